@@ -1,0 +1,29 @@
+# rll-bt: the two commands of the README.  Both create .venv when it is
+# missing and install the project (with its test extras) into it.
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.rll-bt-installed
+SEED   ?= 1
+
+.PHONY: sim test install protos clean
+
+$(STAMP): pyproject.toml
+	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[test]'
+	@touch $(STAMP)
+
+install: $(STAMP)
+
+sim: $(STAMP)
+	$(BIN)/rll-bt sim --seed $(SEED)
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
+
+protos: $(STAMP)
+	$(BIN)/python -m rll_bt.msgs.generate
+
+clean:
+	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -1,0 +1,1 @@
+"""Backends implementing rll_bt.backend.Backend; see DESIGN.md."""

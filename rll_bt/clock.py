@@ -1,0 +1,82 @@
+"""Clocks.  Every component takes one; none calls ``time.time()`` itself.
+
+``now()`` is monotonic seconds used for timeouts and periods; ``epoch()`` is
+Unix time in seconds, used where a message carries a wall time (a beacon's
+``time`` field).  :class:`SimClock` advances only when told to, so a lockstep
+simulation is deterministic and as fast as the CPU allows.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from typing import Protocol, runtime_checkable
+
+
+@runtime_checkable
+class Clock(Protocol):
+    def now(self) -> float:
+        """Monotonic seconds."""
+
+    def epoch(self) -> float:
+        """Unix time in seconds."""
+
+    def sleep(self, seconds: float) -> None:
+        """Wait ``seconds`` of this clock's time."""
+
+
+class WallClock:
+    """The machine's clock."""
+
+    def now(self) -> float:
+        return time.monotonic()
+
+    def epoch(self) -> float:
+        return time.time()
+
+    def sleep(self, seconds: float) -> None:
+        if seconds > 0:
+            time.sleep(seconds)
+
+
+class SimClock:
+    """A simulated clock that moves only through :meth:`advance`.
+
+    ``sleep`` from another thread blocks until the owner has advanced the
+    clock far enough; from the thread that owns the clock it simply advances.
+    """
+
+    def __init__(self, start: float = 0.0, epoch_offset: float = 1_700_000_000.0):
+        self._t = float(start)
+        self._epoch_offset = float(epoch_offset)
+        self._cond = threading.Condition()
+        self._owner = threading.get_ident()
+
+    def now(self) -> float:
+        return self._t
+
+    def epoch(self) -> float:
+        return self._epoch_offset + self._t
+
+    def advance(self, seconds: float) -> float:
+        if seconds < 0:
+            raise ValueError(f"cannot advance a clock backwards ({seconds})")
+        with self._cond:
+            self._t += seconds
+            self._cond.notify_all()
+        return self._t
+
+    def set(self, t: float) -> None:
+        if t < self._t:
+            raise ValueError(f"cannot set the clock back from {self._t} to {t}")
+        self.advance(t - self._t)
+
+    def sleep(self, seconds: float) -> None:
+        if seconds <= 0:
+            return
+        if threading.get_ident() == self._owner:
+            self.advance(seconds)
+            return
+        deadline = self._t + seconds
+        with self._cond:
+            while self._t < deadline:
+                self._cond.wait(timeout=1.0)

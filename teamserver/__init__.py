@@ -1,0 +1,1 @@
+"""The team server: knowledge base, exploration, HTN planning, dispatch."""

@@ -1,0 +1,1 @@
+"""YAML behaviour trees, one per team-protocol task type."""
