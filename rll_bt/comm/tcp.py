@@ -1,0 +1,384 @@
+"""Framed TCP streams: a reconnecting client and a multi-client server.
+
+Frames are the same v2 frames as on UDP (8-byte header, then payload_size
+bytes), so a stream is cut by reading 8 bytes and then payload_size bytes.
+With a key (the team-server link) every frame is encrypted like the team
+channel; a peer without the key can neither read (its frames fail to
+decrypt and are dropped) nor task (the server drops its frames and, by
+default, disconnects it).  Sockets are non-blocking; outgoing bytes are
+buffered and flushed as the socket accepts them.
+"""
+from __future__ import annotations
+
+import errno
+import logging
+import os
+import select
+import socket
+import time
+from typing import Any, Callable
+
+from ..clock import Clock
+from . import stats as S
+from .codec import FrameCodec
+from .crypto import TEAM_CIPHER
+from .framing import FRAME_V2, MAX_STREAM_PAYLOAD, StreamReassembler
+from .ports import TEAM_SERVER_PORT
+from .registry import MessageRegistry
+from .transport import CONNECTED, DISCONNECTED, PumpedTransport, Received
+
+log = logging.getLogger("rll_bt.comm")
+
+#: a peer whose unsent bytes exceed this is considered dead, bytes
+MAX_TX_BUFFER = 8 << 20
+_RECV_CHUNK = 65536
+
+
+class _Conn:
+    """One framed, non-blocking TCP connection."""
+
+    def __init__(self, sock: socket.socket, peer: Any, frame_version: int, max_payload: int):
+        sock.setblocking(False)
+        try:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        except OSError:
+            pass
+        self.sock, self.peer = sock, peer
+        self.rx = StreamReassembler(frame_version, max_payload)
+        self.tx = bytearray()
+
+    def queue(self, frame: bytes) -> bool:
+        """Buffer and try to send ``frame``; False if the connection is dead."""
+        if len(self.tx) + len(frame) > MAX_TX_BUFFER:
+            return False
+        self.tx += frame
+        return self.flush()
+
+    def flush(self) -> bool:
+        while self.tx:
+            try:
+                n = self.sock.send(self.tx)
+            except (BlockingIOError, InterruptedError):
+                return True
+            except OSError:
+                return False
+            del self.tx[:n]
+        return True
+
+    def read(self) -> tuple[list[bytes], bool]:
+        """Whole frames received so far and whether the connection is still up."""
+        frames: list[bytes] = []
+        while True:
+            try:
+                data = self.sock.recv(_RECV_CHUNK)
+            except (BlockingIOError, InterruptedError):
+                return frames, True
+            except OSError:
+                return frames, False
+            if not data:
+                return frames, False
+            frames += self.rx.feed(data)
+            if self.rx.broken:
+                return frames, False
+
+    def close(self) -> None:
+        try:
+            self.sock.close()
+        except OSError:
+            pass
+
+
+def _decode_frames(owner, conn: _Conn, frames: list[bytes], source: Any) -> str | None:
+    """Decode and deliver ``frames``; the first crypto-related drop cause, if any."""
+    crypto_cause = None
+    for frame in frames:
+        decoded, cause = owner.codec.try_decode(frame)
+        if decoded is not None:
+            owner._deliver(Received.of(decoded, owner.channel, source, owner.clock.now()))
+        elif cause in S.CRYPTO_CAUSES and crypto_cause is None:
+            crypto_cause = cause
+    if conn.rx.broken:
+        owner.stats.add(conn.rx.broken.cause, conn.rx.broken.detail)
+    return crypto_cause
+
+
+class StreamClient(PumpedTransport):
+    """Connects to ``host:port`` and keeps reconnecting with exponential backoff.
+
+    ``backoff_initial``/``backoff_max``: seconds of ``clock`` between attempts
+    (doubling after each failure, reset once connected).  ``connect_timeout``:
+    seconds an attempt may take.  ``send`` returns False while disconnected
+    (the message is not queued).  :attr:`Received.source` is ``(host, port)``.
+    """
+
+    def __init__(self, host: str, port: int = TEAM_SERVER_PORT, *, registry: MessageRegistry,
+                 key: str | bytes | None = None, cipher: int | str = TEAM_CIPHER,
+                 clock: Clock | None = None, channel: str = "stream",
+                 backoff_initial: float = 0.1, backoff_max: float = 5.0,
+                 connect_timeout: float = 2.0, frame_version: int = FRAME_V2,
+                 max_payload: int = MAX_STREAM_PAYLOAD,
+                 iv_source: Callable[[int], bytes] = os.urandom):
+        super().__init__(channel, clock)
+        self.host, self.port = host, int(port)
+        self.stats = S.DropStats(f"{channel} tcp client {host}:{port}")
+        self.codec = FrameCodec(registry, key=key, cipher=cipher, frame_version=frame_version,
+                                stats=self.stats, iv_source=iv_source)
+        self.backoff_initial, self.backoff_max = backoff_initial, backoff_max
+        self.connect_timeout = connect_timeout
+        self._frame_version, self._max_payload = frame_version, max_payload
+        self._conn: _Conn | None = None
+        self._connecting: tuple[socket.socket, float] | None = None
+        self._backoff = backoff_initial
+        self._next_attempt = self.clock.now()
+        self._warned_connect = False
+        self.connections = 0   #: successful connects so far
+        with self._io_lock:
+            self._progress()
+
+    @property
+    def address(self) -> tuple[str, int]:
+        return (self.host, self.port)
+
+    @property
+    def connected(self) -> bool:
+        return self._conn is not None
+
+    # -- connection state machine ----------------------------------------------
+    def _progress(self) -> None:
+        if self._conn is not None or self._closed:
+            return
+        now = self.clock.now()
+        if self._connecting is None:
+            if now < self._next_attempt:
+                return
+            s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+            s.setblocking(False)
+            try:
+                err = s.connect_ex(self.address)
+            except OSError as exc:
+                err = exc.errno or errno.EHOSTUNREACH
+            if err == 0:
+                self._established(s)
+            elif err in (errno.EINPROGRESS, errno.EWOULDBLOCK, errno.EALREADY):
+                self._connecting = (s, now)
+            else:
+                s.close()
+                self._failed(err)
+            return
+        s, started = self._connecting
+        try:
+            _, writable, _ = select.select([], [s], [], 0)
+        except (OSError, ValueError):
+            writable = [s]
+        if writable:
+            err = s.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR)
+            self._connecting = None
+            if err == 0:
+                self._established(s)
+            else:
+                s.close()
+                self._failed(err)
+        elif now - started > self.connect_timeout:
+            self._connecting = None
+            s.close()
+            self._failed(errno.ETIMEDOUT)
+
+    def _established(self, s: socket.socket) -> None:
+        self._conn = _Conn(s, self.address, self._frame_version, self._max_payload)
+        self._backoff = self.backoff_initial
+        self._warned_connect = False
+        self.connections += 1
+        log.info("%s: connected to %s:%d", self.channel, self.host, self.port)
+        self._event(CONNECTED, self.address)
+
+    def _failed(self, err: int) -> None:
+        if not self._warned_connect:
+            self._warned_connect = True
+            log.warning("%s: cannot connect to %s:%d (%s); retrying with backoff up to %.1f s",
+                        self.channel, self.host, self.port, os.strerror(err), self.backoff_max)
+        self._schedule_retry()
+
+    def _schedule_retry(self) -> None:
+        self._next_attempt = self.clock.now() + self._backoff
+        self._backoff = min(self._backoff * 2, self.backoff_max)
+
+    def _lost(self) -> None:
+        if self._conn is None:
+            return
+        self._conn.close()
+        self._conn = None
+        log.info("%s: connection to %s:%d lost", self.channel, self.host, self.port)
+        self._event(DISCONNECTED, self.address)
+        self._schedule_retry()
+
+    # -- transport interface ---------------------------------------------------
+    def send(self, msg) -> bool:
+        frame = self.codec.encode(msg)
+        with self._io_lock:
+            if self._closed:
+                return False
+            self._progress()
+            if self._conn is None:
+                return False
+            if not self._conn.queue(frame):
+                self._lost()
+                return False
+            return True
+
+    def _pump(self) -> None:
+        self._progress()
+        conn = self._conn
+        if conn is None:
+            return
+        alive = conn.flush()
+        frames, up = conn.read()
+        _decode_frames(self, conn, frames, self.address)
+        if not (alive and up):
+            self._lost()
+
+    def _wait_io(self, timeout: float) -> None:
+        timeout = max(0.0, timeout)
+        rd, wr = [], []
+        if self._conn is not None:
+            rd.append(self._conn.sock)
+            if self._conn.tx:
+                wr.append(self._conn.sock)
+        elif self._connecting is not None:
+            wr.append(self._connecting[0])
+        else:
+            timeout = min(timeout, max(0.0, self._next_attempt - self.clock.now()))
+        try:
+            select.select(rd, wr, [], timeout)
+        except (OSError, ValueError):
+            pass
+
+    def wait_connected(self, timeout: float) -> bool:
+        """Block up to ``timeout`` wall seconds until connected; True if connected."""
+        deadline = time.monotonic() + timeout
+        while not self.connected and not self._closed:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                break
+            if self._thread is None:
+                self._wait_io(min(left, 0.05))
+                self._pump_locked()
+            else:
+                time.sleep(min(left, 0.01))
+        return self.connected
+
+    def _close_io(self) -> None:
+        if self._conn is not None:
+            self._conn.flush()
+            self._conn.close()
+            self._conn = None
+        if self._connecting is not None:
+            self._connecting[0].close()
+            self._connecting = None
+
+
+class StreamServer(PumpedTransport):
+    """Accepts framed TCP clients on ``host:port`` (0 = an ephemeral port, see :attr:`port`).
+
+    Each client gets an int id (:attr:`Received.source`, :class:`LinkEvent`
+    ``peer``).  With ``key`` the link is encrypted; with
+    ``drop_unauthenticated`` a client whose frame fails crypto (plain on an
+    encrypted link, wrong key) is disconnected.
+    """
+
+    def __init__(self, port: int = TEAM_SERVER_PORT, *, registry: MessageRegistry,
+                 host: str = "0.0.0.0", key: str | bytes | None = None,
+                 cipher: int | str = TEAM_CIPHER, clock: Clock | None = None,
+                 channel: str = "stream", drop_unauthenticated: bool = True,
+                 frame_version: int = FRAME_V2, max_payload: int = MAX_STREAM_PAYLOAD,
+                 iv_source: Callable[[int], bytes] = os.urandom, backlog: int = 16):
+        super().__init__(channel, clock)
+        self.stats = S.DropStats(f"{channel} tcp server :{port}")
+        self.codec = FrameCodec(registry, key=key, cipher=cipher, frame_version=frame_version,
+                                stats=self.stats, iv_source=iv_source)
+        self.drop_unauthenticated = drop_unauthenticated
+        self._frame_version, self._max_payload = frame_version, max_payload
+        lsock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        try:
+            lsock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            lsock.bind((host, int(port)))
+            lsock.listen(backlog)
+            lsock.setblocking(False)
+        except OSError:
+            lsock.close()
+            raise
+        self._lsock = lsock
+        self.host = host
+        self.port = lsock.getsockname()[1]
+        self.stats.name = f"{channel} tcp server :{self.port}"
+        self._conns: dict[int, _Conn] = {}
+        self._next_id = 1
+
+    def clients(self) -> list[int]:
+        """Ids of the connected clients, oldest first."""
+        return list(self._conns)
+
+    def peer_address(self, client: int) -> tuple[str, int] | None:
+        conn = self._conns.get(client)
+        return conn.peer if conn else None
+
+    def send(self, msg, to: int | None = None) -> bool:
+        """Send to client ``to``, or to every client when None.  True if at least one got it."""
+        sent = False
+        with self._io_lock:
+            targets = list(self._conns) if to is None else [to]
+            for cid in targets:
+                conn = self._conns.get(cid)
+                if conn is None:
+                    continue
+                if conn.queue(self.codec.encode(msg)):
+                    sent = True
+                else:
+                    self._drop(cid)
+        return sent
+
+    def disconnect(self, client: int) -> None:
+        with self._io_lock:
+            self._drop(client)
+
+    def _drop(self, cid: int) -> None:
+        conn = self._conns.pop(cid, None)
+        if conn is not None:
+            conn.close()
+            self._event(DISCONNECTED, cid)
+
+    def _pump(self) -> None:
+        while True:
+            try:
+                s, addr = self._lsock.accept()
+            except (BlockingIOError, InterruptedError):
+                break
+            except OSError as exc:
+                log.debug("%s: accept: %s", self.channel, exc)
+                break
+            cid, self._next_id = self._next_id, self._next_id + 1
+            self._conns[cid] = _Conn(s, addr, self._frame_version, self._max_payload)
+            self._event(CONNECTED, cid)
+        for cid, conn in list(self._conns.items()):
+            alive = conn.flush()
+            frames, up = conn.read()
+            bad = _decode_frames(self, conn, frames, cid)
+            if bad and self.drop_unauthenticated:
+                log.info("%s: disconnecting client %d %s (%s)", self.channel, cid, conn.peer, bad)
+                up = False
+            if not (alive and up):
+                self._drop(cid)
+
+    def _wait_io(self, timeout: float) -> None:
+        rd = [self._lsock] + [c.sock for c in self._conns.values()]
+        wr = [c.sock for c in self._conns.values() if c.tx]
+        try:
+            select.select(rd, wr, [], max(0.0, timeout))
+        except (OSError, ValueError):
+            pass
+
+    def _close_io(self) -> None:
+        for cid in list(self._conns):
+            conn = self._conns.pop(cid)
+            conn.flush()
+            conn.close()
+        self._lsock.close()
