@@ -131,6 +131,10 @@ class Profile:
         return self._tag_index.get(tag_id)
 
     @property
+    def all_tag_ids(self) -> frozenset[int]:
+        return frozenset(self._tag_index)
+
+    @property
     def _tag_index(self) -> dict[int, tuple[str, str]]:
         idx = self.__dict__.get("_tag_index_cache")
         if idx is None:
