@@ -1,0 +1,118 @@
+"""A small feed-forward network over signal-tower crops: the classifier of
+the paper's chain.  One tanh hidden layer, softmax over the eight light
+states (green 1, yellow 2, red 4), cross-entropy with weight decay, trained
+with scaled conjugate gradient on a flat parameter vector.
+
+Input: a crop resized to ``size`` (w, h) in BGR, as floats in [0, 1]
+minus 0.5, flattened.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from .scg import scg
+
+N_STATES = 8
+
+
+def crop_features(crop: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """A BGR crop to the network's input vector."""
+    small = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
+    return small.astype(np.float32).ravel() / 255.0 - 0.5
+
+
+@dataclass
+class Mlp:
+    w1: np.ndarray      # (n_in, n_hidden)
+    b1: np.ndarray
+    w2: np.ndarray      # (n_hidden, 8)
+    b2: np.ndarray
+    size: tuple[int, int] = (8, 24)
+
+    @classmethod
+    def create(cls, n_in: int, n_hidden: int, size=(8, 24), seed: int = 0) -> "Mlp":
+        rng = np.random.default_rng(seed)
+        return cls(rng.normal(0, 1 / np.sqrt(n_in), (n_in, n_hidden)), np.zeros(n_hidden),
+                   rng.normal(0, 1 / np.sqrt(n_hidden), (n_hidden, N_STATES)), np.zeros(N_STATES),
+                   tuple(size))
+
+    # -- flat parameter vector for the optimiser ---------------------------
+    def _shapes(self):
+        return [self.w1.shape, self.b1.shape, self.w2.shape, self.b2.shape]
+
+    def get(self) -> np.ndarray:
+        return np.concatenate([a.ravel() for a in (self.w1, self.b1, self.w2, self.b2)])
+
+    def set(self, theta: np.ndarray) -> None:
+        out, i = [], 0
+        for shape in self._shapes():
+            n = int(np.prod(shape))
+            out.append(theta[i:i + n].reshape(shape))
+            i += n
+        self.w1, self.b1, self.w2, self.b2 = out
+
+    # -- forward / loss ----------------------------------------------------
+    def probabilities(self, x: np.ndarray) -> np.ndarray:
+        h = np.tanh(x @ self.w1 + self.b1)
+        z = h @ self.w2 + self.b2
+        z -= z.max(axis=1, keepdims=True)
+        e = np.exp(z)
+        return e / e.sum(axis=1, keepdims=True)
+
+    def predict(self, x: np.ndarray) -> np.ndarray:
+        return self.probabilities(x).argmax(axis=1)
+
+    def loss_and_grad(self, theta: np.ndarray, x: np.ndarray, y: np.ndarray, decay: float):
+        self.set(theta)
+        n = len(x)
+        h = np.tanh(x @ self.w1 + self.b1)
+        z = h @ self.w2 + self.b2
+        z -= z.max(axis=1, keepdims=True)
+        e = np.exp(z)
+        prob = e / e.sum(axis=1, keepdims=True)
+        loss = -np.log(prob[np.arange(n), y] + 1e-12).mean()
+        loss += 0.5 * decay * (np.sum(self.w1 ** 2) + np.sum(self.w2 ** 2))
+        dz = prob
+        dz[np.arange(n), y] -= 1.0
+        dz /= n
+        gw2 = h.T @ dz + decay * self.w2
+        gb2 = dz.sum(axis=0)
+        dh = (dz @ self.w2.T) * (1.0 - h ** 2)
+        gw1 = x.T @ dh + decay * self.w1
+        gb1 = dh.sum(axis=0)
+        return float(loss), np.concatenate([gw1.ravel(), gb1, gw2.ravel(), gb2])
+
+    def train(self, x: np.ndarray, y: np.ndarray, max_iter: int = 300, decay: float = 1e-4,
+              callback=None):
+        """Full-batch training with scaled conjugate gradient."""
+        x = np.asarray(x, dtype=np.float64)
+        y = np.asarray(y, dtype=np.int64)
+        cache = {}
+
+        def both(theta):
+            key = theta.tobytes()
+            if key not in cache:
+                cache.clear()
+                cache[key] = self.loss_and_grad(theta, x, y, decay)
+            return cache[key]
+
+        res = scg(lambda t: both(t)[0], lambda t: both(t)[1], self.get(), max_iter=max_iter,
+                  callback=callback)
+        self.set(res.x)
+        return res
+
+    # -- persistence -------------------------------------------------------
+    def save(self, path) -> None:
+        np.savez_compressed(path, w1=self.w1.astype(np.float32), b1=self.b1.astype(np.float32),
+                            w2=self.w2.astype(np.float32), b2=self.b2.astype(np.float32),
+                            size=np.array(self.size))
+
+    @classmethod
+    def load(cls, path) -> "Mlp":
+        with np.load(path) as d:
+            return cls(d["w1"].astype(np.float64), d["b1"].astype(np.float64),
+                       d["w2"].astype(np.float64), d["b2"].astype(np.float64),
+                       tuple(int(v) for v in d["size"]))
