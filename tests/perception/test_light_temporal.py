@@ -1,0 +1,54 @@
+import pytest
+
+from skills.perception.light.temporal import BLINK, OFF, ON, UNKNOWN, LightFilter
+
+
+def feed(f, states, dt=0.1, t0=0.0):
+    for i, s in enumerate(states):
+        f.add(t0 + i * dt, s)
+
+
+def test_steady_lights():
+    f = LightFilter()
+    feed(f, [5] * 20)                      # red + green
+    p = f.pattern()
+    assert (p.green, p.yellow, p.red) == (ON, OFF, ON)
+    assert p.steady_state == 5
+
+
+def test_blinking_green_with_steady_yellow():
+    f = LightFilter()
+    # 2 Hz blink sampled at 10 Hz: 2-3 frames on, 2-3 off
+    seq = [(2 | (1 if (i // 2.5) % 2 == 0 else 0)) for i in range(20)]
+    feed(f, seq)
+    p = f.pattern()
+    assert (p.green, p.yellow, p.red) == (BLINK, ON, OFF)
+    assert p.steady_state is None and p.complete
+
+
+def test_unknown_until_window_is_long_enough():
+    f = LightFilter(min_span=1.0)
+    feed(f, [1] * 5)                       # 0.4 s
+    assert f.pattern().green == UNKNOWN
+    feed(f, [1] * 10, t0=0.5)
+    assert f.pattern().green == ON
+
+
+def test_one_bad_frame_does_not_make_a_blink():
+    f = LightFilter()
+    feed(f, [4] * 9 + [0] + [4] * 10)
+    assert f.pattern().red == ON
+    g = LightFilter()
+    feed(g, [4] * 10 + [0] * 10)           # switched off once: neither steady nor blinking
+    assert g.pattern().red == UNKNOWN
+
+
+def test_old_frames_leave_the_window_and_bad_input():
+    f = LightFilter(window=1.0, min_span=0.5)
+    feed(f, [7] * 10)
+    feed(f, [0] * 15, t0=2.0)
+    assert f.pattern().steady_state == 0
+    with pytest.raises(ValueError):
+        f.add(10.0, 9)
+    f.add(0.0, 1)                          # time went backwards: restart
+    assert f.pattern().green == UNKNOWN
