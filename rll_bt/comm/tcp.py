@@ -143,6 +143,13 @@ class StreamClient(PumpedTransport):
     def connected(self) -> bool:
         return self._conn is not None
 
+    @property
+    def retry_at(self) -> float | None:
+        """Clock time of the next connection attempt; None while connected or connecting."""
+        if self._conn is not None or self._connecting is not None:
+            return None
+        return self._next_attempt
+
     # -- connection state machine ----------------------------------------------
     def _progress(self) -> None:
         if self._conn is not None or self._closed:

@@ -93,6 +93,10 @@ class UdpPeer(PumpedTransport):
         try:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+            try:  # best effort: more room between polls (the kernel caps it at rmem_max)
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
+            except OSError:
+                pass
             sock.bind((bind_host, recv_port))
             sock.setblocking(False)
         except OSError:

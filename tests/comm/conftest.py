@@ -1,0 +1,16 @@
+"""Fixtures for the rll_bt.comm tests."""
+from __future__ import annotations
+
+import types
+
+import pytest
+
+from comm_testmsgs import TM, registry
+
+
+@pytest.fixture(scope="session")
+def tm():
+    """The test message classes of :mod:`comm_testmsgs` plus ``tm.registry()``."""
+    ns = types.SimpleNamespace(**vars(TM))
+    ns.registry = registry
+    return ns
