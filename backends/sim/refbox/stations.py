@@ -1,0 +1,486 @@
+"""Station state machines of the production phase (the refbox's production.clp).
+
+States and signal-tower lights (refbox code; where the 2016 rulebook's
+wording differs, e.g. "yellow busy", the code wins):
+
+================  =============================  =================================
+state             lights                         leaves when
+================  =============================  =================================
+IDLE              green                          a valid PrepareMachine arrives
+PREPARED          green blinking for 3 s, green  a workpiece lies on the input
+PROCESSING        green + yellow                 the processing time has passed
+READY-AT-OUTPUT   yellow                         a robot takes the product
+WAIT-IDLE         yellow blinking                5 s later -> IDLE
+BROKEN            red + yellow blinking          30 s later -> IDLE (slots cleared)
+DOWN              red                            the down period ends
+================  =============================  =================================
+
+A wrong or missing instruction breaks the station: an RS ring colour the RS
+does not have, RETRIEVE_CAP while a cap is buffered, MOUNT_CAP without one,
+a workpiece fed to an RS without enough additional bases on the slide, a
+workpiece the operation cannot work on (RETRIEVE from a cap-less one, MOUNT
+on a capped one, a ring on a capped or three-ring one), more than 3 bases
+loaded on a slide.  Each break sends an attention message with the reason.
+A DOWN period freezes the station's timers and restores its state after.
+
+Products: the BS dispenses a base of the instructed colour on the instructed
+side; the RS mounts a ring on the workpiece fed at the input (consuming the
+ring's cost in slide bases) and puts it on the output; the CS takes the cap
+off a capped workpiece into its buffer (the cap-less base appears at the
+output) or mounts the buffered cap; the DS consumes the workpiece and has
+the game score the delivery.  Additional bases put on an RS slide are
+consumed and score +2 each (up to 3 loaded).  Times are game seconds.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+from rll_bt.rules import BASE_COLORS
+
+from . import events as E
+from .world import (ALL_OFF, BLINK, INPUT, ON, OUTPUT, SHELF_SLOTS, SLIDE, Workpiece, lights)
+
+IDLE, PREPARED, PROCESSING = "IDLE", "PREPARED", "PROCESSING"
+READY_AT_OUTPUT, WAIT_IDLE, BROKEN, DOWN = "READY-AT-OUTPUT", "WAIT-IDLE", "BROKEN", "DOWN"
+STATES = (IDLE, PREPARED, PROCESSING, READY_AT_OUTPUT, WAIT_IDLE, BROKEN, DOWN)
+
+STATE_LIGHTS = {
+    IDLE: lights(green=ON),
+    PREPARED: lights(green=ON),
+    PROCESSING: lights(yellow=ON, green=ON),
+    READY_AT_OUTPUT: lights(yellow=ON),
+    WAIT_IDLE: lights(yellow=BLINK),
+    BROKEN: lights(red=BLINK, yellow=BLINK),
+    DOWN: lights(red=ON),
+}
+PREPARED_BLINK = lights(green=BLINK)
+
+
+@dataclass(frozen=True)
+class StationConfig:
+    """Processing durations and station rules, game seconds.
+
+    Durations are our choice for a plausible game (a real MPS takes a few
+    to twenty seconds); the other values are the refbox's globals.clp.
+    """
+
+    bs_dispense: float = 5.0
+    rs_mount: float = 15.0
+    cs_process: float = 12.0
+    ds_deliver: float = 8.0
+    prepared_blink: float = 3.0            # PREPARED-BLINK-TIME
+    wait_idle: float = 5.0                 # RETRIEVE-WAIT-IDLE-TIME
+    broken: float = 30.0                   # BROKEN-DOWN-TIME
+    prepared_timeout: float | None = None  # break a PREPARED station never fed (None: never)
+    slide_max: int = 3                     # LOADED-WITH-MAX
+    cs_caps: tuple[tuple[str, str], ...] = (("CS1", "CAP_GREY"), ("CS2", "CAP_BLACK"))
+    carrier_base: str = "BASE_RED"         # base under the caps on a CS shelf
+    refill_shelf: bool = True              # a taken cap carrier is replaced at once
+
+    def cap_of(self, kind: str) -> str:
+        return dict(self.cs_caps)[kind]
+
+
+@dataclass(frozen=True)
+class BSInstruction:
+    side: str          # "INPUT" | "OUTPUT"
+    color: str         # BASE_*
+
+
+@dataclass(frozen=True)
+class RSInstruction:
+    ring_color: str    # RING_*
+
+
+@dataclass(frozen=True)
+class CSInstruction:
+    operation: str     # "RETRIEVE_CAP" | "MOUNT_CAP"
+
+
+@dataclass(frozen=True)
+class DSInstruction:
+    gate: int = 0               # 2016: 1-3 (0 = any)
+    order_id: int | None = None  # 2017+: the order to deliver
+
+
+class StationHost(Protocol):
+    """What a station needs from the game."""
+
+    world: object
+    config: StationConfig
+    profile: object
+
+    def ring_cost(self, color: str) -> int: ...
+    def rs_colors(self, machine: str) -> tuple[str, ...]: ...
+    def award(self, team: str, points: int, reason: str, machine: str | None = None,
+              game_time: float | None = None) -> None: ...
+    def emit(self, kind: str, text: str, *, team: str | None = None, machine: str | None = None,
+             game_time: float | None = None, **data) -> None: ...
+    def deliver(self, station: "Station", wp: Workpiece, gate: int, game_time: float) -> None: ...
+
+
+@dataclass
+class Station:
+    """One station's production state.  ``now`` is the station's game time
+    (production seconds) as of its last :meth:`update`."""
+
+    name: str
+    team: str
+    host: StationHost
+    state: str = IDLE
+    prev_state: str | None = None
+    lights: dict = field(default_factory=lambda: dict(ALL_OFF))
+    now: float = 0.0
+    active: bool = False
+    deadline: float | None = None
+    blink_until: float | None = None
+    down: tuple[float, float] | None = None
+    down_done: bool = False
+    broken_reason: str = ""
+    instruction: object = None
+    input_wp: Workpiece | None = None
+    inside: Workpiece | None = None
+    out_slot: str = OUTPUT
+    bases_added: int = 0
+    bases_used: int = 0
+    cap_buffer: str | None = None
+
+    kind = "?"
+    duration_key = ""
+
+    # -- phase ----------------------------------------------------------------
+    def start_production(self, game_time: float) -> None:
+        """Enter production: IDLE with its lights."""
+        self.active, self.now = True, game_time
+        self._set_state(IDLE, "production started")
+
+    def stop_production(self) -> None:
+        self.active = False
+
+    # -- inputs ------------------------------------------------------------------
+    def prepare(self, instr) -> None:
+        """A PrepareMachine for this (IDLE) station; the game checked phase, team and state."""
+        reason = self.validate(instr)
+        if reason:
+            self.break_(reason)
+            return
+        self.instruction = instr
+        self.blink_until = self.now + self.host.config.prepared_blink
+        self._set_state(PREPARED, f"prepared: {instr}")
+        cfg = self.host.config
+        self.deadline = self.now + cfg.prepared_timeout if cfg.prepared_timeout else None
+        self.on_prepared()
+        self._maybe_start()
+
+    def on_put(self, slot: str, wp: Workpiece) -> None:
+        if slot == INPUT:
+            self.input_wp = wp
+            self._maybe_start()
+
+    def on_take(self, slot: str, wp: Workpiece | None) -> None:
+        if slot == INPUT:
+            self.input_wp = None
+        if slot != self.out_slot or self.inside is not None:
+            return
+        if self.state == READY_AT_OUTPUT:
+            self._product_taken()
+        elif self.state == DOWN and self.prev_state == READY_AT_OUTPUT:
+            self.prev_state = IDLE      # taken while down: idle once up again
+
+    def update(self, game_time: float) -> None:
+        """Run every timed transition due up to ``game_time``, each at its own time."""
+        if not self.active:
+            self.now = max(self.now, game_time)
+            return
+        self._maybe_start()
+        while True:
+            t, what = self._next_timer()
+            if t is None or t > game_time:
+                break
+            self.now = max(self.now, t)
+            what()
+            self._maybe_start()
+        self.now = max(self.now, game_time)
+
+    # -- kind hooks ------------------------------------------------------------
+    def validate(self, instr) -> str | None:
+        return None
+
+    def on_prepared(self) -> None:
+        pass
+
+    def start(self, wp: Workpiece) -> str | None:
+        """Begin processing ``wp`` (taken off the input); a reason to break instead."""
+        return None
+
+    def finish(self) -> None:
+        raise NotImplementedError
+
+    @property
+    def duration(self) -> float:
+        return getattr(self.host.config, self.duration_key)
+
+    # -- machinery ---------------------------------------------------------------
+    def break_(self, reason: str) -> None:
+        self.broken_reason = f"{self.name}: {reason}"
+        self.instruction, self.inside = None, None
+        self._clear_slots()
+        self._set_state(BROKEN, reason)
+        self.deadline = self.now + self.host.config.broken
+        self.host.emit(E.ATTENTION, self.broken_reason, team=self.team, machine=self.name,
+                       time_to_show=10.0)
+
+    def _maybe_start(self) -> None:
+        if (self.active and self.state == PREPARED and self.input_wp is not None
+                and self.kind != "BS"):
+            wp = self.host.world.remove_workpiece(self.name, INPUT) or self.input_wp
+            self.input_wp = None
+            reason = self.start(wp)
+            if reason:
+                self.break_(reason)
+                return
+            self.inside = wp
+            self._processing()
+
+    def _processing(self) -> None:
+        self._set_state(PROCESSING, f"processing {self.instruction}")
+        self.deadline = self.now + self.duration
+
+    def _ready(self, wp: Workpiece, slot: str = OUTPUT) -> None:
+        self.out_slot = slot
+        self.host.world.spawn_workpiece(self.name, slot, wp)
+        self.host.emit(E.WORKPIECE, f"{self.name} put {wp} on {slot}", team=self.team,
+                       machine=self.name, workpiece=wp, slot=slot)
+        self.inside = None
+        self.deadline = None
+        self._set_state(READY_AT_OUTPUT, f"{wp} ready at {slot}")
+
+    def _product_taken(self) -> None:
+        wait = self.host.config.wait_idle
+        if wait > 0:
+            self._set_state(WAIT_IDLE, "product taken")
+            self.deadline = self.now + wait
+        else:
+            self._idle("product taken")
+
+    def _idle(self, why: str) -> None:
+        self.instruction, self.deadline = None, None
+        self._set_state(IDLE, why)
+
+    def _next_timer(self):
+        cand = []
+        if self.state == DOWN:
+            cand.append((self.down[1], self._down_end))
+        else:
+            if self.down is not None and not self.down_done:
+                cand.append((self.down[0], self._down_start))
+            if self.blink_until is not None:
+                cand.append((self.blink_until, self._blink_end))
+            if self.deadline is not None:
+                cand.append((self.deadline, self._deadline))
+        if not cand:
+            return None, None
+        return min(cand, key=lambda c: c[0])
+
+    def _blink_end(self) -> None:
+        self.blink_until = None
+        self._show_lights()
+
+    def _deadline(self) -> None:
+        self.deadline = None
+        if self.state == PROCESSING:
+            self.finish()
+        elif self.state == WAIT_IDLE:
+            self._idle("retrieval done")
+        elif self.state == BROKEN:
+            self._recover()
+        elif self.state == PREPARED:
+            self.break_("prepared, but no workpiece fed in time")
+
+    def _recover(self) -> None:
+        self.bases_used = self.bases_added
+        self.cap_buffer = None
+        self._clear_slots()
+        self.broken_reason = ""
+        self._idle("recovered")
+
+    def _down_start(self) -> None:
+        start, end = self.down
+        self.down_done = True
+        length = end - start
+        if self.deadline is not None:
+            self.deadline += length
+        if self.blink_until is not None:
+            self.blink_until += length
+        self.prev_state = self.state
+        self._set_state(DOWN, f"down for {length:.0f} s")
+
+    def _down_end(self) -> None:
+        back = self.prev_state or IDLE
+        self.prev_state = None
+        self._set_state(back, "up again")
+
+    def _clear_slots(self) -> None:
+        for slot in (INPUT, OUTPUT):
+            if self.host.world.workpiece_at(self.name, slot) is not None:
+                self.host.world.remove_workpiece(self.name, slot)
+        self.input_wp = None
+
+    def _set_state(self, state: str, why: str) -> None:
+        prev, self.state = self.state, state
+        if state != PREPARED:
+            self.blink_until = None
+        self._show_lights()
+        self.host.emit(E.MACHINE, f"{self.name} {prev} -> {state}: {why}", team=self.team,
+                       machine=self.name, state=state, previous=prev, reason=why)
+
+    def _show_lights(self) -> None:
+        want = PREPARED_BLINK if (self.state == PREPARED and self.blink_until is not None) \
+            else STATE_LIGHTS[self.state]
+        self.set_lights(want)
+
+    def set_lights(self, want: dict) -> None:
+        if want != self.lights:
+            self.lights = dict(want)
+            self.host.world.set_lights(self.name, self.lights)
+            self.host.emit(E.LIGHTS, f"{self.name} lights {_light_text(want)}", team=self.team,
+                           machine=self.name, lights=dict(want))
+
+    @property
+    def slide_loaded(self) -> int:
+        return self.bases_added - self.bases_used
+
+
+def _light_text(l: dict) -> str:
+    on = [f"{c}-{s}" for c, s in l.items() if s != "OFF"]
+    return " ".join(on) or "off"
+
+
+class BaseStation(Station):
+    kind, duration_key = "BS", "bs_dispense"
+
+    def validate(self, instr) -> str | None:
+        if not isinstance(instr, BSInstruction):
+            return "prepare without base station instruction"
+        if instr.side not in (INPUT, OUTPUT):
+            return f"invalid side {instr.side}"
+        if instr.color not in BASE_COLORS:
+            return f"invalid base color {instr.color}"
+        return None
+
+    def on_prepared(self) -> None:
+        # the BS goes straight to dispensing
+        self._set_state(PROCESSING, f"dispensing {self.instruction.color}")
+        self.deadline = self.now + self.duration
+
+    def finish(self) -> None:
+        side = self.instruction.side
+        if self.host.world.workpiece_at(self.name, side) is not None:
+            self.break_(f"cannot dispense, {side} is occupied")
+            return
+        self._ready(Workpiece(self.instruction.color), side)
+
+
+class RingStation(Station):
+    kind, duration_key = "RS", "rs_mount"
+
+    def validate(self, instr) -> str | None:
+        if not isinstance(instr, RSInstruction):
+            return "prepare without ring station instruction"
+        colors = self.host.rs_colors(self.name)
+        if instr.ring_color not in colors:
+            return f"invalid ring color {instr.ring_color} (has {', '.join(colors)})"
+        return None
+
+    def on_put(self, slot: str, wp: Workpiece) -> None:
+        if slot == SLIDE and self.active:
+            self.host.world.remove_workpiece(self.name, SLIDE)
+            self.bases_added += 1
+            if self.slide_loaded > self.host.config.slide_max:
+                if self.state != BROKEN:
+                    self.break_(f"too many additional bases loaded ({self.slide_loaded})")
+                return
+            self.host.award(self.team, self.host.profile.scoring.additional_base,
+                            f"added additional base to {self.name}", machine=self.name)
+            return
+        super().on_put(slot, wp)
+
+    def start(self, wp: Workpiece) -> str | None:
+        color = self.instruction.ring_color
+        need = self.host.ring_cost(color)
+        if self.slide_loaded < need:
+            return f"insufficient bases ({self.slide_loaded} < {need}) for {color}"
+        if wp.cap is not None or len(wp.rings) >= 3:
+            return f"cannot mount a ring on {wp}"
+        self.bases_used += need
+        return None
+
+    def finish(self) -> None:
+        self._ready(self.inside.with_ring(self.instruction.ring_color))
+
+
+class CapStation(Station):
+    kind, duration_key = "CS", "cs_process"
+
+    def validate(self, instr) -> str | None:
+        if not isinstance(instr, CSInstruction):
+            return "prepare without cap station instruction"
+        if instr.operation == "RETRIEVE_CAP":
+            return "cannot retrieve while already holding a cap" if self.cap_buffer else None
+        if instr.operation == "MOUNT_CAP":
+            return None if self.cap_buffer else "cannot mount without a buffered cap"
+        return f"invalid cap station operation {instr.operation}"
+
+    def on_take(self, slot: str, wp: Workpiece | None) -> None:
+        if slot in SHELF_SLOTS and self.host.config.refill_shelf:
+            self.host.world.spawn_workpiece(self.name, slot, self.carrier())
+            return
+        super().on_take(slot, wp)
+
+    def carrier(self) -> Workpiece:
+        cfg = self.host.config
+        return Workpiece(cfg.carrier_base, (), cfg.cap_of(self.name[2:]))
+
+    def start(self, wp: Workpiece) -> str | None:
+        if self.instruction.operation == "RETRIEVE_CAP" and wp.cap is None:
+            return f"no cap to retrieve on {wp}"
+        if self.instruction.operation == "MOUNT_CAP" and wp.cap is not None:
+            return f"cannot mount a cap on capped {wp}"
+        return None
+
+    def finish(self) -> None:
+        wp = self.inside
+        if self.instruction.operation == "RETRIEVE_CAP":
+            self.cap_buffer = wp.cap
+            self._ready(wp.without_cap())
+        else:
+            cap, self.cap_buffer = self.cap_buffer, None
+            self._ready(wp.with_cap(cap))
+
+
+class DeliveryStation(Station):
+    kind, duration_key = "DS", "ds_deliver"
+
+    def validate(self, instr) -> str | None:
+        if not isinstance(instr, DSInstruction):
+            return "prepare without delivery station instruction"
+        if not 0 <= int(instr.gate) <= 3:
+            return f"invalid delivery gate {instr.gate}"
+        return None
+
+    def finish(self) -> None:
+        wp, self.inside = self.inside, None
+        self.host.deliver(self, wp, int(self.instruction.gate), self.now)
+        self._idle("delivered")
+
+
+KINDS = {"BS": BaseStation, "RS": RingStation, "CS": CapStation, "DS": DeliveryStation}
+
+
+def make_station(name: str, team: str, host: StationHost) -> Station:
+    try:
+        cls = KINDS[name[2:4]]
+    except KeyError:
+        raise ValueError(f"no station model for {name!r}") from None
+    return cls(name=name, team=team, host=host)
