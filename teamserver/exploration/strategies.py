@@ -1,0 +1,163 @@
+"""Exploration strategies: which zone an idle robot explores next.
+
+- :class:`Algorithm1`: the paper's Algorithm 1, line by line;
+- :class:`RandomStrategy`, :class:`NearestStrategy`: baselines;
+- :class:`OracleStrategy`: knows where the machines stand (a lower bound
+  for benchmarks only; a real game has no oracle).
+
+Every strategy answers ``next_zone(view, pose) -> Decision | None``; the
+``branch`` names the rule that chose (tests and logs read it).  Randomness
+comes from a seeded :class:`random.Random`, so a game is reproducible.
+"""
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass
+
+from .view import ExplorationView, identification
+
+DEFAULT_THRESH = 0.9
+
+
+@dataclass(frozen=True)
+class Decision:
+    zone: int
+    branch: str
+
+
+class Strategy:
+    name = "base"
+
+    def __init__(self, seed: int = 0, thresh: float = DEFAULT_THRESH):
+        self.rng = random.Random(seed)
+        self.thresh = thresh
+
+    def next_zone(self, view: ExplorationView, pose=None) -> Decision | None:
+        raise NotImplementedError
+
+    def _choose_random(self, zones: list[int]) -> int:
+        return self.rng.choice(sorted(zones))
+
+
+def lowest_confidence(hyp: dict[int, float], zones) -> int:
+    """getZoneWithLowestConfidence (ties: the lower zone number)."""
+    return min(zones, key=lambda z: (hyp.get(z, 0.0), z))
+
+
+class Algorithm1(Strategy):
+    """Algorithm 1 of the paper.
+
+    ::
+
+        1  if observations = {} then
+        2    if oppositeZone in notVisitedZones then return exploreZone(oppositeZone)
+        5    else return exploreZone(chooseRandom(notVisitedZones))
+        9  if numZonesNotVisited(observations) > 0 then
+        11   return exploreZone(getZoneWithLowestConfidence(zonesNotVisited(observations)))
+        14 if mFound(observations, thresh) < #MPS then
+        15   return exploreZone(chooseRandom(notVisitedZones))
+        18 else
+        19   return exploreZone(getZoneWithLowestConfidence(...))
+
+    ``observations`` are the zones where one of our machines is believed
+    (:meth:`ExplorationView.hypotheses`).  At line 18 no observed zone is
+    unvisited any more (line 9 returned otherwise), so, as the paper's text
+    says ("if all zones are visited, the zone with the lowest confidence is
+    chosen"), the lowest-confidence observed zone is revisited.  Zones another
+    robot is already heading for count as being visited.  When line 15 finds
+    no unvisited zone left, it too falls back to the lowest confidence.
+    """
+
+    name = "algorithm1"
+
+    def next_zone(self, view: ExplorationView, pose=None) -> Decision | None:
+        not_visited = view.not_visited()
+        hyp = view.hypotheses()
+        if not hyp:                                                     # line 1
+            opposite = view.opposite_zone()
+            if opposite is not None and opposite in not_visited:        # line 2
+                return Decision(opposite, "opposite")
+            if not_visited:                                             # line 5
+                return Decision(self._choose_random(not_visited), "random-start")
+            return None
+        unvisited_obs = [z for z in hyp if z not in view.visited and z not in view.busy]
+        if unvisited_obs:                                               # line 9
+            return Decision(lowest_confidence(hyp, unvisited_obs), "observed-unvisited")
+        if view.m_found(self.thresh) < view.n_mps and not_visited:      # line 14
+            return Decision(self._choose_random(not_visited), "random-fallback")
+        zones = [z for z in hyp if z not in view.busy] or list(hyp)     # line 18
+        return Decision(lowest_confidence(hyp, zones), "lowest-confidence")
+
+
+class RandomStrategy(Strategy):
+    """Unvisited zones in random order, then random weakly known ones."""
+
+    name = "random"
+
+    def next_zone(self, view: ExplorationView, pose=None) -> Decision | None:
+        not_visited = view.not_visited()
+        if not_visited:
+            return Decision(self._choose_random(not_visited), "random")
+        weak = [z for z, c in view.hypotheses().items() if c < self.thresh] or view.zones
+        return Decision(self._choose_random(weak), "random-revisit") if weak else None
+
+
+class NearestStrategy(Strategy):
+    """The nearest unvisited zone, then the nearest weakly known one."""
+
+    name = "nearest"
+
+    def next_zone(self, view: ExplorationView, pose=None) -> Decision | None:
+        not_visited = view.not_visited()
+        if not_visited:
+            return Decision(min(not_visited, key=lambda z: (view.distance(pose, z), z)),
+                            "nearest")
+        hyp = view.hypotheses()
+        weak = [z for z, c in hyp.items() if c < self.thresh and z not in view.busy]
+        if weak:
+            return Decision(min(weak, key=lambda z: (view.distance(pose, z), z)),
+                            "nearest-revisit")
+        return Decision(lowest_confidence(hyp, hyp), "lowest-confidence") if hyp else None
+
+
+class OracleStrategy(Strategy):
+    """Knows each machine's zone (``truth``: machine name -> zone) and sends
+    robots to the nearest zone of one of our machines not yet identified.
+    For benchmarks only: it is the lower bound the others are measured by."""
+
+    name = "oracle"
+
+    def __init__(self, truth: dict[str, int], seed: int = 0, thresh: float = DEFAULT_THRESH):
+        super().__init__(seed, thresh)
+        self.truth = dict(truth)
+
+    def next_zone(self, view: ExplorationView, pose=None) -> Decision | None:
+        from rll_bt.rules import PREFIX
+        own = [n for n in self.truth if n.startswith(PREFIX[view.team] + "-")]
+        todo = []
+        for name in own:
+            g = view.guesses.get(name)
+            if g is None or g.zone != self.truth[name] or identification(
+                    view.profile, g) < self.thresh:
+                todo.append(self.truth[name])
+        free = [z for z in todo if z not in view.busy] or todo
+        if not free:
+            return None
+        return Decision(min(free, key=lambda z: (view.distance(pose, z), z)), "oracle")
+
+
+STRATEGIES = {"algorithm1": Algorithm1, "random": RandomStrategy, "nearest": NearestStrategy,
+              "oracle": OracleStrategy}
+
+
+def make_strategy(name: str, seed: int = 0, thresh: float = DEFAULT_THRESH,
+                  truth: dict[str, int] | None = None) -> Strategy:
+    """A strategy by name; ``oracle`` needs ``truth`` (machine -> zone)."""
+    if name not in STRATEGIES:
+        raise ValueError(f"unknown exploration strategy {name!r} "
+                         f"(one of {', '.join(STRATEGIES)})")
+    if name == "oracle":
+        if truth is None:
+            raise ValueError("the oracle strategy needs the true machine zones")
+        return OracleStrategy(truth, seed, thresh)
+    return STRATEGIES[name](seed, thresh)

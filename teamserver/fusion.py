@@ -1,0 +1,128 @@
+"""Fusing machine observations into beliefs, one property at a time.
+
+A discrete property (zone, orientation, light, type) has K possible values.
+An observation of value v with confidence c is read as a likelihood: the
+robot says v with probability c when v is true and spreads 1 - c evenly over
+the K - 1 other values.  From a uniform prior the posterior is then
+
+    log P(v) = sum over robots r: log c_r            if r saw v
+                                  log((1-c_r)/(K-1)) otherwise   (+ const)
+
+Repeated observations from one robot are *updates* (the paper's agents
+resend when a confidence rises or a value is corrected), so each robot
+contributes only its latest value, at the highest confidence it gave for
+that value.  Agreement between robots raises the confidence, disagreement
+lowers it.  Poses are fused as a confidence-weighted mean (orientation as a
+circular mean) with a noisy-OR confidence.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Hashable, Iterable
+
+_C_MIN, _C_MAX = 1e-3, 0.999
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """Best value of a property, its probability, and who contributed."""
+
+    value: Any
+    confidence: float
+    robots: tuple[str, ...]
+
+
+class DiscreteBelief:
+    """Belief over one discrete property of one machine (``k`` possible values)."""
+
+    def __init__(self, k: int):
+        if k < 2:
+            raise ValueError(f"a discrete property needs at least 2 values, not {k}")
+        self.k = k
+        self._by_robot: dict[str, tuple[Hashable, float]] = {}
+
+    def add(self, robot: str, value: Hashable, confidence: float) -> None:
+        old = self._by_robot.get(robot)
+        if old is not None and old[0] == value:
+            confidence = max(confidence, old[1])
+        self._by_robot[robot] = (value, confidence)
+
+    def add_fixed(self, robot: str, value: Hashable, confidence: float) -> None:
+        """Set a robot's statement outright (ground truth from the refbox)."""
+        self._by_robot[robot] = (value, confidence)
+
+    @property
+    def empty(self) -> bool:
+        return not self._by_robot
+
+    def log_scores(self) -> tuple[dict[Hashable, float], float, int]:
+        """(log score per observed value, log score of any unobserved value, #unobserved)."""
+        seen: dict[Hashable, float] = {}
+        base = 0.0
+        for value, c in self._by_robot.values():
+            c = min(max(c, _C_MIN), _C_MAX)
+            miss = math.log((1.0 - c) / (self.k - 1))
+            base += miss
+            seen[value] = seen.get(value, 0.0) + math.log(c) - miss
+        scores = {v: base + s for v, s in seen.items()}
+        return scores, base, max(self.k - len(scores), 0)
+
+    def distribution(self) -> tuple[dict[Hashable, float], float]:
+        """(P(value) for each observed value, P(each single unobserved value))."""
+        scores, other, n_other = self.log_scores()
+        if not scores:
+            return {}, 1.0 / self.k
+        top = max(max(scores.values()), other)
+        weights = {v: math.exp(s - top) for v, s in scores.items()}
+        w_other = math.exp(other - top)
+        total = sum(weights.values()) + n_other * w_other
+        return {v: w / total for v, w in weights.items()}, w_other / total
+
+    def probability(self, value: Hashable) -> float:
+        dist, other = self.distribution()
+        return dist.get(value, other)
+
+    def estimate(self) -> Estimate | None:
+        dist, _ = self.distribution()
+        if not dist:
+            return None
+        value = max(dist, key=lambda v: (dist[v], _order_key(v)))
+        robots = tuple(sorted(r for r, (v, _) in self._by_robot.items() if v == value))
+        return Estimate(value, dist[value], robots)
+
+
+class PoseBelief:
+    """Confidence-weighted mean of each robot's latest pose (x, y, ori)."""
+
+    def __init__(self) -> None:
+        self._by_robot: dict[str, tuple[tuple[float, float, float], float]] = {}
+
+    def add(self, robot: str, value: Iterable[float], confidence: float) -> None:
+        x, y, ori = (float(v) for v in value)
+        self._by_robot[robot] = ((x, y, ori), confidence)
+
+    add_fixed = add
+
+    @property
+    def empty(self) -> bool:
+        return not self._by_robot
+
+    def estimate(self) -> Estimate | None:
+        if not self._by_robot:
+            return None
+        w_sum = sx = sy = sc = ss = 0.0
+        miss = 1.0
+        for (x, y, ori), c in self._by_robot.values():
+            w = max(c, _C_MIN)
+            w_sum += w
+            sx, sy = sx + w * x, sy + w * y
+            sc, ss = sc + w * math.cos(ori), ss + w * math.sin(ori)
+            miss *= 1.0 - min(c, _C_MAX)
+        value = (sx / w_sum, sy / w_sum, math.atan2(ss, sc))
+        return Estimate(value, 1.0 - miss, tuple(sorted(self._by_robot)))
+
+
+def _order_key(v: Any) -> str:
+    """Deterministic tie-break between equally likely values."""
+    return repr(v)

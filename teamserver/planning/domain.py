@@ -1,0 +1,249 @@
+"""The RCLL production domain: orders C0..C3 as task networks.
+
+A product is a base from the base station, 0..3 rings from the ring
+stations, a cap from a cap station, delivered at the delivery station:
+
+    stage 0   = get a base of the order's colour at the BS output
+    stage i   = (stage i-1  ||  additional bases for ring i on its RS slide)
+                -> MountRing(ring i) -> GetWorkpiece(RS output)
+    cap       = RetrieveCap(shelf -> CS input) -> GetWorkpiece(CS output)
+                -> the cap-less base is discarded, or used as an additional base
+    finish    = (stage k || cap) -> MountCap -> GetWorkpiece(CS output) -> Deliver
+
+``||`` is unordered: additional bases and the cap retrieval start at once,
+in parallel with the main chain, and each mount waits only for what it
+needs.  A ring colour costs 0, 1 or 2 additional bases (RingInfo); each is
+fetched from the BS (any colour) and put on the slide of the RS that mounts
+that colour, unless the cap-less base from the cap retrieval can serve.
+
+Steps are the team protocol's tasks (GetWorkpiece, PutWorkpiece,
+RetrieveCap, MountRing, MountCap, Deliver, Discard) with the PrepareMachine
+each needs and the station locks they take and release.  A step whose
+robot must already hold the workpiece (PutWorkpiece, MountRing, MountCap,
+Deliver, Discard) is ``carry``: it goes to the robot that made the pickup
+before it (or to ``holder`` when a repair starts from a held workpiece).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .. import model as M
+from .htn import Domain, Par, Seq
+
+DOMAIN = Domain("rcll-production")
+CAP_LOCK = "#cap"          # suffix of a cap station's buffer lock ("C-CS1#cap")
+
+
+@dataclass
+class Progress:
+    """What already exists of a product (for repair after a failure).
+
+    ``base``/``rings``/``cap``: the workpiece's composition, None/() when
+    there is none; ``location``: where it is ("robot:<id>", "<machine>:OUTPUT").
+    ``slide_credit``: our additional bases already on each RS slide for
+    this product.  ``cap_ready``: the CS holding a cap retrieved for it.
+    """
+
+    base: str | None = None
+    rings: tuple[str, ...] = ()
+    cap: str | None = None
+    location: str | None = None
+    slide_credit: dict[str, int] = field(default_factory=dict)
+    cap_ready: str | None = None
+
+
+@dataclass
+class ProductionContext:
+    """What the methods may look at (read-only during planning).
+
+    ``rs_colors``: RS machine name -> the ring colours it mounts;
+    ``ring_costs``: ring colour -> additional bases; ``cs_caps``: CS machine
+    name -> cap colour on its shelf; ``unusable``: stations not to plan with;
+    ``ds_by_order``: True from 2017 on (DS prepared with the order id).
+    """
+
+    team_prefix: str
+    rs_colors: dict[str, tuple[str, ...]]
+    ring_costs: dict[str, int]
+    cs_caps: dict[str, str]
+    order: M.Order
+    progress: Progress = field(default_factory=Progress)
+    unusable: frozenset[str] = frozenset()
+    ds_by_order: bool = False
+    reuse_capless_base: bool = True
+
+    @property
+    def bs(self) -> str:
+        return f"{self.team_prefix}-BS"
+
+    @property
+    def ds(self) -> str:
+        return f"{self.team_prefix}-DS"
+
+    def rs_for(self, color: str) -> str | None:
+        for rs in sorted(self.rs_colors):
+            if color in self.rs_colors[rs] and rs not in self.unusable:
+                return rs
+        return None
+
+    def cs_for(self, cap: str) -> list[str]:
+        return [cs for cs in sorted(self.cs_caps)
+                if self.cs_caps[cs] == cap and cs not in self.unusable]
+
+
+def _step(kind: str, params: dict, *, prepare: dict | None = None, locks=(), releases=(),
+          carry: bool = False, holder: str | None = None) -> dict:
+    return {"kind": kind, "params": params, "prepare": prepare, "locks": tuple(locks),
+            "releases": tuple(releases), "carry": carry, "holder": holder}
+
+
+# -- operators -----------------------------------------------------------------
+@DOMAIN.operator("get_base")
+def op_get_base(ctx: ProductionContext, color: str):
+    if ctx.bs in ctx.unusable:
+        return None
+    return _step(M.GET_WORKPIECE, {"machine": ctx.bs, "side": M.OUTPUT, "base": color},
+                 prepare={"machine": ctx.bs, "bs": {"side": M.OUTPUT, "color": color}},
+                 locks=(ctx.bs,), releases=(ctx.bs,))
+
+
+@DOMAIN.operator("pickup")
+def op_pickup(ctx: ProductionContext, machine: str, release_cap: bool = False):
+    """Take the workpiece from ``machine``'s output."""
+    releases = (machine, machine + CAP_LOCK) if release_cap else (machine,)
+    return _step(M.GET_WORKPIECE, {"machine": machine, "side": M.OUTPUT},
+                 locks=(machine,), releases=releases)
+
+
+@DOMAIN.operator("put_slide")
+def op_put_slide(ctx: ProductionContext, rs: str, holder: str | None = None):
+    return _step(M.PUT_WORKPIECE, {"machine": rs, "side": M.SLIDE}, carry=True, holder=holder)
+
+
+@DOMAIN.operator("mount_ring")
+def op_mount_ring(ctx: ProductionContext, rs: str, color: str, holder: str | None = None):
+    if color not in ctx.rs_colors.get(rs, ()):
+        return None
+    return _step(M.MOUNT_RING, {"machine": rs, "ring_color": color,
+                                "cost": ctx.ring_costs.get(color, 0)},
+                 prepare={"machine": rs, "rs": {"ring_color": color}},
+                 locks=(rs,), carry=True, holder=holder)
+
+
+@DOMAIN.operator("retrieve_cap")
+def op_retrieve_cap(ctx: ProductionContext, cs: str):
+    return _step(M.RETRIEVE_CAP, {"machine": cs, "cap": ctx.cs_caps[cs]},
+                 prepare={"machine": cs, "cs": {"operation": "RETRIEVE_CAP"}},
+                 locks=(cs, cs + CAP_LOCK))
+
+
+@DOMAIN.operator("mount_cap")
+def op_mount_cap(ctx: ProductionContext, cs: str, holder: str | None = None):
+    return _step(M.MOUNT_CAP, {"machine": cs, "cap_color": ctx.cs_caps[cs]},
+                 prepare={"machine": cs, "cs": {"operation": "MOUNT_CAP"}},
+                 locks=(cs, cs + CAP_LOCK), carry=True, holder=holder)
+
+
+@DOMAIN.operator("deliver")
+def op_deliver(ctx: ProductionContext, holder: str | None = None):
+    if ctx.ds in ctx.unusable:
+        return None
+    o = ctx.order
+    target = {"order_id": o.id} if ctx.ds_by_order else {"gate": o.gate}
+    return _step(M.DELIVER, {"machine": ctx.ds, "order_id": o.id, "not_before": o.begin,
+                             **target},
+                 prepare={"machine": ctx.ds, "ds": dict(target)},
+                 locks=(ctx.ds,), releases=(ctx.ds,), carry=True, holder=holder)
+
+
+@DOMAIN.operator("discard")
+def op_discard(ctx: ProductionContext, holder: str | None = None):
+    return _step(M.DISCARD, {}, carry=True, holder=holder)
+
+
+# -- methods ---------------------------------------------------------------------
+@DOMAIN.method("product")
+def m_product(ctx: ProductionContext):
+    """Make ctx.order from what exists (nothing, or a partial workpiece)."""
+    o, pr = ctx.order, ctx.progress
+    if pr.base is not None and (pr.base != o.base or tuple(pr.rings) != tuple(o.rings)[
+            :len(pr.rings)] or pr.cap is not None):
+        return None                     # the workpiece cannot become this product
+    stations = [ctx.rs_for(c) for c in o.rings[len(pr.rings):]]
+    if any(rs is None for rs in stations):
+        return None
+    caps = ctx.cs_for(o.cap)
+    if pr.cap_ready is not None:
+        caps = [pr.cap_ready] if pr.cap_ready in caps else []
+    for cs in caps:
+        yield ("product_with", cs)
+
+
+@DOMAIN.method("product_with", "reuse_capless_base")
+def m_product_reuse(ctx: ProductionContext, cs: str):
+    """The cap-less base from the cap retrieval serves as an additional base."""
+    pr = ctx.progress
+    if not ctx.reuse_capless_base or pr.cap_ready is not None:
+        return None
+    remaining = ctx.order.rings[len(pr.rings):]
+    for i, color in enumerate(remaining):
+        rs = ctx.rs_for(color)
+        if _bases_needed(ctx, remaining, i) > 0:
+            return _product_spec(ctx, cs, reuse_for=i)
+    return None
+
+
+@DOMAIN.method("product_with", "discard_capless_base")
+def m_product_discard(ctx: ProductionContext, cs: str):
+    return _product_spec(ctx, cs, reuse_for=None)
+
+
+def _bases_needed(ctx: ProductionContext, remaining, i: int) -> int:
+    """Additional bases still to bring for remaining ring i (after slide credit)."""
+    rs = ctx.rs_for(remaining[i])
+    credit = dict(ctx.progress.slide_credit)
+    for j in range(i + 1):
+        rj = ctx.rs_for(remaining[j])
+        cost = ctx.ring_costs.get(remaining[j], 0)
+        use = min(cost, credit.get(rj, 0))
+        credit[rj] = credit.get(rj, 0) - use
+        if j == i:
+            return cost - use
+    return 0
+
+
+def _product_spec(ctx: ProductionContext, cs: str, reuse_for: int | None):
+    pr = ctx.progress
+    remaining = ctx.order.rings[len(pr.rings):]
+    holder = pr.location[len("robot:"):] if pr.location and pr.location.startswith(
+        "robot:") else None
+    # stage 0: the workpiece to start from
+    if pr.base is None:
+        chain = ("get_base", ctx.order.base)
+    elif holder is not None:
+        chain = None                    # already in a gripper
+    else:
+        chain = ("pickup", pr.location.split(":")[0])
+    for i, color in enumerate(remaining):
+        rs = ctx.rs_for(color)
+        need = _bases_needed(ctx, remaining, i)
+        extras = []
+        if reuse_for == i and need > 0:
+            extras.append(Seq(("retrieve_cap", cs), ("pickup", cs), ("put_slide", rs)))
+            need -= 1
+        extras += [Seq(("get_base", _any_base(ctx)), ("put_slide", rs)) for _ in range(need)]
+        mount_holder = holder if chain is None else None
+        chain = Seq(Par(chain, *extras) if chain else Par(*extras),
+                    ("mount_ring", rs, color, mount_holder), ("pickup", rs))
+    if pr.cap_ready is not None or reuse_for is not None:
+        cap = None
+    else:
+        cap = Seq(("retrieve_cap", cs), ("pickup", cs), ("discard",))
+    cap_holder = holder if chain is None else None
+    parts = [p for p in (chain, cap) if p]
+    return Seq(Par(*parts), ("mount_cap", cs, cap_holder), ("pickup", cs, True), ("deliver",))
+
+
+def _any_base(ctx: ProductionContext) -> str:
+    """Colour of an additional base: any will do; the order's own saves a prepare change."""
+    return ctx.order.base
