@@ -6,7 +6,7 @@ whose pair is not registered is dropped by the receiver.
 """
 from __future__ import annotations
 
-from typing import Iterable
+from collections.abc import Iterable, Mapping
 
 from .errors import NoCompType, RegistryConflict
 
@@ -51,7 +51,7 @@ class MessageRegistry:
         reg = cls()
         for ms in sets:
             classes = getattr(ms, "classes", ms)
-            reg.add_all(classes.values() if isinstance(classes, dict) else classes)
+            reg.add_all(classes.values() if isinstance(classes, Mapping) else classes)
         return reg
 
     def add(self, cls: type) -> CompType:
@@ -69,6 +69,8 @@ class MessageRegistry:
         """Register those of ``classes`` that have a CompType; returns how many."""
         n = 0
         for c in classes:
+            if not hasattr(c, "DESCRIPTOR"):
+                raise TypeError(f"not a protobuf message class: {c!r}")
             if comp_type_of(c) is not None:
                 self.add(c)
                 n += 1

@@ -3,11 +3,15 @@ descriptor_pb2 in a private DescriptorPool (independent of rll_bt.msgs).
 
 Hello (2000/1), Other (2000/2), TeamCmd (5000/10) are what :func:`registry` accepts;
 Stranger (2000/99) has a CompType but is not registered; NoType has none; Clash (another
-pool) claims Hello's (2000, 1)."""
+pool) claims Hello's (2000, 1).
+
+``hand_key``/``pkcs7``/``aes`` redo the refbox crypto from hashlib and raw AES."""
 from __future__ import annotations
 
+import hashlib
 import types
 
+from cryptography.hazmat.primitives.ciphers import Cipher, algorithms, modes
 from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 
 F = descriptor_pb2.FieldDescriptorProto
@@ -56,3 +60,23 @@ TM = build_test_messages()
 def registry():
     from rll_bt.comm import MessageRegistry
     return MessageRegistry([TM.Hello, TM.Other, TM.TeamCmd])
+
+
+# -- crypto done by hand, independently of rll_bt.comm.crypto ------------------------------
+
+def hand_key(key: str, nbytes: int) -> bytes:
+    d = hashlib.sha256(key.encode()).digest()
+    for _ in range(7):
+        d = hashlib.sha256(d).digest()
+    return d[:nbytes]
+
+
+def pkcs7(data: bytes) -> bytes:
+    n = 16 - len(data) % 16
+    return data + bytes([n]) * n
+
+
+def aes(key: bytes, iv: bytes | None, data: bytes, decrypt=False) -> bytes:
+    c = Cipher(algorithms.AES(key), modes.CBC(iv) if iv else modes.ECB())
+    op = c.decryptor() if decrypt else c.encryptor()
+    return op.update(data) + op.finalize()

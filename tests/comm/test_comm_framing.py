@@ -107,6 +107,16 @@ def test_registry_keys_by_comp_type(tm):
         reg.add(tm.NoType)
 
 
+def test_registry_from_message_set_like_objects(tm):
+    import types as _t
+    from collections import OrderedDict
+    ms = _t.SimpleNamespace(classes=_t.MappingProxyType(OrderedDict(Hello=tm.Hello, NoType=tm.NoType)))
+    reg = MessageRegistry.from_message_set(ms, [tm.Other])
+    assert reg.lookup(2000, 1) is tm.Hello and reg.lookup(2000, 2) is tm.Other and len(reg) == 2
+    with pytest.raises(TypeError, match="not a protobuf message class"):
+        MessageRegistry(["Hello"])
+
+
 def test_registry_conflict_is_an_error(tm):
     reg = tm.registry()
     with pytest.raises(RegistryConflict, match="COMP_ID 2000 MSG_TYPE 1"):
