@@ -1,0 +1,162 @@
+"""The base class of every leaf node type: :class:`Node`.
+
+A node type is a py_trees behaviour with declared, typed ports
+(:class:`~rll_bt.tree.ports.Input`, :class:`~rll_bt.tree.ports.Output`), a
+docstring (shown by ``rll-bt tree nodes``) and a constructor that receives
+its name, its bound ports and the :class:`~rll_bt.tree.context.RunContext`.
+
+Skills never block a tick: ``initialise`` starts the work (sends a command,
+starts a planner), ``update`` polls and returns RUNNING, SUCCESS or FAILURE,
+``terminate(new_status)`` stops whatever is still going when the node is
+interrupted (``new_status`` is INVALID then).
+
+Halt before start: when a node whose ``preempts`` is true (every action by
+default) is about to start, every RUNNING branch that its composites are
+abandoning is halted *first* (terminate is called on it), so two actions
+never command the robot at once, not even for part of a tick.  Parallel
+composites are the exception: their children run together by design.
+"""
+from __future__ import annotations
+
+import re
+from typing import Any, ClassVar, Iterator
+
+import py_trees
+from py_trees.common import Status
+
+from ..backend import Capability
+from .context import RunContext
+from .ports import MISSING, BoundPorts, Const, Key, Port, Binding
+
+_VALID = frozenset(Status)
+_RUNNING = Status.RUNNING
+_INVALID = Status.INVALID
+
+#: names a port may not take (attributes of behaviours and nodes)
+RESERVED = frozenset(dir(py_trees.behaviour.Behaviour)) | {
+    "name", "status", "iterator", "parent", "children", "logger", "feedback_message", "blackbox_level",
+    "id", "qualified_name", "blackboards", "ctx", "ports", "log", "kind", "preempts", "child", "type",
+    "doc", "node_type", "bound", "requires_services", "requires_capabilities", "_bindings", "_bb"}
+
+
+def _snake(name: str) -> str:
+    return re.sub(r"(?<!^)(?=[A-Z])", "_", name).lower()
+
+
+class Node(py_trees.behaviour.Behaviour):
+    """Base class of leaf node types (actions and conditions).
+
+    Class attributes a node type may set:
+
+    - ``kind``: ``"action"`` (may return RUNNING) or ``"condition"``
+      (answers SUCCESS/FAILURE at once and changes nothing)
+    - ``preempts``: halt abandoned running branches before starting
+      (default: true for actions, false for conditions)
+    - ``requires_services``: names in ``ctx.services`` it uses, checked at load
+    - ``requires_capabilities``: backend capabilities it uses, checked at load
+    """
+
+    kind: ClassVar[str] = "action"
+    preempts: ClassVar[bool | None] = None
+    requires_services: ClassVar[tuple[str, ...]] = ()
+    requires_capabilities: ClassVar[Capability] = Capability.NONE
+    node_type: ClassVar[str] = ""
+    ports: ClassVar[dict[str, Port]] = {}
+
+    def __init_subclass__(cls, **kw) -> None:
+        super().__init_subclass__(**kw)
+        ports: dict[str, Port] = {}
+        for klass in reversed(cls.__mro__):
+            for attr, value in vars(klass).items():
+                if isinstance(value, Port):
+                    ports[value.name or attr] = value
+        for pname in ports:
+            if pname in RESERVED or pname.startswith("_"):
+                raise TypeError(f"{cls.__name__}: port name {pname!r} is reserved; choose another name")
+        cls.ports = ports
+        if cls.kind not in ("action", "condition"):
+            raise TypeError(f"{cls.__name__}: kind must be 'action' or 'condition', not {cls.kind!r}")
+        if "preempts" not in vars(cls) or cls.preempts is None:
+            cls.preempts = cls.kind == "action" if cls.preempts is None else cls.preempts
+
+    def __init__(self, name: str, ports: BoundPorts, ctx: RunContext):
+        super().__init__(name)
+        self.ctx = ctx
+        self.bound = ports
+        self._bb = ports.blackboard
+        bindings: dict[str, Binding] = {}
+        for pname, port in type(self).ports.items():
+            b = ports.bindings.get(pname)
+            if b is None:
+                if port.direction == "in":
+                    bindings[pname] = Const(port.default, "default")
+            elif isinstance(b, Key) and port.direction == "in" and port.default is not None:
+                bindings[pname] = b.with_default(port.default)
+            else:
+                bindings[pname] = b
+        self._bindings = bindings
+        self.log = ctx.logger
+
+    # -- building from Python -------------------------------------------------
+    @classmethod
+    def make(cls, ctx: RunContext | None = None, name: str | None = None, **values: Any) -> "Node":
+        """Build a node from Python (tests, hand-built trees).  ``values`` are
+        literals or :func:`~rll_bt.tree.ports.BB` keys."""
+        ctx = ctx or RunContext()
+        bindings: dict[str, Binding] = {}
+        for pname, value in values.items():
+            port = cls.ports.get(pname)
+            if port is None:
+                raise TypeError(f"{cls.__name__} has no port {pname!r} (ports: {', '.join(cls.ports) or 'none'})")
+            if isinstance(value, Binding):
+                bindings[pname] = value
+            elif port.direction == "out":
+                raise TypeError(f"output port {pname!r} needs a blackboard key: BB('key')")
+            elif port.ptype.name == "expr":
+                from .expr import parse_expr
+                bindings[pname] = Const(parse_expr(value), value)
+            else:
+                bindings[pname] = Const(port.check(value))
+        for pname, port in cls.ports.items():
+            if port.required and pname not in bindings:
+                raise TypeError(f"{cls.__name__} needs port {pname!r}")
+        return cls(name or cls.node_type or _snake(cls.__name__), BoundPorts(bindings, ctx.blackboard), ctx)
+
+    # -- ticking ----------------------------------------------------------------
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """py_trees' tick contract, plus halt-before-start for preempting nodes."""
+        if self.status is not _RUNNING:
+            if self.preempts:
+                self.halt_abandoned_branches()
+            self.initialise()
+        new_status = self.update()
+        if new_status not in _VALID:
+            self.logger.error(f"invalid status {new_status!r} from {self.name}; using INVALID")
+            new_status = _INVALID
+        if new_status is not _RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
+    def halt_abandoned_branches(self) -> None:
+        """Stop every RUNNING sibling of this node and of its ancestors,
+        except under composites whose children run concurrently."""
+        child: py_trees.behaviour.Behaviour = self
+        parent = self.parent
+        while parent is not None:
+            if not getattr(parent, "concurrent_children", False) and \
+                    not isinstance(parent, py_trees.composites.Parallel):
+                for sibling in parent.children:
+                    if sibling is not child and sibling.status is _RUNNING:
+                        sibling.stop(_INVALID)
+            child, parent = parent, parent.parent
+
+    def update(self) -> Status:  # pragma: no cover - subclasses implement
+        return Status.SUCCESS
+
+    @classmethod
+    def describe(cls) -> dict[str, Any]:
+        return {"kind": cls.kind, "ports": [p.describe() for p in cls.ports.values()]}
+
+
+__all__ = ["Node", "Status", "MISSING"]
