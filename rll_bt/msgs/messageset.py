@@ -55,6 +55,7 @@ class MessageSet:
     def __init__(self, name: str, descriptor_set: bytes, source_sha256: str = ""):
         self.name = name
         self.source_sha256 = source_sha256
+        self.descriptor_set = bytes(descriptor_set)
         self.pool = descriptor_pool.DescriptorPool()
         fds = descriptor_pb2.FileDescriptorSet()
         fds.ParseFromString(descriptor_set)
@@ -87,6 +88,12 @@ class MessageSet:
             by_ct[ct] = cls
         self.classes: Mapping[str, type] = MappingProxyType(classes)
         self.by_comp_type: Mapping[CompType, type] = MappingProxyType(by_ct)
+
+    def file_descriptor_set(self) -> descriptor_pb2.FileDescriptorSet:
+        """A fresh copy of the set's descriptors (``descriptor_pb2.FileDescriptorSet``)."""
+        fds = descriptor_pb2.FileDescriptorSet()
+        fds.ParseFromString(self.descriptor_set)
+        return fds
 
     # -- lookup -------------------------------------------------------------
     def get(self, name: str) -> type:
