@@ -58,37 +58,24 @@ def register(cli) -> None:
     snd.set_defaults(func=cmd_send)
 
 
-def _positive_int(text: str) -> int:
-    import argparse
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if v <= 0:
-        raise argparse.ArgumentTypeError(f"must be positive, not {v}")
-    return v
+def _number(kind: type, what: str, lo: float, hi: float | None = None):
+    """An argparse type: a ``kind`` number > ``lo`` (and < ``hi``)."""
+    def parse(text: str):
+        import argparse
+        try:
+            v = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not {what}: {text!r}") from None
+        if not (v > lo and (hi is None or v < hi)):
+            bounds = f"between {lo} and {hi}" if hi is not None else f"greater than {lo}"
+            raise argparse.ArgumentTypeError(f"must be {bounds}, not {text}")
+        return v
+    return parse
 
 
-def _positive_float(text: str) -> float:
-    import argparse
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not v > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, not {text}")
-    return v
-
-
-def _port(text: str) -> int:
-    import argparse
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
-    if not 0 < v < 65536:
-        raise argparse.ArgumentTypeError(f"port must be 1..65535, not {v}")
-    return v
+_positive_int = _number(int, "an integer", 0)
+_positive_float = _number(float, "a number", 0.0)
+_port = _number(int, "a port number", 0, 65536)
 
 
 def _common_args(p, key_required: bool) -> None:

@@ -24,7 +24,9 @@ from .codec import FrameCodec
 from .crypto import TEAM_CIPHER
 from .framing import FRAME_HEADER_SIZE, MAX_DATAGRAM, MAX_STREAM_PAYLOAD
 from .registry import MessageRegistry
-from .transport import CONNECTED, DISCONNECTED, LinkEvent, Received
+from .transport import CONNECTED, DISCONNECTED, CryptoSwitch, LinkEvent, Received
+
+_STREAM_MAX_FRAME = FRAME_HEADER_SIZE + MAX_STREAM_PAYLOAD
 
 #: a tap sees (channel or address, source name, frame bytes)
 Tap = Callable[[str, Any, bytes], None]
@@ -90,7 +92,7 @@ class Bus:
                                iv_source=iv_source)
 
 
-class _BusEnd:
+class _BusEnd(CryptoSwitch):
     """Inbox, codec and events shared by every bus endpoint."""
 
     def __init__(self, bus: Bus, channel: str, registry: MessageRegistry, key, cipher,
@@ -135,16 +137,6 @@ class _BusEnd:
         self._poll()
         return bool(self._inbox or self._events)
 
-    def set_crypto(self, key: str | bytes, cipher: int | str = TEAM_CIPHER) -> None:
-        self.codec.set_crypto(key, cipher)
-
-    def clear_crypto(self) -> None:
-        self.codec.clear_crypto()
-
-    @property
-    def encrypted(self) -> bool:
-        return self.codec.encrypted
-
     def __enter__(self):
         return self
 
@@ -186,8 +178,7 @@ class BusStreamServer(_BusEnd):
 
     def __init__(self, bus: Bus, address: str, *, registry, key, cipher, channel: str,
                  drop_unauthenticated: bool, iv_source):
-        super().__init__(bus, channel, registry, key, cipher,
-                         FRAME_HEADER_SIZE + MAX_STREAM_PAYLOAD,
+        super().__init__(bus, channel, registry, key, cipher, _STREAM_MAX_FRAME,
                          f"{channel} bus server {address}", iv_source)
         self.address = address
         self.drop_unauthenticated = drop_unauthenticated
@@ -249,8 +240,7 @@ class BusStreamClient(_BusEnd):
 
     def __init__(self, bus: Bus, address: str, *, registry, key, cipher, channel: str,
                  name: str, iv_source):
-        super().__init__(bus, channel, registry, key, cipher,
-                         FRAME_HEADER_SIZE + MAX_STREAM_PAYLOAD,
+        super().__init__(bus, channel, registry, key, cipher, _STREAM_MAX_FRAME,
                          f"{channel} bus client {name}", iv_source)
         self.address = address
         self.name = name

@@ -28,7 +28,8 @@ from dataclasses import dataclass
 from typing import Any, Callable, Protocol, runtime_checkable
 
 from ..clock import Clock, WallClock
-from .codec import Decoded
+from .codec import Decoded, FrameCodec
+from .crypto import TEAM_CIPHER
 from .stats import DropStats
 
 log = logging.getLogger("rll_bt.comm")
@@ -75,6 +76,26 @@ class LinkEvent:
     peer: Any
     channel: str
     time: float
+
+
+class CryptoSwitch:
+    """Mixin for transports holding a :class:`~rll_bt.comm.codec.FrameCodec` as ``codec``:
+    switch the team-channel encryption on or off at run time."""
+
+    codec: FrameCodec
+
+    def set_crypto(self, key: str | bytes, cipher: int | str = TEAM_CIPHER) -> None:
+        """Encrypt with ``key`` from now on and drop plain frames (e.g. once GameState
+        names our team)."""
+        self.codec.set_crypto(key, cipher)
+
+    def clear_crypto(self) -> None:
+        """Send and accept plain frames from now on."""
+        self.codec.clear_crypto()
+
+    @property
+    def encrypted(self) -> bool:
+        return self.codec.encrypted
 
 
 @runtime_checkable

@@ -24,7 +24,7 @@ from .codec import FrameCodec
 from .crypto import TEAM_CIPHER
 from .framing import FRAME_V2, MAX_DATAGRAM
 from .registry import MessageRegistry
-from .transport import PumpedTransport, Received
+from .transport import CryptoSwitch, PumpedTransport, Received
 
 log = logging.getLogger("rll_bt.comm")
 
@@ -62,7 +62,7 @@ def local_ipv4_addresses(probe_host: str | None = None) -> set[str]:
     return ips
 
 
-class UdpPeer(PumpedTransport):
+class UdpPeer(CryptoSwitch, PumpedTransport):
     """A broadcast peer on one channel.
 
     ``host``: where to send (a broadcast address, or 127.0.0.1 locally).
@@ -107,18 +107,6 @@ class UdpPeer(PumpedTransport):
         self.stats.name = f"{channel} udp recv :{self.recv_port}"
         self._own_ips = local_ipv4_addresses(host)
         self._send_errors: set[int] = set()
-
-    # -- crypto ------------------------------------------------------------
-    def set_crypto(self, key: str | bytes, cipher: int | str = TEAM_CIPHER) -> None:
-        """Switch encryption on (e.g. once GameState names our team)."""
-        self.codec.set_crypto(key, cipher)
-
-    def clear_crypto(self) -> None:
-        self.codec.clear_crypto()
-
-    @property
-    def encrypted(self) -> bool:
-        return self.codec.encrypted
 
     # -- send ----------------------------------------------------------------
     def send(self, msg) -> bool:

@@ -5,12 +5,12 @@ import types
 
 import pytest
 
-from comm_testmsgs import TM, registry
+from comm_testkit import TM, registry
 
 
 @pytest.fixture(scope="session")
 def tm():
-    """The test message classes of :mod:`comm_testmsgs` plus ``tm.registry()``."""
+    """The test message classes of :mod:`comm_testkit` plus ``tm.registry()``."""
     ns = types.SimpleNamespace(**vars(TM))
     ns.registry = registry
     return ns

@@ -4,7 +4,6 @@ from __future__ import annotations
 import json
 import os
 import queue
-import socket
 import subprocess
 import sys
 import threading
@@ -13,20 +12,11 @@ from pathlib import Path
 
 import pytest
 
+from comm_testkit import free_udp_ports
 from rll_bt.cli import main
 
 RLL_BT = str(Path(sys.executable).parent / "rll-bt")
 TEAM, KEY = "Carologistics", "randomkey"
-
-
-def free_udp_ports(n):
-    socks = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(n)]
-    for s in socks:
-        s.bind(("127.0.0.1", 0))
-    ports = [s.getsockname()[1] for s in socks]
-    for s in socks:
-        s.close()
-    return ports
 
 
 class Monitor:

@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rll_bt.comm import FRAME_V1, FrameCodec, StreamReassembler, StreamServer, UdpPeer
-from comm_testmsgs import TM, registry
+from comm_testkit import TM, registry
 
 KEY = "randomkey"
 FUZZ = settings(max_examples=250, deadline=None,

@@ -5,7 +5,7 @@ import struct
 
 import pytest
 
-from comm_testmsgs import aes, hand_key, pkcs7
+from comm_testkit import aes, hand_key, pkcs7
 from rll_bt import msgs
 from rll_bt.comm import Bus, FrameCodec, MessageRegistry, TEAM_CIPHER
 from rll_bt.comm import stats as S

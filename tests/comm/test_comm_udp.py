@@ -7,20 +7,11 @@ import time
 
 import pytest
 
+from comm_testkit import free_udp_ports
 from rll_bt.comm import FrameTooLarge, UdpPeer
 from rll_bt.comm import stats as S
 
 KEY = "randomkey"
-
-
-def free_udp_ports(n):
-    socks = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(n)]
-    for s in socks:
-        s.bind(("127.0.0.1", 0))
-    ports = [s.getsockname()[1] for s in socks]
-    for s in socks:
-        s.close()
-    return ports
 
 
 def collect(peer, n, timeout=3.0):

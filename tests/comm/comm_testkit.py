@@ -9,6 +9,7 @@ pool) claims Hello's (2000, 1).
 from __future__ import annotations
 
 import hashlib
+import socket
 import types
 
 from cryptography.hazmat.primitives.ciphers import Cipher, algorithms, modes
@@ -80,3 +81,14 @@ def aes(key: bytes, iv: bytes | None, data: bytes, decrypt=False) -> bytes:
     c = Cipher(algorithms.AES(key), modes.CBC(iv) if iv else modes.ECB())
     op = c.decryptor() if decrypt else c.encryptor()
     return op.update(data) + op.finalize()
+
+
+def free_udp_ports(n):
+    """``n`` distinct UDP ports free on 127.0.0.1 right now."""
+    socks = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(n)]
+    for s in socks:
+        s.bind(("127.0.0.1", 0))
+    ports = [s.getsockname()[1] for s in socks]
+    for s in socks:
+        s.close()
+    return ports
