@@ -1,0 +1,206 @@
+"""The localisation service of one robot: an AMCL-style particle filter fed
+from a backend's odometry and laser.
+
+    loc = Localiser(backend, field_map, clock, AmclConfig.cheap(), seed=1)
+    loc.initialise(Pose2D(4.5, -0.5, math.pi / 2))
+    ...
+    loc.update()              # every control tick; cheap when not moved
+    est = loc.estimate()      # pose (field frame), covariance, confidence
+
+The filter runs only after ``update_min_d`` metres or ``update_min_a``
+radians of odometry (as AMCL does), and, while its confidence is low, every
+``still_update_period`` seconds when standing.  Between filter updates the
+pose is the last estimate moved on by odometry, so ``pose()`` is smooth and
+current at every tick.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rll_bt.backend import Backend, CapabilityError, LaserScan, Pose2D
+from rll_bt.clock import Clock
+
+from ..maps import FieldMap, march_rays
+from .config import AmclConfig
+from .motion import odometry_step
+from .particles import ParticleFilter
+
+
+@dataclass(frozen=True)
+class PoseEstimate:
+    """The localiser's belief.  ``pose`` in the field frame; ``covariance``
+    3x3 over (x [m], y [m], theta [rad]); ``confidence`` 0..1 combines the
+    share of weight in the main cluster, its spread and how well the scan
+    agrees with the map from that pose (``fit``)."""
+    stamp: float
+    pose: Pose2D
+    covariance: np.ndarray
+    confidence: float
+    fit: float
+    particles: int
+    lost: bool = False
+
+    @property
+    def std_xy(self) -> float:
+        return float(math.sqrt(max(self.covariance[0, 0] + self.covariance[1, 1], 0.0)))
+
+    @property
+    def std_theta(self) -> float:
+        return float(math.sqrt(max(self.covariance[2, 2], 0.0)))
+
+
+def select_beams(scan: LaserScan, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """(ranges, angles in the laser frame) of up to ``count`` beams spread
+    evenly over the scan, without readings outside [range_min, range_max)."""
+    ranges = np.asarray(scan.ranges, dtype=float)
+    n = len(ranges)
+    if n == 0:
+        return np.zeros(0), np.zeros(0)
+    idx = np.unique(np.linspace(0, n - 1, min(count, n)).round().astype(int))
+    r = ranges[idx]
+    ok = np.isfinite(r) & (r >= scan.range_min) & (r < scan.range_max)
+    return r[ok], scan.angle_min + scan.angle_increment * idx[ok]
+
+
+def beam_endpoints(ranges: np.ndarray, angles: np.ndarray, mount: Pose2D) -> np.ndarray:
+    """Beam endpoints (M, 2) in the robot frame."""
+    a = angles + mount.theta
+    return np.column_stack([mount.x + ranges * np.cos(a), mount.y + ranges * np.sin(a)])
+
+
+class Localiser:
+    def __init__(self, backend: Backend, field_map: FieldMap, clock: Clock,
+                 config: AmclConfig | None = None, seed: int = 0):
+        self.backend = backend
+        self.map = field_map
+        self.clock = clock
+        self.config = config or AmclConfig.standard()
+        self.filter = ParticleFilter(field_map, self.config, seed)
+        self._odom_at_update: Pose2D | None = None     # odometry at the last filter update
+        self._pose_at_update: Pose2D | None = None     # estimate at the last filter update
+        self._last_filter_time = -math.inf
+        self._last_scan_stamp: float | None = None
+        self._low_streak = 0
+        self._estimate: PoseEstimate | None = None
+        self.filter_updates = 0
+        self.filter_seconds = 0.0          # measured by the caller's clock only in benchmarks
+
+    # -- set-up -----------------------------------------------------------
+    def initialise(self, pose: Pose2D, sigma: tuple[float, float, float] = (0.1, 0.1, 0.1)) -> None:
+        """Start from a known pose (a Gaussian with the given std devs)."""
+        self.filter.initialise(pose, sigma)
+        self._reset(pose)
+
+    def initialise_global(self) -> None:
+        """Start lost: particles over all free space."""
+        self.filter.initialise_uniform()
+        self._reset(None)
+
+    def _reset(self, pose: Pose2D | None) -> None:
+        self._odom_at_update = self.backend.odometry().pose
+        self._pose_at_update = pose
+        self._last_filter_time = -math.inf
+        self._low_streak = 0
+        if pose is not None:
+            est = self.filter.estimate()
+            self._estimate = PoseEstimate(self.clock.now(), pose, est.covariance, 0.0, 0.0,
+                                          len(self.filter.particles))
+        else:
+            self._estimate = None
+
+    @property
+    def initialised(self) -> bool:
+        return len(self.filter.particles) > 0
+
+    # -- running ----------------------------------------------------------
+    def update(self, force: bool = False) -> bool:
+        """Run the filter if the robot moved enough (or ``force``); returns
+        whether it ran.  Cheap otherwise: one odometry read."""
+        if not self.initialised:
+            raise RuntimeError("initialise the localiser first")
+        odom = self.backend.odometry().pose
+        du, dv, dw = odometry_step(self._odom_at_update, odom)
+        moved = math.hypot(du, dv) >= self.config.update_min_d or abs(dw) >= self.config.update_min_a
+        now = self.clock.now()
+        still = (not moved and self.config.still_update_period is not None
+                 and now - self._last_filter_time >= self.config.still_update_period
+                 and (self._estimate is None or self._estimate.confidence < self.config.confident))
+        if not (moved or still or force):
+            return False
+        scan = self._scan()
+        if scan is None:
+            return False
+        self.filter.predict((du, dv, dw))
+        if not moved:
+            self.filter.jitter(*self.config.still_jitter)
+        ranges, angles = select_beams(scan, self.config.beams)
+        beams = beam_endpoints(ranges, angles, scan.mount)
+        self.filter.correct(beams)
+        if self.filter.updates % self.config.resample_interval == 0:
+            self.filter.resample()
+        self._odom_at_update = odom
+        self._last_filter_time = now
+        self.filter_updates += 1
+        self._estimate = self._make_estimate(now, ranges, angles, scan.mount)
+        self._pose_at_update = self._estimate.pose
+        return True
+
+    def _scan(self) -> LaserScan | None:
+        try:
+            return self.backend.laser_scan()
+        except CapabilityError:
+            return None
+
+    def _make_estimate(self, now: float, ranges, angles, mount: Pose2D) -> PoseEstimate:
+        cl = self.filter.estimate()
+        fit = self.fit(cl.pose, ranges, angles, mount)
+        std = math.sqrt(max(cl.covariance[0, 0] + cl.covariance[1, 1], 0.0))
+        spread = 1.0 / (1.0 + (std / 0.15) ** 2)
+        confidence = float(cl.weight * fit * spread)
+        self._low_streak = self._low_streak + 1 if confidence < self.config.lost else 0
+        lost = self._low_streak >= self.config.lost_updates
+        return PoseEstimate(now, cl.pose, cl.covariance, confidence, fit, len(self.filter.particles), lost)
+
+    def fit(self, pose: Pose2D, ranges: np.ndarray, angles: np.ndarray, mount: Pose2D) -> float:
+        """Agreement of a scan with the map seen from ``pose``: a beam that
+        ends at the expected wall counts 1, one cut short (an unmapped
+        obstacle, another robot) 0.5, one that passes through a mapped
+        wall 0."""
+        if len(ranges) == 0:
+            return 0.0
+        spec, occ = self.map.occupancy(self.config.grid_resolution)
+        origin = pose.compose(mount)
+        expected = march_rays(spec, occ, (origin.x, origin.y), angles + origin.theta,
+                              self.filter.field.range_max)
+        tol = self.config.fit_tolerance
+        match = np.abs(ranges - expected) <= tol
+        short = ranges < expected - tol
+        return float((match.sum() + 0.5 * short.sum()) / len(ranges))
+
+    # -- results ----------------------------------------------------------
+    def estimate(self) -> PoseEstimate | None:
+        """The belief at the current odometry (the last filter estimate moved
+        on by the odometry since), or None before the first estimate."""
+        if self._estimate is None:
+            return None
+        return PoseEstimate(self._estimate.stamp, self.pose(), self._estimate.covariance,
+                            self._estimate.confidence, self._estimate.fit,
+                            self._estimate.particles, self._estimate.lost)
+
+    def pose(self) -> Pose2D | None:
+        if self._pose_at_update is None:
+            return None
+        odom = self.backend.odometry().pose
+        step = odom.relative_to(self._odom_at_update)
+        return self._pose_at_update.compose(step)
+
+    @property
+    def confidence(self) -> float:
+        return 0.0 if self._estimate is None else self._estimate.confidence
+
+    @property
+    def lost(self) -> bool:
+        return self._estimate is not None and self._estimate.lost

@@ -1,0 +1,193 @@
+"""Path following for the omnidirectional base.
+
+The follower steers toward a carrot ``lookahead`` metres further along the
+path (pure pursuit, but an omni base needs no curvature: it translates
+straight at the carrot) and, independently, turns the body: along the
+direction of travel while far from the goal (so the laser, which sees
+240 degrees forward, looks where the robot goes) and to the goal heading
+for the last ``align_distance`` metres.
+
+Limits: translation speed ``max_speed`` (the rules' 0.7 m/s), the speed
+from which the robot can still stop at the goal with ``max_decel``, and an
+optional external cap (the laser safety check); the commanded velocity
+vector changes by at most ``max_accel * dt`` (``max_decel * dt`` when
+slowing); angular speed and acceleration likewise.  Velocities are planned
+in the field frame and sent in the robot frame.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from rll_bt.backend import Pose2D, wrap_angle
+
+
+@dataclass(frozen=True)
+class Limits:
+    max_speed: float = 0.7
+    max_omega: float = 1.6
+    max_accel: float = 0.8
+    max_decel: float = 1.2
+    max_alpha: float = 1.6
+
+    @classmethod
+    def from_settings(cls, s, max_speed: float | None = None) -> "Limits":
+        return cls(min(max_speed or s.max_speed, s.max_speed), s.max_omega, s.max_accel,
+                   s.max_decel, s.max_alpha)
+
+
+class VelocityLimiter:
+    """Holds the last command and limits how fast it changes."""
+
+    def __init__(self, limits: Limits):
+        self.limits = limits
+        self.v = np.zeros(2)          # field frame, m/s
+        self.omega = 0.0
+
+    def reset(self) -> None:
+        self.v[:] = 0.0
+        self.omega = 0.0
+
+    def apply(self, v_des: np.ndarray, omega_des: float, dt: float) -> tuple[np.ndarray, float]:
+        lim = self.limits
+        speed = float(np.hypot(*v_des))
+        if speed > lim.max_speed:
+            v_des = v_des * (lim.max_speed / speed)
+        dv = v_des - self.v
+        a = lim.max_accel if np.hypot(*v_des) > np.hypot(*self.v) else lim.max_decel
+        n = float(np.hypot(*dv))
+        if n > a * dt:
+            dv = dv * (a * dt / n)
+        self.v = self.v + dv
+        omega_des = float(np.clip(omega_des, -lim.max_omega, lim.max_omega))
+        dw = float(np.clip(omega_des - self.omega, -lim.max_alpha * dt, lim.max_alpha * dt))
+        self.omega += dw
+        return self.v.copy(), self.omega
+
+    def to_robot(self, theta: float) -> tuple[float, float, float]:
+        c, s = math.cos(theta), math.sin(theta)
+        vx, vy = self.v
+        return c * vx + s * vy, -s * vx + c * vy, self.omega
+
+
+def heading_command(error: float, limits: Limits, gain: float = 2.0) -> float:
+    """Angular speed toward a heading error (rad), able to stop in time."""
+    w = gain * error
+    stop = math.sqrt(2.0 * limits.max_alpha * 0.8 * abs(error))
+    return float(np.clip(w, -min(stop, limits.max_omega), min(stop, limits.max_omega)))
+
+
+class PathFollower:
+    """Follows waypoints ``path`` (K, 2) to the last one, then turns to
+    ``goal_theta`` (None: any heading)."""
+
+    def __init__(self, path: np.ndarray, goal_theta: float | None, limits: Limits,
+                 position_tolerance: float = 0.05, heading_tolerance: float = 0.05,
+                 lookahead: float = 0.5, align_distance: float = 0.8, gain: float = 1.5):
+        self.path = np.asarray(path, dtype=float)
+        if len(self.path) == 1:
+            self.path = np.vstack([self.path, self.path])
+        seg = np.diff(self.path, axis=0)
+        self.seg_len = np.hypot(seg[:, 0], seg[:, 1])
+        self.cum = np.concatenate([[0.0], np.cumsum(self.seg_len)])
+        self.goal_theta = goal_theta
+        self.limits = limits
+        self.position_tolerance = position_tolerance
+        self.heading_tolerance = heading_tolerance
+        self.lookahead = lookahead
+        self.align_distance = align_distance
+        self.gain = gain
+        self.limiter = VelocityLimiter(limits)
+        self.progress = 0.0           # arc length of the closest path point
+        self.done = False
+        self.capped = False           # the last command was slowed by ``speed_cap``
+        self.last_speed_wanted = 0.0
+
+    @property
+    def goal(self) -> np.ndarray:
+        return self.path[-1]
+
+    @property
+    def length(self) -> float:
+        return float(self.cum[-1])
+
+    def remaining(self, pose: Pose2D) -> float:
+        """Path length left from the closest point plus the offset to it."""
+        return max(self.length - self.progress, 0.0)
+
+    def _project(self, pose: Pose2D) -> None:
+        p = np.array([pose.x, pose.y])
+        a = self.path[:-1]
+        d = self.path[1:] - a
+        len2 = np.maximum((d * d).sum(axis=1), 1e-12)
+        t = np.clip(((p - a) * d).sum(axis=1) / len2, 0.0, 1.0)
+        proj = a + d * t[:, None]
+        dist = np.hypot(*(proj - p).T)
+        s = self.cum[:-1] + t * self.seg_len
+        # only look forward (and a little back) from the current progress
+        window = (s >= self.progress - 0.2) & (s <= self.progress + 2.0)
+        if window.any():
+            dist = np.where(window, dist, np.inf)
+        i = int(np.argmin(dist))
+        self.progress = max(self.progress, float(s[i]))
+
+    def point_at(self, s: float) -> np.ndarray:
+        s = min(max(s, 0.0), self.length)
+        i = int(np.searchsorted(self.cum, s, side="right")) - 1
+        i = min(max(i, 0), len(self.seg_len) - 1)
+        if self.seg_len[i] <= 1e-12:
+            return self.path[i + 1].copy()
+        t = (s - self.cum[i]) / self.seg_len[i]
+        return self.path[i] + (self.path[i + 1] - self.path[i]) * t
+
+    def command(self, pose: Pose2D, dt: float,
+                speed_cap: Callable[[float, float], float] | None = None) -> tuple[float, float, float]:
+        """Body velocity (vx, vy, omega) for this control step.  ``speed_cap``
+        gets the desired direction of travel (a field-frame unit vector) and
+        returns the highest speed allowed along it (the laser check)."""
+        lim = self.limits
+        self._project(pose)
+        p = np.array([pose.x, pose.y])
+        to_goal = self.goal - p
+        d_goal = float(np.hypot(*to_goal))
+        remaining = max(self.length - self.progress, d_goal)
+        if remaining <= self.lookahead or d_goal <= self.lookahead:
+            target, dist = self.goal, d_goal
+        else:
+            target = self.point_at(self.progress + self.lookahead)
+            dist = remaining
+        direction = target - p
+        n = float(np.hypot(*direction))
+        speed = min(lim.max_speed, math.sqrt(2.0 * lim.max_decel * 0.8 * dist), self.gain * dist)
+        wanted = speed
+        self.capped = False
+        if speed_cap is not None and n > 1e-9 and d_goal > self.position_tolerance:
+            cap = speed_cap(direction[0] / n, direction[1] / n)
+            if cap < speed:
+                speed, self.capped = max(cap, 0.0), True
+        self.last_speed_wanted = speed
+        v_des = direction / n * speed if n > 1e-9 else np.zeros(2)
+        at_position = d_goal <= self.position_tolerance
+        if at_position:
+            v_des = np.zeros(2)
+        # heading
+        if self.goal_theta is not None and remaining <= self.align_distance:
+            want = self.goal_theta
+        elif wanted > 0.05 and n > 1e-9 and remaining > self.align_distance:
+            want = math.atan2(direction[1], direction[0])
+        else:
+            want = self.goal_theta if self.goal_theta is not None else pose.theta
+        err = wrap_angle(want - pose.theta)
+        omega_des = heading_command(err, lim)
+        heading_ok = self.goal_theta is None or abs(wrap_angle(self.goal_theta - pose.theta)) <= self.heading_tolerance
+        if at_position and heading_ok:
+            self.done = True
+            self.limiter.reset()
+            return 0.0, 0.0, 0.0
+        if self.goal_theta is None and at_position:
+            omega_des = 0.0
+        self.limiter.apply(v_des, omega_des, dt)
+        return self.limiter.to_robot(pose.theta)

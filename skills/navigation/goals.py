@@ -1,0 +1,123 @@
+"""Navigation goals: a pose, a zone (its centre, or the nearest free spot
+inside it) or a station side (a pose in front of an input or output face).
+
+Every goal resolves against a :class:`~skills.context.SkillContext` to a
+field pose and whether its heading matters; a station side needs the
+station's pose from ``ctx.machines``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rll_bt.backend import Pose2D
+from rll_bt.rules import MPS, MpsGeometry
+
+from ..errors import SkillError, SkillFailure
+
+SIDES = ("INPUT", "OUTPUT")
+
+
+def side_sign(side: str) -> float:
+    """+1 for the input face (machine x = +depth/2), -1 for the output face."""
+    side = side.upper()
+    if side not in SIDES:
+        raise ValueError(f"side must be INPUT or OUTPUT, not {side!r}")
+    return 1.0 if side == "INPUT" else -1.0
+
+
+def target_lateral(target: str, mps: MpsGeometry = MPS) -> float:
+    """Machine-frame y (m) of a place on a face: ``conveyor``, ``slide``,
+    ``shelf0``/``shelf1``/``shelf2`` (the cap station's shelf slots)."""
+    t = target.lower()
+    if t == "conveyor":
+        return mps.belt_offset_y
+    if t == "slide":
+        return mps.slide_y
+    if t.startswith("shelf") and t[5:].isdigit() and int(t[5:]) < len(mps.shelf_y):
+        return mps.shelf_y[int(t[5:])]
+    raise ValueError(f"unknown place {target!r} (conveyor, slide, shelf0..shelf{len(mps.shelf_y) - 1})")
+
+
+def approach_pose(machine: Pose2D, side: str, distance: float, lateral: float | None = None,
+                  mps: MpsGeometry = MPS) -> Pose2D:
+    """The robot pose facing ``side`` of a station, its centre ``distance``
+    metres from the face, on the line of machine-frame y = ``lateral``
+    (default: the conveyor's centre line)."""
+    sx = side_sign(side)
+    y = mps.belt_offset_y if lateral is None else lateral
+    local = Pose2D(sx * (mps.depth / 2.0 + distance), y, math.pi if sx > 0 else 0.0)
+    return machine.compose(local)
+
+
+@dataclass(frozen=True)
+class PoseGoal:
+    pose: Pose2D
+    heading: bool = True           # whether the final heading matters
+
+    def resolve(self, ctx) -> tuple[Pose2D, bool]:
+        return self.pose, self.heading
+
+    def describe(self) -> str:
+        p = self.pose
+        return f"pose ({p.x:.2f}, {p.y:.2f}, {math.degrees(p.theta):.0f} deg)"
+
+
+@dataclass(frozen=True)
+class ZoneGoal:
+    """The zone's centre, or the free spot inside the zone nearest to it
+    (a station may stand at the centre).  ``heading`` None: any."""
+    zone: int
+    heading: float | None = None
+
+    def resolve(self, ctx) -> tuple[Pose2D, bool]:
+        prof = ctx.profile
+        try:
+            rect = prof.zones.bounds(self.zone)
+        except ValueError as exc:
+            raise SkillFailure(SkillError.BAD_GOAL, str(exc)) from None
+        cx, cy = rect.centre
+        cm = ctx.costmap
+        if bool(cm.is_free(cx, cy)):
+            x, y = cx, cy
+        else:
+            xs, ys = cm.spec.centres()
+            inside = (xs >= rect.x_min) & (xs <= rect.x_max) & (ys >= rect.y_min) & (ys <= rect.y_max)
+            lethal, _ = cm.grids()
+            ok = inside & ~lethal
+            if not ok.any():
+                raise SkillFailure(SkillError.BAD_GOAL, f"zone {prof.zone_name(self.zone)} has no free spot")
+            d = np.where(ok, np.hypot(xs - cx, ys - cy), np.inf)
+            r, c = np.unravel_index(int(np.argmin(d)), d.shape)
+            x, y = float(xs[r, c]), float(ys[r, c])
+        theta = self.heading if self.heading is not None else 0.0
+        return Pose2D(x, y, theta), self.heading is not None
+
+    def describe(self) -> str:
+        return f"zone {self.zone}"
+
+
+@dataclass(frozen=True)
+class StationSideGoal:
+    """In front of ``side`` of ``machine``, facing it, ``distance`` metres
+    from the face, aligned with ``place`` (conveyor, slide, shelfN)."""
+    machine: str
+    side: str
+    distance: float = 0.6
+    place: str = "conveyor"
+
+    def resolve(self, ctx) -> tuple[Pose2D, bool]:
+        pose = ctx.machines.get(self.machine)
+        if pose is None:
+            raise SkillFailure(SkillError.MACHINE_UNKNOWN, f"the pose of {self.machine} is not known")
+        mps = ctx.profile.mps
+        try:
+            lateral = target_lateral(self.place, mps)
+            return approach_pose(pose, self.side, self.distance, lateral, mps), True
+        except ValueError as exc:
+            raise SkillFailure(SkillError.BAD_GOAL, str(exc)) from None
+
+    def describe(self) -> str:
+        return f"{self.machine} {self.side.lower()} ({self.place})"

@@ -1,0 +1,167 @@
+"""Driving to a goal: plan on the costmap, follow the path, stop for what
+the laser sees, replan around it, give up after a timeout.
+
+:class:`Navigate` is a non-blocking activity.  Each poll reads the pose
+and the latest scan, commands one velocity and returns.  When the laser
+check holds the robot still for ``block_replan_after`` seconds, the
+unexplained laser points near the robot (not walls or known stations:
+other robots, unknown stations) go into the costmap for
+``obstacle_ttl`` seconds and the path is replanned; while no path exists
+the robot waits, and after ``max_blocked`` seconds it fails with
+``NAVIGATION_FAILED``.  Losing localisation fails with
+``LOCALISATION_LOST``; the time limit with ``TIMEOUT``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rll_bt.backend import CapabilityError, Pose2D, wrap_angle
+
+from ..activity import Activity, Status
+from ..errors import SkillError, SkillFailure
+from .controller import Limits, PathFollower
+from .planner import GridPlanner, NoPath
+from .safety import scan_points, speed_limit, to_field
+
+
+class Navigate(Activity):
+    name = "navigate"
+
+    def __init__(self, ctx, goal, position_tolerance: float | None = None,
+                 heading_tolerance: float | None = None, max_speed: float | None = None,
+                 timeout: float | None = None, max_blocked: float = 20.0, use_laser: bool = True):
+        super().__init__(ctx, timeout)
+        s = ctx.settings
+        self.goal = goal
+        self.position_tolerance = position_tolerance or s.position_tolerance
+        self.heading_tolerance = heading_tolerance or s.heading_tolerance
+        self.limits = Limits.from_settings(s, max_speed)
+        self.max_blocked = max_blocked
+        self.use_laser = use_laser
+        self.target: Pose2D | None = None
+        self.path: np.ndarray | None = None
+        self.follower: PathFollower | None = None
+        self.replans = 0
+        self.blocked_time = 0.0
+        self._blocked_since: float | None = None
+        self._last_poll: float | None = None
+        self._user_timeout = timeout
+        self.name = f"navigate to {goal.describe()}" if hasattr(goal, "describe") else "navigate"
+
+    @property
+    def planner(self) -> GridPlanner:
+        planner = getattr(self.ctx, "_planner", None)
+        if planner is None or planner.costmap is not self.ctx.costmap:
+            planner = GridPlanner(self.ctx.costmap)
+            self.ctx._planner = planner
+        return planner
+
+    # -- activity ---------------------------------------------------------
+    def _on_start(self) -> None:
+        self.ctx.update()
+        self.target, heading = self.goal.resolve(self.ctx)
+        self._goal_heading = self.target.theta if heading else None
+        start = self.ctx.pose()
+        if self._user_timeout is None:
+            straight = start.distance_to(self.target)
+            self.timeout = 3.0 * straight / self.limits.max_speed + 20.0
+        self.replans = 0
+        self.blocked_time = 0.0
+        self._blocked_since = None
+        self._last_poll = None
+        try:
+            self._plan(start)
+        except NoPath as exc:
+            raise SkillFailure(SkillError.NAVIGATION_FAILED, str(exc)) from None
+
+    def _plan(self, start: Pose2D) -> None:
+        self.ctx.costmap.expire(self.ctx.clock.now())
+        self.path = self.planner.plan((start.x, start.y), (self.target.x, self.target.y))
+        old = self.follower
+        self.follower = PathFollower(self.path, self._goal_heading, self.limits,
+                                     self.position_tolerance, self.heading_tolerance)
+        if old is not None:      # keep the current velocity: no jump in the command
+            self.follower.limiter.v = old.limiter.v.copy()
+            self.follower.limiter.omega = old.limiter.omega
+
+    def _step(self, now: float) -> Status:
+        ctx = self.ctx
+        src = ctx.pose_source
+        if getattr(src, "lost", False):
+            raise SkillFailure(SkillError.LOCALISATION_LOST,
+                               f"localisation confidence {src.confidence:.2f} stayed below the limit")
+        pose = ctx.pose()
+        dt = ctx.settings.control_period if self._last_poll is None else max(now - self._last_poll, 1e-3)
+        self._last_poll = now
+        points = self._points(pose) if self.use_laser else None
+        cap = None
+        if points is not None:
+            s = ctx.settings
+            half_fov = ctx.robot.laser_fov / 2.0
+
+            def cap(ux: float, uy: float) -> float:
+                limit = speed_limit(points, ux, uy, ctx.robot.radius, s.safety_margin, 0.02,
+                                    self.limits.max_decel * 0.8, s.control_period)
+                # the laser does not see behind: creep where it is blind
+                if abs(wrap_angle(math.atan2(uy, ux) - pose.theta)) > half_fov - 0.4:
+                    limit = min(limit, s.blind_speed)
+                return limit
+        vx, vy, w = self.follower.command(pose, dt, cap)
+        if self.follower.done:
+            self.message = f"reached {self.goal.describe()}" if hasattr(self.goal, "describe") else "reached"
+            return Status.SUCCESS
+        blocked = self.follower.capped and self.follower.last_speed_wanted < 0.02
+        if blocked:
+            if self._blocked_since is None:
+                self._blocked_since = now
+            self.blocked_time += dt
+            if now - self._blocked_since >= ctx.settings.block_replan_after:
+                self._replan_around(pose, points, now)
+            if self.blocked_time > self.max_blocked:
+                raise SkillFailure(SkillError.NAVIGATION_FAILED,
+                                   f"blocked for {self.blocked_time:.0f} s on the way to "
+                                   f"({self.target.x:.2f}, {self.target.y:.2f})")
+        else:
+            self._blocked_since = None
+            if self._off_path(pose) > 0.6:
+                self._try_plan(pose)
+        ctx.backend.drive(vx, vy, w)
+        return Status.RUNNING
+
+    # -- helpers ----------------------------------------------------------
+    def _points(self, pose: Pose2D) -> np.ndarray | None:
+        """Laser points relative to the robot, in field-frame axes."""
+        try:
+            scan = self.ctx.backend.laser_scan()
+        except CapabilityError:
+            self.use_laser = False
+            return None
+        if scan is None:
+            return None
+        pts = scan_points(scan, max_range=3.0)
+        return to_field(pts, Pose2D(0.0, 0.0, pose.theta))
+
+    def _replan_around(self, pose: Pose2D, points: np.ndarray | None, now: float) -> None:
+        ctx = self.ctx
+        if points is not None and len(points):
+            field_pts = points + np.array([pose.x, pose.y])
+            near = np.hypot(points[:, 0], points[:, 1]) < 2.0
+            static = ctx.map.distance(ctx.costmap.resolution).lookup(field_pts[:, 0], field_pts[:, 1])
+            unexplained = near & (static > 0.1)
+            ctx.costmap.add_obstacles(field_pts[unexplained], now, ctx.settings.obstacle_ttl)
+        self._blocked_since = now       # next attempt after another block period
+        self._try_plan(pose)
+
+    def _try_plan(self, pose: Pose2D) -> None:
+        try:
+            self._plan(pose)
+            self.replans += 1
+        except NoPath:
+            pass      # keep waiting; the obstacles expire or move
+
+    def _off_path(self, pose: Pose2D) -> float:
+        f = self.follower
+        p = f.point_at(f.progress)
+        return math.hypot(pose.x - p[0], pose.y - p[1])

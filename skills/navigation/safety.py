@@ -1,0 +1,63 @@
+"""Stopping for what the laser sees (stations, walls, other robots).
+
+The check looks along the commanded direction of travel: a laser point
+ahead (within the robot's width plus ``lateral_margin``) limits the speed
+to what still stops ``margin`` metres before it with ``decel``; closer
+than that the robot is *blocked*.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rll_bt.backend import LaserScan, Pose2D
+
+
+def scan_points(scan: LaserScan, max_range: float | None = None) -> np.ndarray:
+    """Valid returns (K, 2) in the robot frame."""
+    r = np.asarray(scan.ranges, dtype=float)
+    ok = np.isfinite(r) & (r >= scan.range_min) & (r < scan.range_max)
+    if max_range is not None:
+        ok &= r <= max_range
+    a = scan.angles[ok] + scan.mount.theta
+    return np.column_stack([scan.mount.x + r[ok] * np.cos(a), scan.mount.y + r[ok] * np.sin(a)])
+
+
+def to_field(points: np.ndarray, pose: Pose2D) -> np.ndarray:
+    c, s = math.cos(pose.theta), math.sin(pose.theta)
+    return np.column_stack([pose.x + c * points[:, 0] - s * points[:, 1],
+                            pose.y + s * points[:, 0] + c * points[:, 1]])
+
+
+def clear_distance(points: np.ndarray, vx: float, vy: float, radius: float,
+                   lateral_margin: float) -> float:
+    """Free distance (m) the robot's disc can travel along (vx, vy) before
+    touching a point, ``inf`` when nothing is in the way."""
+    speed = math.hypot(vx, vy)
+    if speed < 1e-6 or len(points) == 0:
+        return math.inf
+    ux, uy = vx / speed, vy / speed
+    along = points[:, 0] * ux + points[:, 1] * uy
+    lateral = np.abs(points[:, 1] * ux - points[:, 0] * uy)
+    width = radius + lateral_margin
+    hit = (along > 0.0) & (lateral < width)
+    if not hit.any():
+        return math.inf
+    # distance until the disc's front meets the point
+    front = along[hit] - np.sqrt(np.maximum(width * width - lateral[hit] ** 2, 0.0))
+    return float(max(front.min(), 0.0))
+
+
+def speed_limit(points: np.ndarray, vx: float, vy: float, radius: float, margin: float,
+                lateral_margin: float, decel: float, latency: float = 0.0) -> float:
+    """Highest speed (m/s) along (vx, vy) that still stops ``margin``
+    before the nearest point ahead, given ``latency`` seconds before braking
+    starts (the control period): v * latency + v^2 / (2 decel) <= free.
+    0 means blocked."""
+    free = clear_distance(points, vx, vy, radius, lateral_margin) - margin
+    if math.isinf(free):
+        return math.inf
+    if free <= 0.0:
+        return 0.0
+    return decel * (-latency + math.sqrt(latency * latency + 2.0 * free / decel))
