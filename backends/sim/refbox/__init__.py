@@ -11,8 +11,8 @@ from .game import RefboxGame
 from .stations import (BSInstruction, CSInstruction, DSInstruction, RSInstruction,
                        StationConfig)
 from .timing import Timing, parse_phase_lengths
-from .world import RefboxWorld, SlotEvent, StationPose, TableWorld, Workpiece
+from .world import RefboxWorld, SlotEvent, TableWorld, Workpiece
 
 __all__ = ["RefboxGame", "Event", "ReportEntry", "BSInstruction", "CSInstruction",
            "DSInstruction", "RSInstruction", "StationConfig", "Timing", "parse_phase_lengths",
-           "RefboxWorld", "SlotEvent", "StationPose", "TableWorld", "Workpiece"]
+           "RefboxWorld", "SlotEvent", "TableWorld", "Workpiece"]

@@ -59,10 +59,9 @@ class RefboxGame:
         self.rules = rules_for(self.profile)
         self.timing = timing or Timing.from_profile(self.profile)
         self.config = config or StationConfig()
-        self.world = world if world is not None else TableWorld.generated(
-            self.profile, self.rng("placement"))
-        self.layout = dict(self.world.layout())
-        missing = set(self.profile.machines()) - set(self.layout)
+        self.world = world if world is not None else TableWorld.generated(self.profile, self.seed)
+        self.layout = self.world.layout()
+        missing = set(self.profile.machines()) - set(self.layout.machines)
         if missing:
             raise ValueError(f"the world has no station {', '.join(sorted(missing))}")
         self.teams: dict[str, str | None] = {CYAN: team_cyan or None, MAGENTA: team_magenta or None}
@@ -75,7 +74,7 @@ class RefboxGame:
         self.robots = RobotRegistry()
         rs, self.ring_costs = self.profile.ring_setup(self.rng("rings"))
         self._rs_colors = {kind: tuple(colors) for kind, colors in rs.items()}
-        zones = {m: p.zone for m, p in self.layout.items()}
+        zones = {m: p.zone for m, p in self.layout.machines.items()}
         self.exploration = self.rules.make_exploration(self.profile, zones, self.rng("exploration"),
                                                        feedback_time)
         self._feedback: dict[str, float] = {}     # machine -> exploration time the feedback ends

@@ -14,8 +14,6 @@ lights map ``RED``/``YELLOW``/``GREEN`` to ``ON``/``OFF``/``BLINK``.
 """
 from __future__ import annotations
 
-import math
-import random
 from dataclasses import dataclass, field, replace
 from typing import Callable, Mapping, Protocol, runtime_checkable
 
@@ -72,31 +70,14 @@ class SlotEvent:
     workpiece: Workpiece | None = None
 
 
-@dataclass(frozen=True)
-class StationPose:
-    """Where a station stands: its zone number (the profile's Zone enum value),
-    rotation in degrees (rulebook convention: machine x axis from output to
-    input, counter-clockwise from the field x axis), and the centre ``x``, ``y``
-    in metres, field frame."""
-
-    machine: str
-    zone: int
-    rotation: int
-    x: float
-    y: float
-
-    @property
-    def yaw(self) -> float:
-        """Rotation in radians."""
-        return math.radians(self.rotation)
-
-
 @runtime_checkable
 class RefboxWorld(Protocol):
     """What the refbox needs from a world."""
 
-    def layout(self) -> Mapping[str, StationPose]:
-        """Every station of both teams, as placed."""
+    def layout(self):
+        """Every station of both teams, as placed: a
+        :class:`backends.sim.layout.FieldLayout` (``layout[m].zone``,
+        ``.rotation_deg``, ``.pose``)."""
 
     def set_lights(self, machine: str, lights: Mapping[str, str]) -> None:
         """Show ``lights`` (RED/YELLOW/GREEN -> ON/OFF/BLINK) on ``machine``'s tower."""
@@ -115,29 +96,29 @@ class RefboxWorld(Protocol):
 
 
 class TableWorld:
-    """An in-memory :class:`RefboxWorld`: stations placed by ``layout``
-    (a mapping machine -> :class:`StationPose`, e.g. from
-    :func:`backends.sim.refbox.placement.generate_layout`), workpieces in a
-    dictionary, lights remembered.  :meth:`put` and :meth:`take` play the
-    robot's part and notify the listeners, as a physical world would.
+    """An in-memory :class:`RefboxWorld`: stations placed by ``layout`` (a
+    :class:`backends.sim.layout.FieldLayout`), workpieces in a dictionary,
+    lights remembered.  :meth:`put` and :meth:`take` play the robot's part and
+    notify the listeners, as a physical world would.
     """
 
-    def __init__(self, layout: Mapping[str, StationPose]):
-        self._layout = dict(layout)
+    def __init__(self, layout):
+        self._layout = layout
         self.slots: dict[tuple[str, str], Workpiece] = {}
-        self.lights: dict[str, dict[str, str]] = {m: dict(ALL_OFF) for m in self._layout}
+        self.lights: dict[str, dict[str, str]] = {m: dict(ALL_OFF) for m in layout.machines}
         self._listeners: list[Callable[[SlotEvent], None]] = []
         self._uid = 0
 
     @classmethod
-    def generated(cls, profile, rng: random.Random) -> "TableWorld":
-        """A table world with a freshly generated layout."""
-        from .placement import generate_layout
-        return cls(generate_layout(profile, rng))
+    def generated(cls, profile, seed: int) -> "TableWorld":
+        """A table world with the seeded layout of the PyBullet world's generator
+        (:func:`backends.sim.layout.generate_layout`)."""
+        from ..layout import generate_layout
+        return cls(generate_layout(profile, seed))
 
     # -- RefboxWorld -----------------------------------------------------------
-    def layout(self) -> Mapping[str, StationPose]:
-        return dict(self._layout)
+    def layout(self):
+        return self._layout
 
     def set_lights(self, machine: str, lights: Mapping[str, str]) -> None:
         self._check(machine)
@@ -184,7 +165,7 @@ class TableWorld:
             fn(ev)
 
     def _check(self, machine: str, slot: str | None = None) -> None:
-        if machine not in self._layout:
+        if machine not in self._layout.machines:
             raise KeyError(f"no station {machine!r} in this world")
         if slot is not None and slot not in SLOTS:
             raise KeyError(f"no slot {slot!r} (slots: {', '.join(SLOTS)})")
