@@ -1,0 +1,101 @@
+"""The robot's sensors in the world: a planar laser (``rayTestBatch``) and a
+camera (TinyRenderer, rendered only when asked).
+
+Laser: ``laser_beams`` rays spread evenly over ``laser_fov`` (first at
+``-fov/2``, last at ``+fov/2``), cast horizontally from ``ROBOT.laser_mount``
+(0.22 m above the floor, so they never touch it), hitting walls, stations and
+other robots (the robot's own body is masked out); Gaussian noise of
+``laser_noise`` on every hit, ``inf`` where nothing is hit.
+
+Camera: pinhole with ``CameraIntrinsics.from_fov(width, height, hfov)``,
+optical frame at ``ROBOT.camera_mount`` pitched by ``camera_pitch``; images
+are BGR uint8.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rll_bt.backend import CameraExtrinsics, CameraImage, CameraIntrinsics, LaserScan, Pose2D
+
+from .bullet import pybullet
+from .robot import SimRobot
+
+ALL_GROUPS = 0x7FFFFFFF
+NEAR, FAR = 0.02, 20.0
+
+
+def ray_mask(robot: SimRobot | None) -> int:
+    """Ray filter mask seeing everything but ``robot``'s own body."""
+    return ALL_GROUPS if robot is None else ALL_GROUPS & ~robot.ray_group
+
+
+def laser_scan(cid: int, robot: SimRobot, stamp: float) -> LaserScan:
+    p = pybullet()
+    cfg, g = robot.config, robot.config.geometry
+    n = cfg.laser_beams
+    angle_min = -cfg.laser_fov / 2.0
+    inc = cfg.laser_fov / (n - 1) if n > 1 else 0.0
+    rmin, rmax = cfg.laser_range
+    mx, my, mz = g.laser_mount
+    pose = robot.pose
+    c, s = math.cos(pose.theta), math.sin(pose.theta)
+    ox, oy = pose.x + c * mx - s * my, pose.y + s * mx + c * my
+    a = pose.theta + angle_min + inc * np.arange(n)
+    start = np.empty((n, 3))
+    start[:, 0], start[:, 1], start[:, 2] = ox, oy, mz
+    end = start.copy()
+    end[:, 0] += rmax * np.cos(a)
+    end[:, 1] += rmax * np.sin(a)
+    hits = p.rayTestBatch(start, end, numThreads=1, collisionFilterMask=ray_mask(robot),
+                          physicsClientId=cid)
+    frac = np.fromiter((h[2] if h[0] >= 0 else np.inf for h in hits), float, count=n)
+    ranges = frac * rmax
+    if cfg.laser_noise > 0.0:
+        ranges = ranges + robot.rng.normal(0.0, cfg.laser_noise, n)
+    ranges = np.where(np.isfinite(ranges), np.clip(ranges, rmin, rmax), np.inf)
+    return LaserScan(stamp, angle_min, inc, rmin, rmax, ranges, mount=Pose2D(mx, my, 0.0))
+
+
+def camera_model(robot: SimRobot) -> tuple[CameraIntrinsics, CameraExtrinsics]:
+    cfg = robot.config
+    intr = CameraIntrinsics.from_fov(cfg.camera_width, cfg.camera_height, cfg.camera_hfov)
+    extr = CameraExtrinsics(position=tuple(cfg.geometry.camera_mount), yaw=0.0, pitch=cfg.camera_pitch)
+    return intr, extr
+
+
+def camera_pose(robot: SimRobot, extr: CameraExtrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """(eye, R): camera position in the field frame and the rotation taking
+    optical-frame vectors into the field frame."""
+    pose = robot.pose
+    c, s = math.cos(pose.theta), math.sin(pose.theta)
+    yaw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    eye = np.array([pose.x, pose.y, 0.0]) + yaw @ np.asarray(extr.position, float)
+    return eye, yaw @ extr.rotation()
+
+
+def project(points: np.ndarray, eye: np.ndarray, rot: np.ndarray,
+            intr: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel coordinates (N, 2) and optical depths (N,) of field-frame points."""
+    cam = (np.atleast_2d(points) - eye) @ rot          # rows: optical-frame coordinates
+    z = cam[:, 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = intr.fx * cam[:, 0] / z + intr.cx
+        v = intr.fy * cam[:, 1] / z + intr.cy
+    return np.column_stack([u, v]), z
+
+
+def render(cid: int, robot: SimRobot, stamp: float, camera: str = "front") -> CameraImage:
+    p = pybullet()
+    intr, extr = camera_model(robot)
+    eye, rot = camera_pose(robot, extr)
+    view = p.computeViewMatrix(eye.tolist(), (eye + rot[:, 2]).tolist(), (-rot[:, 1]).tolist(),
+                               physicsClientId=cid)
+    vfov = math.degrees(2.0 * math.atan(intr.height / (2.0 * intr.fy)))
+    proj = p.computeProjectionMatrixFOV(vfov, intr.width / intr.height, NEAR, FAR, physicsClientId=cid)
+    _, _, rgba, _, _ = p.getCameraImage(intr.width, intr.height, view, proj, shadow=0,
+                                        renderer=p.ER_TINY_RENDERER,
+                                        flags=p.ER_NO_SEGMENTATION_MASK, physicsClientId=cid)
+    rgb = np.reshape(np.asarray(rgba, dtype=np.uint8), (intr.height, intr.width, 4))[:, :, :3]
+    return CameraImage(stamp, np.ascontiguousarray(rgb[:, :, ::-1]), intr, extr, camera)
