@@ -269,6 +269,7 @@ class RobotinoEmulator:
             out = {"frames": fw.rx_counter, "replies": fw.replies,
                    "checksum_errors": fw.decoder.checksum_errors,
                    "watchdog_trips": fw.watchdog_trips,
+                   "watchdog_motion_stops": fw.watchdog_motion_stops,
                    "corrupted": self._base.rx.corrupted + self._base.tx.corrupted,
                    "dropped": self._base.rx.dropped + self._base.tx.dropped,
                    "connects": self._base.connects}

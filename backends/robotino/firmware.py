@@ -120,7 +120,8 @@ class BaseFirmware:
         self.rx_counter = 0
         self._ticks_since_frame = WATCHDOG_MAX_INACTIVE
         self.com_active = False
-        self.watchdog_trips = 0
+        self.watchdog_trips = 0            # active -> inactive transitions
+        self.watchdog_motion_stops = 0     # ... of which stopped turning motors
         self.watchdog_trip_times: list[float] = []
         # chargers
         self._charger_period_ms = int(charger_info_period * 1000)
@@ -193,6 +194,8 @@ class BaseFirmware:
             if self.com_active:
                 self.watchdog_trips += 1
                 self.watchdog_trip_times.append(self.now)
+                if any(m.setpoint or m.ss for m in self.motors):
+                    self.watchdog_motion_stops += 1
             self.com_active = False
             self.stop_all()
         else:
