@@ -51,7 +51,7 @@ class KnowledgeBase:
         self.store = store if store is not None else Store(":memory:")
         self.machines: dict[str, MachineBelief] = {}
         self.observation_count = 0
-        self.robots: dict[str, M.Robot] = {}
+        self.robots: dict[int, M.Robot] = {}
         self.orders: dict[int, M.Order] = {}
         self.stations: dict[str, M.Station] = {}
         self.workpieces: dict[str, M.Workpiece] = {}
@@ -87,7 +87,7 @@ class KnowledgeBase:
         return kb
 
     _TABLES = (
-        ("robots", "robot", M.Robot, str),
+        ("robots", "robot", M.Robot, int),
         ("orders", "order", M.Order, int),
         ("stations", "station", M.Station, str),
         ("workpieces", "workpiece", M.Workpiece, str),
@@ -153,8 +153,8 @@ class KnowledgeBase:
 
     # -- records -----------------------------------------------------------------
     def save_robot(self, r: M.Robot) -> None:
-        self.robots[r.name] = r
-        self.store.put("robot", r.name, r.to_dict())
+        self.robots[r.number] = r
+        self.store.put("robot", r.number, r.to_dict())
 
     def save_order(self, o: M.Order) -> None:
         self.orders[o.id] = o

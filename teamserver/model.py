@@ -91,17 +91,23 @@ class Observation(Record):
 
 @dataclass
 class Robot(Record):
-    """A connected (or once connected) robot agent."""
+    """A connected (or once connected) robot agent, keyed by its jersey ``number``."""
 
-    name: str
-    number: int = 0
+    number: int
+    name: str = ""
     status: str = ACTIVE
     pose: tuple[float, float, float] | None = None
     task_id: int | None = None
     last_heartbeat: float = 0.0
-    holding: str | None = None          # workpiece id in the gripper
+    holding: str | None = None          # workpiece id in the gripper ("?" if unknown)
     peer: Any = None                    # transport address (not meaningful after a restart)
+    state: str = "IDLE"                 # the agent's own RobotStatus.State
     _tuples = ("pose",)
+
+    @property
+    def key(self) -> str:
+        """The robot's name in observations and plans (``"R<number>"``)."""
+        return f"R{self.number}"
 
 
 @dataclass
@@ -175,20 +181,21 @@ class Task(Record):
     kind: str
     params: dict = field(default_factory=dict)
     state: str = PENDING
-    robot: str | None = None
+    robot: int | None = None
     product: str | None = None
     deps: tuple[int, ...] = ()
     prepare: dict | None = None
     prepared_at: float | None = None
     locks: tuple[str, ...] = ()
-    keep_locks: tuple[str, ...] = ()
     releases: tuple[str, ...] = ()
+    carry: bool = False                 # the robot must hold the workpiece already
+    holder: int | None = None           # robot bound to a carry task
     attempts: int = 0
     created: float = 0.0
     assigned_at: float | None = None
     finished_at: float | None = None
     error: str | None = None
-    _tuples = ("deps", "locks", "keep_locks", "releases")
+    _tuples = ("deps", "locks", "releases")
 
     @property
     def machine(self) -> str | None:
@@ -203,6 +210,8 @@ class Product(Record):
     order_id: int
     state: str = "ACTIVE"               # ACTIVE, DELIVERED, ABANDONED
     tasks: tuple[int, ...] = ()
-    workpiece: str | None = None
+    workpiece: str | None = None        # id of the product's own workpiece
     created: float = 0.0
+    repair: str | None = None           # why it must be re-planned (None: it need not)
+    repairs: int = 0
     _tuples = ("tasks",)

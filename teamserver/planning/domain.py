@@ -32,6 +32,9 @@ from .htn import Domain, Par, Seq
 
 DOMAIN = Domain("rcll-production")
 CAP_LOCK = "#cap"          # suffix of a cap station's buffer lock ("C-CS1#cap")
+# the role of a picked-up workpiece: the product itself, an additional base,
+# or the cap-less base a cap retrieval leaves at the CS output
+MAIN, EXTRA, CAPLESS = "main", "extra", "capless"
 
 
 @dataclass
@@ -99,19 +102,21 @@ def _step(kind: str, params: dict, *, prepare: dict | None = None, locks=(), rel
 
 # -- operators -----------------------------------------------------------------
 @DOMAIN.operator("get_base")
-def op_get_base(ctx: ProductionContext, color: str):
+def op_get_base(ctx: ProductionContext, color: str, role: str = MAIN):
     if ctx.bs in ctx.unusable:
         return None
-    return _step(M.GET_WORKPIECE, {"machine": ctx.bs, "side": M.OUTPUT, "base": color},
+    return _step(M.GET_WORKPIECE, {"machine": ctx.bs, "side": M.OUTPUT, "base": color,
+                                   "role": role},
                  prepare={"machine": ctx.bs, "bs": {"side": M.OUTPUT, "color": color}},
                  locks=(ctx.bs,), releases=(ctx.bs,))
 
 
 @DOMAIN.operator("pickup")
-def op_pickup(ctx: ProductionContext, machine: str, release_cap: bool = False):
+def op_pickup(ctx: ProductionContext, machine: str, release_cap: bool = False,
+              role: str = MAIN):
     """Take the workpiece from ``machine``'s output."""
     releases = (machine, machine + CAP_LOCK) if release_cap else (machine,)
-    return _step(M.GET_WORKPIECE, {"machine": machine, "side": M.OUTPUT},
+    return _step(M.GET_WORKPIECE, {"machine": machine, "side": M.OUTPUT, "role": role},
                  locks=(machine,), releases=releases)
 
 
@@ -186,8 +191,7 @@ def m_product_reuse(ctx: ProductionContext, cs: str):
     if not ctx.reuse_capless_base or pr.cap_ready is not None:
         return None
     remaining = ctx.order.rings[len(pr.rings):]
-    for i, color in enumerate(remaining):
-        rs = ctx.rs_for(color)
+    for i, _color in enumerate(remaining):
         if _bases_needed(ctx, remaining, i) > 0:
             return _product_spec(ctx, cs, reuse_for=i)
     return None
@@ -229,16 +233,18 @@ def _product_spec(ctx: ProductionContext, cs: str, reuse_for: int | None):
         need = _bases_needed(ctx, remaining, i)
         extras = []
         if reuse_for == i and need > 0:
-            extras.append(Seq(("retrieve_cap", cs), ("pickup", cs), ("put_slide", rs)))
+            extras.append(Seq(("retrieve_cap", cs), ("pickup", cs, False, CAPLESS),
+                              ("put_slide", rs)))
             need -= 1
-        extras += [Seq(("get_base", _any_base(ctx)), ("put_slide", rs)) for _ in range(need)]
+        extras += [Seq(("get_base", _any_base(ctx), EXTRA), ("put_slide", rs))
+                   for _ in range(need)]
         mount_holder = holder if chain is None else None
         chain = Seq(Par(chain, *extras) if chain else Par(*extras),
                     ("mount_ring", rs, color, mount_holder), ("pickup", rs))
     if pr.cap_ready is not None or reuse_for is not None:
         cap = None
     else:
-        cap = Seq(("retrieve_cap", cs), ("pickup", cs), ("discard",))
+        cap = Seq(("retrieve_cap", cs), ("pickup", cs, False, CAPLESS), ("discard",))
     cap_holder = holder if chain is None else None
     parts = [p for p in (chain, cap) if p]
     return Seq(Par(*parts), ("mount_cap", cs, cap_holder), ("pickup", cs, True), ("deliver",))

@@ -120,6 +120,7 @@ def simulate(profile: Profile, tasks: list[SimTask], robots: list[SimRobot],
     locks: dict[str, str] = dict(owned or {})
     holder_of: dict = {}            # carry task key -> robot that made the pickup
     holding: dict[str, object] = {}  # robot -> carry task it must do next
+    busy: dict[str, float] = {}      # lock -> when the step using it ends
     pending = [t for t in tasks if t.key not in done]
     rb = {r.name: SimRobot(r.name, r.pos, max(r.free_at, now)) for r in robots}
     for t in pending:
@@ -132,7 +133,8 @@ def simulate(profile: Profile, tasks: list[SimTask], robots: list[SimRobot],
                 continue
             if any(locks.get(lk, t.product) != t.product for lk in t.locks):
                 continue
-            ready = max([now, t.not_before] + [finish[d] for d in t.deps])
+            ready = max([now, t.not_before] + [finish[d] for d in t.deps]
+                        + [busy.get(lk, now) for lk in t.locks])
             if t.carry or t.holder:
                 cands = [t.holder or holder_of.get(t.key)]
             else:
@@ -165,6 +167,7 @@ def simulate(profile: Profile, tasks: list[SimTask], robots: list[SimRobot],
         r.free_at, r.pos = end, pos or r.pos
         for lk in t.locks:
             locks[lk] = t.product
+            busy[lk] = end
         for lk in t.releases:
             locks.pop(lk, None)
         if finish[t.key] <= horizon:

@@ -1,0 +1,309 @@
+"""The dispatcher: ready tasks to idle robots, PrepareMachine at the right moment,
+results, and robots that drop out.
+
+- A production task is *ready* when its predecessors are DONE, its station
+  locks are free (or held by its own product), its station is neither
+  BROKEN nor DOWN, the game is RUNNING in PRODUCTION, and (deliveries) its
+  order's window opens within ``deliver_early`` seconds.
+- Carry tasks go to the robot holding the workpiece; the others are matched
+  to idle robots with empty grippers by travel distance (an optimal
+  assignment, ``scipy.optimize.linear_sum_assignment``), earlier products
+  first on ties.  Locks are taken at assignment.
+- PrepareMachine is sent for an assigned task once its robot is within
+  ``prepare_distance`` metres of the station or ``prepare_lead`` seconds
+  away, the station is IDLE and the game RUNNING; resent after
+  ``prepare_retry`` seconds if the station did not leave IDLE.
+- A robot silent for ``heartbeat_timeout`` seconds is dropped: its task goes
+  back to the pool (or, if it carried a workpiece, the product is repaired).
+
+The dispatcher does not send anything itself: it appends to :attr:`outbox`
+(``("task", Task)``, ``("cancel", Task, reason)``, ``("prepare", Task)``)
+and the server turns these into messages.
+"""
+from __future__ import annotations
+
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from . import model as M
+from .kb import KnowledgeBase
+from .production import ProductionManager
+
+log = logging.getLogger("teamserver.dispatch")
+
+UNUSABLE_STATES = ("BROKEN", "DOWN")
+#: errors after which the same step is simply tried again
+RETRY_ERRORS = {"NAVIGATION_FAILED", "LOCALISATION_LOST", "MACHINE_NOT_FOUND", "ALIGN_FAILED",
+                "GRAB_FAILED", "TIMEOUT", "NOT_RUNNING", "MACHINE_BROKEN", "NONE"}
+
+
+@dataclass
+class DispatchConfig:
+    """Seconds, metres and counts that steer the dispatcher."""
+
+    heartbeat_timeout: float = 10.0
+    prepare_distance: float = 1.5
+    prepare_lead: float = 3.0
+    prepare_retry: float = 6.0
+    speed: float = 0.5
+    max_attempts: int = 3
+    deliver_early: float = 60.0
+
+
+class Dispatcher:
+    def __init__(self, kb: KnowledgeBase, production: ProductionManager, clock,
+                 config: DispatchConfig = DispatchConfig()):
+        self.kb = kb
+        self.production = production
+        self.clock = clock
+        self.config = config
+        self.outbox: list[tuple] = []
+
+    # -- robots ----------------------------------------------------------------------
+    def idle_robots(self) -> list[M.Robot]:
+        return [r for r in self.kb.active_robots() if r.task_id is None]
+
+    def check_heartbeats(self) -> list[M.Robot]:
+        """Drop robots silent for too long; returns the ones dropped now."""
+        now = self.clock.now()
+        dropped = []
+        for r in list(self.kb.robots.values()):
+            if r.status == M.ACTIVE and now - r.last_heartbeat > self.config.heartbeat_timeout:
+                self.drop(r, f"no heartbeat for {now - r.last_heartbeat:.1f} s")
+                dropped.append(r)
+        return dropped
+
+    def drop(self, robot: M.Robot, why: str) -> None:
+        log.warning("robot %d dropped: %s", robot.number, why)
+        robot.status = M.LOST
+        task = self.kb.tasks.get(robot.task_id) if robot.task_id is not None else None
+        robot.task_id = None
+        if robot.holding:
+            wp = self.kb.workpieces.get(robot.holding)
+            if wp is not None:
+                wp.location = "gone"
+                self.kb.save_workpiece(wp)
+                self.production.needs_repair(wp.product, f"robot {robot.number} lost with it")
+            robot.holding = None
+        self.kb.save_robot(robot)
+        if task is not None and task.state == M.ASSIGNED:
+            if task.carry:
+                task.state = M.CANCELLED
+                task.error = f"robot {robot.number} lost"
+                self.kb.save_task(task)
+                self.production.needs_repair(task.product, f"robot {robot.number} lost")
+            else:
+                self._back_to_pool(task, f"robot {robot.number} lost")
+        # carry tasks bound to this robot can no longer be done by it
+        for t in self.kb.open_tasks():
+            if t.holder == robot.number and t.state == M.PENDING:
+                self.production.needs_repair(t.product, f"robot {robot.number} lost")
+
+    def _back_to_pool(self, task: M.Task, why: str) -> None:
+        task.state, task.robot, task.assigned_at, task.prepared_at = M.PENDING, None, None, None
+        task.error = why
+        self.kb.save_task(task)
+        if task.kind == M.EXPLORE_ZONE:
+            task.state = M.CANCELLED        # exploration picks a fresh zone instead
+            self.kb.save_task(task)
+
+    # -- readiness -----------------------------------------------------------------------
+    def station_usable(self, machine: str | None) -> bool:
+        if machine is None:
+            return True
+        st = self.kb.stations.get(machine)
+        return st is None or st.state not in UNUSABLE_STATES
+
+    def ready(self, task: M.Task, game_time: float | None) -> bool:
+        if task.state != M.PENDING or task.kind == M.EXPLORE_ZONE:
+            return False
+        if game_time is None:
+            return False
+        for d in task.deps:
+            dep = self.kb.tasks.get(d)
+            if dep is None or dep.state != M.DONE:
+                return False
+        if not self.production.lock_free(task):
+            return False
+        if not self.station_usable(task.machine):
+            return False
+        if task.kind == M.DELIVER and game_time < float(
+                task.params.get("not_before", 0.0)) - self.config.deliver_early:
+            return False
+        return True
+
+    # -- assignment ------------------------------------------------------------------------
+    def assign(self, game_time: float | None) -> list[M.Task]:
+        """Give ready tasks to idle robots; returns the tasks assigned now."""
+        idle = {r.number: r for r in self.idle_robots()}
+        if not idle:
+            return []
+        ready = [t for t in self.kb.open_tasks() if self.ready(t, game_time)]
+        assigned: list[M.Task] = []
+        # carry tasks: their holder, if idle
+        for t in sorted(ready, key=lambda t: t.id):
+            if t.carry:
+                r = idle.get(t.holder) if t.holder is not None else None
+                if r is not None and self.production.lock_free(t):
+                    self._assign(t, r)
+                    assigned.append(t)
+                    del idle[r.number]
+        free = [r for r in idle.values() if not r.holding]
+        pool = [t for t in ready if not t.carry]
+        if not free or not pool:
+            return assigned
+        positions = self.production.positions()
+        cost = np.zeros((len(free), len(pool)))
+        for i, r in enumerate(free):
+            for j, t in enumerate(pool):
+                cost[i, j] = self.travel(r, positions.get(t.machine)) + 1e-3 * _age(t)
+        rows, cols = linear_sum_assignment(cost)
+        for i, j in sorted(zip(rows, cols), key=lambda ij: cost[ij[0], ij[1]]):
+            t, r = pool[j], free[i]
+            if not self.production.lock_free(t):
+                continue                    # another assignment just took the station
+            self._assign(t, r)
+            assigned.append(t)
+        return assigned
+
+    def travel(self, robot: M.Robot, pos) -> float:
+        """Metres from the robot to ``pos`` (0 when either is unknown)."""
+        if pos is None or robot.pose is None:
+            return 0.0
+        return math.hypot(pos[0] - robot.pose[0], pos[1] - robot.pose[1])
+
+    def _assign(self, task: M.Task, robot: M.Robot) -> None:
+        task.state, task.robot = M.ASSIGNED, robot.number
+        task.assigned_at, task.attempts = self.clock.now(), task.attempts + 1
+        task.prepared_at = None
+        self.production.acquire(task)
+        self.kb.save_task(task)
+        robot.task_id = task.id
+        self.kb.save_robot(robot)
+        self.outbox.append(("task", task))
+
+    def assign_explore(self, robot: M.Robot, zone: int) -> M.Task:
+        t = M.Task(self.kb.next_id("task"), M.EXPLORE_ZONE, {"zone": int(zone)},
+                   created=self.clock.now())
+        self._assign(t, robot)
+        return t
+
+    # -- PrepareMachine timing -----------------------------------------------------------------
+    def prepare(self, running_production: bool) -> list[M.Task]:
+        """Send the PrepareMachine of assigned tasks whose robot is about to arrive."""
+        if not running_production:
+            return []
+        sent = []
+        now = self.clock.now()
+        positions = self.production.positions()
+        for t in self.kb.open_tasks():
+            if t.state != M.ASSIGNED or not t.prepare:
+                continue
+            st = self.kb.stations.get(t.prepare["machine"])
+            state = st.state if st is not None else "IDLE"
+            if t.prepared_at is not None:
+                # resend only if the station never reacted (a lost datagram)
+                if st is None or st.since >= t.prepared_at or state != "IDLE" or \
+                        now - t.prepared_at < self.config.prepare_retry:
+                    continue
+            elif state != "IDLE":
+                continue
+            robot = self.kb.robots.get(t.robot)
+            if robot is None:
+                continue
+            pos = positions.get(t.prepare["machine"])
+            if robot.pose is not None and pos is not None:
+                d = self.travel(robot, pos)
+                if d > self.config.prepare_distance and d / self.config.speed > \
+                        self.config.prepare_lead:
+                    continue
+            t.prepared_at = now
+            self.kb.save_task(t)
+            self.outbox.append(("prepare", t))
+            sent.append(t)
+        return sent
+
+    # -- results -------------------------------------------------------------------------
+    def on_result(self, robot_number: int, task_id: int, status: str, error: str = "NONE",
+                  holding: bool | None = None, text: str = "") -> None:
+        """A TaskResult: ``status`` RUNNING/SUCCEEDED/FAILED/CANCELLED, ``error`` the
+        ErrorCode name, ``holding`` whether the gripper holds something afterwards
+        (None: not said)."""
+        task = self.kb.tasks.get(task_id)
+        robot = self.kb.robots.get(robot_number)
+        if task is None or robot is None:
+            return
+        if task.robot != robot_number or task.state != M.ASSIGNED:
+            if status == "RUNNING" and task.robot != robot_number:
+                self.outbox.append(("cancel", task, "task no longer yours"))
+            return
+        if status == "RUNNING":
+            return
+        robot.task_id = None
+        task.finished_at = self.clock.now()
+        if status == "SUCCEEDED":
+            task.state = M.DONE
+            self.kb.save_task(task)
+            if task.kind == M.EXPLORE_ZONE:
+                self.kb.mark_visited(int(task.params["zone"]), self.clock.now())
+            else:
+                self.production.task_done(task, robot)
+            self.kb.save_robot(robot)
+            return
+        task.error = f"{error}: {text}" if text else error
+        if status == "CANCELLED" or task.kind == M.EXPLORE_ZONE:
+            task.state = M.CANCELLED if status == "CANCELLED" else M.FAILED
+            self.kb.save_task(task)
+            if task.kind != M.EXPLORE_ZONE:
+                self.production.needs_repair(task.product, f"task {task.id} cancelled")
+            self.kb.save_robot(robot)
+            return
+        self._failed(task, robot, error, holding)
+
+    def _failed(self, task: M.Task, robot: M.Robot, error: str, holding: bool | None) -> None:
+        lost = False
+        if task.carry and holding is False:
+            lost = True                      # the workpiece it carried is gone
+        if not task.carry and task.kind == M.GET_WORKPIECE and holding:
+            lost = False
+        if lost and robot.holding:
+            wp = self.kb.workpieces.get(robot.holding)
+            if wp is not None:
+                wp.location = "gone"
+                self.kb.save_workpiece(wp)
+            robot.holding = None
+        self.kb.save_robot(robot)
+        if error == "MACHINE_BROKEN" and task.machine:
+            st = self.kb.stations.get(task.machine)
+            if st is not None and st.state == "BROKEN":
+                self.production.station_broke(task.machine)
+        retry = (not lost and error in RETRY_ERRORS
+                 and task.attempts < self.config.max_attempts)
+        if retry:
+            log.info("task %d failed (%s), trying again", task.id, error)
+            task.state, task.robot, task.prepared_at = M.PENDING, None, None
+            if task.carry:
+                task.holder = robot.number
+            self.kb.save_task(task)
+            return
+        task.state = M.FAILED
+        self.kb.save_task(task)
+        self.production.needs_repair(task.product, f"task {task.id} {task.kind} failed: {error}")
+
+    # -- orphans ---------------------------------------------------------------------------------
+    def discard_orphans(self) -> list[M.Task]:
+        """Idle robots holding a workpiece no open task will take: discard it."""
+        bound = {t.holder for t in self.kb.open_tasks() if t.carry}
+        out = []
+        for r in self.idle_robots():
+            if r.holding and r.number not in bound:
+                out.append(self.production.discard_for(r))
+        return out
+
+
+def _age(task: M.Task) -> float:
+    return float(task.id)

@@ -1,0 +1,430 @@
+"""Products: from chosen orders to tasks, bookkeeping of their progress, repair.
+
+A :class:`~teamserver.model.Product` owns the tasks of one unit of an
+order.  When a task finishes, the workpieces it moved are updated (where
+each is, which rings and cap it has), the station locks its product gives
+up are released, and carry steps are bound to the robot that now holds the
+workpiece.  A product that cannot go on as planned (a failed step, a
+station that broke with its workpiece inside, a robot lost with it) is
+*repaired*: its open tasks are cancelled and the rest of the product is
+planned again from what exists (the workpiece as it is, bases already on a
+slide, a cap already buffered); if nothing can be made of it, it is
+abandoned and a station output it blocks is cleared.
+"""
+from __future__ import annotations
+
+import logging
+
+from rll_bt.rules import Profile
+
+from . import model as M
+from .kb import KnowledgeBase
+from .planning.domain import CAP_LOCK, CAPLESS, EXTRA, MAIN, Progress
+from .planning.estimate import SimRobot, SimTask
+from .planning.htn import Network, PlanningFailed
+from .planning.planner import Candidate, ProductionPlanner, World
+
+log = logging.getLogger("teamserver.production")
+
+DELIVERED, ABANDONED, ACTIVE = "DELIVERED", "ABANDONED", "ACTIVE"
+CLEANUP_ORDER = 0          # order id of products that only clear a station
+
+
+class ProductionManager:
+    """Products, their tasks and workpieces, kept in the knowledge base."""
+
+    def __init__(self, kb: KnowledgeBase, planner: ProductionPlanner, prefix: str, *,
+                 cs_caps: dict[str, str], max_products: int | None = None,
+                 max_repairs: int = 3):
+        self.kb = kb
+        self.profile: Profile = kb.profile
+        self.planner = planner
+        self.prefix = prefix
+        self.cs_caps = {f"{prefix}-{k}" if not k.startswith(prefix + "-") else k: v
+                        for k, v in cs_caps.items()}
+        self.max_products = max_products
+        self.max_repairs = max_repairs
+
+    # -- locks and buffers (persisted in the knowledge base) ------------------------
+    @property
+    def locks(self) -> dict[str, str]:
+        return dict(self.kb.get("locks", {}))
+
+    def _set_locks(self, locks: dict[str, str]) -> None:
+        self.kb.set("locks", locks)
+
+    def lock_free(self, task: M.Task) -> bool:
+        """Its product may take the task's locks, and no other running task uses them
+        (a station serves one robot at a time, even within one product)."""
+        if not task.locks:
+            return True
+        locks = self.locks
+        if any(locks.get(lk, task.product) != task.product for lk in task.locks):
+            return False
+        mine = set(task.locks)
+        return not any(t.id != task.id and t.state == M.ASSIGNED and mine & set(t.locks)
+                       for t in self.kb.open_tasks())
+
+    def acquire(self, task: M.Task) -> None:
+        if task.locks:
+            locks = self.locks
+            locks.update({lk: task.product for lk in task.locks})
+            self._set_locks(locks)
+
+    def release(self, product: str, names=None) -> None:
+        locks = self.locks
+        for lk in list(locks):
+            if locks[lk] == product and (names is None or lk in names):
+                del locks[lk]
+        self._set_locks(locks)
+
+    @property
+    def cap_buffer(self) -> dict[str, str]:
+        """CS -> product whose retrieved cap it holds."""
+        return dict(self.kb.get("cap_buffer", {}))
+
+    def _set_cap_buffer(self, buf: dict[str, str]) -> None:
+        self.kb.set("cap_buffer", buf)
+
+    # -- the planning world -------------------------------------------------------------
+    def rs_colors(self) -> dict[str, tuple[str, ...]]:
+        out = {}
+        for kind in self.profile.machine_types:
+            if not kind.startswith("RS"):
+                continue
+            name = f"{self.prefix}-{kind}"
+            st = self.kb.stations.get(name)
+            if st is not None and st.ring_colors:
+                out[name] = tuple(st.ring_colors)
+            elif self.profile.rs_colors is not None:
+                out[name] = tuple(self.profile.rs_colors[kind])
+        return out
+
+    def positions(self) -> dict[str, tuple[float, float]]:
+        out = {}
+        for kind in self.profile.machine_types:
+            name = f"{self.prefix}-{kind}"
+            pos = self.kb.machine_position(name)
+            if pos is not None:
+                out[name] = pos
+        return out
+
+    def active_products(self) -> list[M.Product]:
+        return [p for p in self.kb.products.values() if p.state == ACTIVE]
+
+    def world(self, game_time: float, horizon: float) -> World:
+        orders = [o for o in self.kb.orders.values() if o.open > 0]
+        in_progress: dict[int, int] = {}
+        delivered: dict[int, int] = {}
+        for p in self.kb.products.values():
+            if p.state == DELIVERED:
+                delivered[p.order_id] = delivered.get(p.order_id, 0) + 1
+        for oid, n in delivered.items():      # ours, not yet counted by the refbox
+            o = self.kb.orders.get(oid)
+            if o is not None and n > o.delivered:
+                in_progress[oid] = n - o.delivered
+        active, done = [], set()
+        for p in self.active_products():
+            in_progress[p.order_id] = in_progress.get(p.order_id, 0) + 1
+            order = self.kb.orders.get(p.order_id)
+            for t in self.kb.tasks_of(p.tasks):
+                if t.state == M.CANCELLED or t.state == M.FAILED:
+                    continue
+                if t.state == M.DONE:
+                    done.add(t.id)
+                holder = t.holder if t.holder is not None else (
+                    t.robot if t.state == M.ASSIGNED else None)
+                active.append(SimTask(
+                    key=t.id, product=p.id, kind=t.kind, machine=t.machine, params=t.params,
+                    deps=t.deps, locks=t.locks, releases=t.releases, carry=t.carry,
+                    holder=None if holder is None else str(holder),
+                    not_before=float(t.params.get("not_before", 0.0)), order=order))
+        robots = []
+        for r in self.kb.active_robots():
+            pos = (r.pose[0], r.pose[1]) if r.pose else self._start_position()
+            robots.append(SimRobot(str(r.number), pos, game_time))
+        n = self.max_products if self.max_products is not None else max(len(robots), 1)
+        return World(orders, robots, self.positions(), self.rs_colors(),
+                     dict(self.kb.get("ring_costs") or {}), self.cs_caps, game_time, horizon,
+                     active=active, done=done, owned=self.locks, in_progress=in_progress,
+                     max_products=n)
+
+    def _start_position(self) -> tuple[float, float]:
+        from rll_bt.rules import CYAN, MAGENTA
+        team = CYAN if self.prefix == "C" else MAGENTA
+        rect = self.profile.insertion.get(team)
+        return rect.centre if rect else (0.0, 0.0)
+
+    def ready_to_plan(self) -> bool:
+        """Ring costs and RS colours are known (needed by every ring method)."""
+        return bool(self.kb.get("ring_costs")) and bool(self.rs_colors())
+
+    # -- starting products ------------------------------------------------------------
+    def plan(self, game_time: float, horizon: float):
+        """Repair what needs it, then start the orders the planner picks.
+        Returns (tasks to cancel, the planner's Choice or None)."""
+        cancels: list[M.Task] = []
+        for p in self.active_products():
+            if p.repair:
+                cancels += self.repair(p)
+        if not self.ready_to_plan():
+            return cancels, None
+        choice = self.planner.choose(self.world(game_time, horizon))
+        for cand in choice.start:
+            self.start(cand)
+        return cancels, choice
+
+    def start(self, cand: Candidate) -> M.Product:
+        pid = f"P{self.kb.next_id('product')}"
+        product = M.Product(pid, cand.order.id, created=self.kb.get("game_time", 0.0))
+        net = cand.network
+        buf = self.cap_buffer
+        free = [cs for cs, owner in buf.items() if owner == "free" and self.cs_caps.get(cs)
+                == cand.order.cap]
+        if free:        # a cap an abandoned product left in a CS: mount that one
+            buf[free[0]] = pid
+            try:
+                world = self.world(float(self.kb.get("game_time", 0.0)), 0.0)
+                net = self.planner.decompose(self.planner.context(
+                    world, cand.order, Progress(cap_ready=free[0])))
+                self._set_cap_buffer(buf)
+            except PlanningFailed:
+                net = cand.network
+        self.kb.save_product(product)
+        self.add_network(product, net)
+        log.info("started %s for order %d (%d tasks)", pid, cand.order.id,
+                 len(cand.network.steps))
+        return product
+
+    def add_network(self, product: M.Product, net: Network) -> list[M.Task]:
+        ids = [self.kb.next_id("task") for _ in net.steps]
+        tasks = []
+        for i, st in enumerate(net.steps):
+            f = st.fields
+            deps = tuple(ids[j] for j in net.predecessors(i))
+            params = dict(f["params"])
+            if f["carry"]:
+                pick = [ids[j] for j in net.predecessors(i)
+                        if net.steps[j].fields["kind"] == M.GET_WORKPIECE]
+                if pick:
+                    params["carry_from"] = pick[0]
+            holder = int(f["holder"]) if f["holder"] is not None else None
+            t = M.Task(ids[i], f["kind"], params, product=product.id, deps=deps,
+                       prepare=f["prepare"], locks=f["locks"], releases=f["releases"],
+                       carry=f["carry"], holder=holder, created=self.kb.get("game_time", 0.0))
+            self.kb.save_task(t)
+            tasks.append(t)
+        product.tasks = tuple(product.tasks) + tuple(ids)
+        self.kb.save_product(product)
+        return tasks
+
+    # -- progress ---------------------------------------------------------------------
+    def progress(self, product: M.Product) -> Progress:
+        pr = Progress()
+        wp = self.kb.workpieces.get(product.workpiece) if product.workpiece else None
+        if wp is not None and self._workpiece_exists(wp):
+            pr.base, pr.rings, pr.cap, pr.location = wp.base, tuple(wp.rings), wp.cap, wp.location
+        credit: dict[str, int] = {}
+        for t in self.kb.tasks_of(product.tasks):
+            if t.state != M.DONE:
+                continue
+            if t.kind == M.PUT_WORKPIECE and t.params.get("side") == M.SLIDE:
+                credit[t.machine] = credit.get(t.machine, 0) + 1
+            elif t.kind == M.MOUNT_RING:
+                credit[t.machine] = credit.get(t.machine, 0) - int(t.params.get("cost", 0))
+        pr.slide_credit = {k: v for k, v in credit.items() if v > 0}
+        for cs, owner in self.cap_buffer.items():
+            if owner == product.id:
+                pr.cap_ready = cs
+        return pr
+
+    def _workpiece_exists(self, wp: M.Workpiece) -> bool:
+        loc = wp.location
+        if loc == "gone":
+            return False
+        if loc.startswith("robot:"):
+            r = self.kb.robots.get(int(loc[6:]))
+            return r is not None and r.status == M.ACTIVE
+        st = self.kb.stations.get(loc.split(":")[0])
+        return st is None or st.state not in ("BROKEN",)
+
+    # -- task outcomes ----------------------------------------------------------------
+    def task_done(self, task: M.Task, robot: M.Robot) -> None:
+        """Book the effects of a finished task on workpieces, locks and buffers."""
+        product = self.kb.products.get(task.product) if task.product else None
+        kind, machine = task.kind, task.machine
+        if kind == M.GET_WORKPIECE:
+            role = task.params.get("role", MAIN)
+            wp = self._workpiece_for_pickup(task, product, role)
+            wp.location = f"robot:{robot.number}"
+            self.kb.save_workpiece(wp)
+            robot.holding = wp.id
+            for other in self.kb.tasks_of(product.tasks if product else ()):
+                if other.params.get("carry_from") == task.id and other.state == M.PENDING:
+                    other.holder = robot.number
+                    self.kb.save_task(other)
+        elif kind == M.RETRIEVE_CAP:
+            wp = M.Workpiece(f"{task.product}/capless{task.id}", base="?", cap=None,
+                             location=f"{machine}:{M.OUTPUT}", product=task.product)
+            self.kb.save_workpiece(wp)
+            buf = self.cap_buffer
+            buf[machine] = task.product
+            self._set_cap_buffer(buf)
+        elif kind in (M.MOUNT_RING, M.MOUNT_CAP):
+            wp = self.kb.workpieces.get(robot.holding or "")
+            if wp is not None:
+                if kind == M.MOUNT_RING:
+                    wp.rings = tuple(wp.rings) + (task.params["ring_color"],)
+                else:
+                    wp.cap = task.params.get("cap_color")
+                    buf = self.cap_buffer
+                    buf.pop(machine, None)
+                    self._set_cap_buffer(buf)
+                wp.location = f"{machine}:{M.OUTPUT}"
+                self.kb.save_workpiece(wp)
+            robot.holding = None
+        elif kind in (M.PUT_WORKPIECE, M.DELIVER, M.DISCARD):
+            wp = self.kb.workpieces.get(robot.holding or "")
+            if wp is not None:
+                wp.location = "gone"
+                self.kb.save_workpiece(wp)
+            robot.holding = None
+            if kind == M.DELIVER and product is not None:
+                product.state = DELIVERED
+                self.kb.save_product(product)
+                self.release(product.id)
+        if task.releases and product is not None:
+            self.release(product.id, set(task.releases))
+        if product is not None and product.state == ACTIVE and product.order_id == CLEANUP_ORDER:
+            if all(t.state == M.DONE for t in self.kb.tasks_of(product.tasks)):
+                product.state = DELIVERED
+                self.kb.save_product(product)
+                self.release(product.id)
+
+    def _workpiece_for_pickup(self, task: M.Task, product: M.Product | None,
+                              role: str) -> M.Workpiece:
+        machine = task.machine
+        here = f"{machine}:{M.OUTPUT}"
+        if product is not None and role == MAIN:
+            if machine.endswith("BS"):
+                wp = M.Workpiece(f"{product.id}/wp{task.id}", base=task.params.get("base"),
+                                 product=product.id)
+            else:
+                wp = self.kb.workpieces.get(product.workpiece or "") or M.Workpiece(
+                    f"{product.id}/wp{task.id}", product=product.id)
+            product.workpiece = wp.id
+            self.kb.save_product(product)
+            return wp
+        if role == CAPLESS:
+            for wp in self.kb.workpieces.values():
+                if wp.location == here and wp.id.startswith(f"{task.product}/capless"):
+                    return wp
+        base = task.params.get("base") if machine.endswith("BS") else "?"
+        return M.Workpiece(f"{task.product}/{EXTRA}{task.id}", base=base, product=task.product)
+
+    def needs_repair(self, product_id: str | None, why: str) -> None:
+        p = self.kb.products.get(product_id or "")
+        if p is not None and p.state == ACTIVE and not p.repair:
+            p.repair = why
+            self.kb.save_product(p)
+            log.info("%s needs repair: %s", p.id, why)
+
+    def station_broke(self, machine: str) -> None:
+        """A BROKEN station loses what it holds: workpieces inside, a buffered cap."""
+        for wp in self.kb.workpieces.values():
+            if wp.location.startswith(machine + ":"):
+                wp.location = "gone"
+                self.kb.save_workpiece(wp)
+                self.needs_repair(wp.product, f"{machine} broke with its workpiece")
+        buf = self.cap_buffer
+        owner = buf.pop(machine, None)
+        if owner is not None:
+            self._set_cap_buffer(buf)
+            self.needs_repair(owner, f"{machine} broke and lost the buffered cap")
+        for t in self.kb.open_tasks():
+            if t.machine == machine and t.prepared_at is not None and t.state == M.ASSIGNED:
+                t.prepared_at = None            # to be prepared again once it is IDLE
+                self.kb.save_task(t)
+
+    # -- repair ---------------------------------------------------------------------------
+    def repair(self, product: M.Product) -> list[M.Task]:
+        """Cancel the product's open tasks and plan the rest again; returns the
+        tasks that were assigned (the robots must be told to stop)."""
+        cancels = self.cancel_open(product)
+        pr = self.progress(product)
+        self.release(product.id)
+        owned = {}
+        if pr.cap_ready:
+            owned[pr.cap_ready + CAP_LOCK] = product.id
+        if pr.location and not pr.location.startswith("robot:"):
+            owned[pr.location.split(":")[0]] = product.id
+        if owned:
+            locks = self.locks
+            locks.update(owned)
+            self._set_locks(locks)
+        product.repair, product.repairs = None, product.repairs + 1
+        order = self.kb.orders.get(product.order_id)
+        net = None
+        if order is not None and order.open > 0 and product.repairs <= self.max_repairs:
+            world = self.world(float(self.kb.get("game_time", 0.0)), 0.0)
+            try:
+                net = self.planner.decompose(self.planner.context(world, order, pr))
+            except PlanningFailed as exc:
+                log.info("%s cannot be repaired: %s", product.id, exc)
+        if net is None:
+            self.abandon(product, pr)
+        else:
+            self.add_network(product, net)
+            self.kb.save_product(product)
+        return cancels
+
+    def cancel_open(self, product: M.Product) -> list[M.Task]:
+        cancels = []
+        for t in self.kb.tasks_of(product.tasks):
+            if t.state in M.OPEN_STATES:
+                if t.state == M.ASSIGNED:
+                    cancels.append(M.Task.from_dict(t.to_dict()))
+                    r = self.kb.robots.get(t.robot)
+                    if r is not None and r.task_id == t.id:
+                        r.task_id = None
+                        self.kb.save_robot(r)
+                t.state = M.CANCELLED
+                self.kb.save_task(t)
+        return cancels
+
+    def abandon(self, product: M.Product, pr: Progress | None = None) -> None:
+        pr = pr or self.progress(product)
+        product.state = ABANDONED
+        self.kb.save_product(product)
+        self.release(product.id)
+        buf = self.cap_buffer
+        for cs in [cs for cs, owner in buf.items() if owner == product.id]:
+            buf[cs] = "free"            # a retrieved cap another product can mount
+        self._set_cap_buffer(buf)
+        if pr.location and not pr.location.startswith("robot:"):
+            self.clear_output(pr.location.split(":")[0])
+        log.info("abandoned %s", product.id)
+
+    def clear_output(self, machine: str) -> M.Product:
+        """A small product that takes a workpiece from ``machine``'s output and discards it."""
+        from .planning.htn import Seq
+        pid = f"X{self.kb.next_id('product')}"
+        product = M.Product(pid, CLEANUP_ORDER)
+        self.kb.save_product(product)
+        ctx = None
+        net = self.planner.htn.plan(ctx, Seq(("pickup", machine, False, CAPLESS),
+                                             ("discard",)))
+        self.add_network(product, net)
+        return product
+
+    def discard_for(self, robot: M.Robot) -> M.Task:
+        """A task for a robot holding a workpiece nothing needs: discard it."""
+        pid = f"X{self.kb.next_id('product')}"
+        product = M.Product(pid, CLEANUP_ORDER)
+        self.kb.save_product(product)
+        t = M.Task(self.kb.next_id("task"), M.DISCARD, {}, product=pid, carry=True,
+                   holder=robot.number, created=self.kb.get("game_time", 0.0))
+        self.kb.save_task(t)
+        product.tasks = (t.id,)
+        self.kb.save_product(product)
+        return t

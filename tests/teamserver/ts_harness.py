@@ -1,0 +1,160 @@
+"""Scripted refbox and robots for the team-server tests (lockstep, one clock)."""
+from __future__ import annotations
+
+from rll_bt import msgs, rules
+from rll_bt.clock import SimClock
+from rll_bt.comm import Bus, MessageRegistry
+
+from teamserver.links import RefboxLink
+from teamserver.server import ServerConfig, TeamServer
+
+TEAM, KEY = "Testers", "secret"
+PHASE = {"PRE_GAME": 0, "SETUP": 10, "EXPLORATION": 20, "PRODUCTION": 30, "POST_GAME": 40}
+STATE = {"INIT": 0, "WAIT_START": 1, "RUNNING": 2, "PAUSED": 3}
+
+
+class FakeRefbox:
+    """Speaks the profile's refbox messages on bus peers: public + cyan."""
+
+    def __init__(self, bus: Bus, profile: str):
+        self.ms = msgs.message_set(profile)
+        reg = MessageRegistry.from_message_set(self.ms)
+        self.public = bus.peer("public", registry=reg, name="refbox")
+        self.cyan = bus.peer("cyan", registry=reg, key=KEY, name="refbox")
+        self.received: list = []
+
+    def game_state(self, phase="PRODUCTION", state="RUNNING", t=0.0, team=TEAM):
+        gs = self.ms.GameState(state=STATE[state], phase=PHASE[phase], team_cyan=team)
+        gs.game_time.sec, gs.game_time.nsec = int(t), int((t % 1) * 1e9)
+        self.public.send(gs)
+
+    def orders(self, orders):
+        info = self.ms.OrderInfo()
+        for o in orders:
+            info.orders.add(**o)
+        self.public.send(info)
+
+    def rings(self, costs):
+        e = self.ms.enum("RingColor")
+        info = self.ms.RingInfo()
+        for c, n in costs.items():
+            info.rings.add(ring_color=e.Value(c), raw_material=n)
+        self.cyan.send(info)
+
+    def machines(self, states: dict, ring_colors: dict | None = None, **extra):
+        info = self.ms.MachineInfo(team_color=0)
+        e = self.ms.enum("RingColor")
+        for name, state in states.items():
+            m = info.machines.add(name=name, state=state, type=name[2:4])
+            for c in (ring_colors or {}).get(name, ()):
+                m.ring_colors.append(e.Value(c))
+            for k, v in extra.get(name, {}).items():
+                setattr(m, k, v)
+        self.cyan.send(info)
+
+    def take(self):
+        got = [rx.msg for rx in self.cyan.receive()]
+        self.received += got
+        return got
+
+
+class FakeAgent:
+    """A robot agent over a team-protocol transport."""
+
+    def __init__(self, transport, number: int, pose=(4.0, 0.5, 0.0)):
+        self.ms = msgs.message_set("team")
+        self.t = transport
+        self.number = number
+        self.pose = pose
+        self.inbox: list = []
+        self.seq = 0
+
+    def hello(self, restarted=False):
+        self.t.send(self.ms.RobotHello(robot_id=self.number, team_name=TEAM,
+                                       peer_name=f"robot{self.number}", restarted=restarted))
+
+    def beat(self):
+        self.seq += 1
+        self.t.send(self.ms.Heartbeat(robot_id=self.number, seq=self.seq))
+
+    def status(self, state=1, holding=False):
+        st = self.ms.RobotStatus(robot_id=self.number, state=state)
+        st.pose.x, st.pose.y, st.pose.theta = self.pose
+        if holding:
+            st.holding.SetInParent()
+        self.t.send(st)
+
+    def take(self):
+        got = [rx.msg for rx in self.t.receive()]
+        self.inbox += got
+        return got
+
+    def tasks(self):
+        return [m for m in self.inbox if m.DESCRIPTOR.name == "Task"]
+
+    def result(self, task_id, status="SUCCEEDED", error="NONE", holding=None):
+        r = self.ms.TaskResult(task_id=task_id, robot_id=self.number,
+                               status=self.ms.enum("TaskResult.Status").Value(status),
+                               error=self.ms.enum("ErrorCode").Value(error))
+        if holding:
+            r.holding.SetInParent()
+        self.t.send(r)
+
+    def observe(self, name, zone=None, zconf=0.9, lights=None, lconf=0.9, orientation=None,
+                oconf=0.9, pose=None, pconf=0.9):
+        m = self.ms.MachineObservation(robot_id=self.number)
+        m.name.value, m.name.confidence = name, 1.0
+        if zone is not None:
+            m.zone.value, m.zone.confidence = zone, zconf
+        if lights is not None:
+            m.lights.pattern, m.lights.confidence = lights, lconf
+        if orientation is not None:
+            m.orientation.value, m.orientation.confidence = orientation, oconf
+        if pose is not None:
+            m.pose.pose.x, m.pose.pose.y, m.pose.pose.theta = pose
+            m.pose.confidence = pconf
+        self.t.send(m)
+
+
+class Lockstep:
+    """A team server, a fake refbox and fake agents on one bus and one clock."""
+
+    def __init__(self, profile="rcll2016", robots=3, state=":memory:", config=None, **kw):
+        self.clock = SimClock()
+        self.bus = Bus(self.clock)
+        self.profile_name = profile
+        self.profile = rules.profile(profile)
+        self.refbox = FakeRefbox(self.bus, profile)
+        self.state = state
+        self.config = config or ServerConfig()
+        self.kw = kw
+        self.team_reg = MessageRegistry.from_message_set(msgs.message_set("team"))
+        self.server = self._server()
+        self.agents = [FakeAgent(self.bus.stream_client("teamserver", registry=self.team_reg,
+                                                        key=KEY, name=f"robot{i}"), i)
+                       for i in range(1, robots + 1)]
+
+    def _server(self):
+        reg = MessageRegistry.from_message_set(msgs.message_set(self.profile_name))
+        link = RefboxLink(self.bus.peer("public", registry=reg, name="ts"),
+                          lambda color: self.bus.peer(color, registry=reg, name="ts"))
+        agents = self.bus.stream_server("teamserver", registry=self.team_reg, key=KEY)
+        return TeamServer(self.profile_name, TEAM, key=KEY, clock=self.clock, refbox=link,
+                          agents=agents, state=self.state, config=self.config, **self.kw)
+
+    def restart(self):
+        """Kill the server (no goodbye) and start a new one on the same database."""
+        self.server.agents.close()
+        self.server.close()
+        self.server = self._server()
+        for a in self.agents:       # the clients reconnect to the new server
+            a.t = self.bus.stream_client("teamserver", registry=self.team_reg, key=KEY,
+                                         name=f"robot{a.number}-again")
+
+    def step(self, dt=0.1, n=1):
+        for _ in range(n):
+            self.clock.advance(dt)
+            self.server.tick()
+            for a in self.agents:
+                a.take()
+            self.refbox.take()
