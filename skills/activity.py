@@ -77,7 +77,7 @@ class Activity:
         except SkillFailure as exc:
             self._finish(Status.FAILURE, exc.code, exc.message)
         except BackendError as exc:
-            self._finish(Status.FAILURE, SkillError.HARDWARE, f"{self.name}: {exc}")
+            self._finish(Status.FAILURE, SkillError.INTERNAL, f"{self.name}: {exc}")
         else:
             if result is Status.SUCCESS:
                 self._finish(Status.SUCCESS, SkillError.NONE, self.message)
@@ -162,6 +162,7 @@ class Sequence(Activity):
         while True:
             if self.current is None:
                 if self._index >= len(self._factories):
+                    self.message = f"{self.name}: done"
                     return Status.SUCCESS
                 self.current = self._factories[self._index]().start()
                 self._index += 1

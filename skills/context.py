@@ -14,7 +14,6 @@ temporary obstacles.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
 
 from rll_bt.backend import Backend, BackendError, Pose2D
@@ -25,6 +24,7 @@ from .localisation import AmclConfig, Localiser, PoseEstimate
 from .machines import BackendTagSource, MachineMap, TagSource
 from .maps import FieldMap
 from .navigation.costmap import Costmap
+from .settings import ManipulationSettings, SkillSettings
 
 
 @runtime_checkable
@@ -57,27 +57,6 @@ class OdometryPose:
 
     def estimate(self) -> None:
         return None
-
-
-@dataclass
-class SkillSettings:
-    """Limits and tolerances shared by the skills (SI units)."""
-    max_speed: float = 0.7            # m/s, the rules' limit
-    max_omega: float = 1.6            # rad/s
-    max_accel: float = 0.8            # m/s^2
-    max_decel: float = 1.2            # m/s^2, planned; the base can do 1.5
-    max_alpha: float = 1.6            # rad/s^2
-    control_period: float = 0.1       # s, the expected time between polls
-    position_tolerance: float = 0.05  # m, a navigation goal is reached
-    heading_tolerance: float = 0.05   # rad
-    safety_margin: float = 0.08       # m, kept free around the robot by the laser check
-    blind_speed: float = 0.2          # m/s, top speed toward where the laser cannot see
-    plan_padding: float = 0.05        # m, added to the robot radius in the costmap
-    costmap_resolution: float = 0.05  # m
-    obstacle_ttl: float = 4.0         # s, laser obstacles stay in the costmap
-    block_replan_after: float = 1.0   # s blocked before replanning around it
-    require_localisation: float = 0.0   # minimum confidence to drive (0: do not check)
-    extra: dict = field(default_factory=dict)
 
 
 class SkillContext:

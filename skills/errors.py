@@ -1,10 +1,9 @@
 """Failure codes of the skills.
 
-The names match the team protocol's task ``ErrorCode`` (the mid-level
-reports them to the team server unchanged): ``NAVIGATION_FAILED``,
-``LOCALISATION_LOST``, ``ALIGN_FAILED``, ``GRAB_FAILED``, ``PUT_FAILED``,
-``TIMEOUT``, ...  A failed activity carries one code and a message that
-says what was seen.
+Every name is a value of the team protocol's ``rllbt.ErrorCode``
+(``rll_bt/msgs/proto/team/common.proto``), so the mid-level reports a
+skill's code to the team server unchanged: ``ErrorCode.Value(err.value)``.
+A failed activity carries one code and a message that says what was seen.
 """
 from __future__ import annotations
 
@@ -13,16 +12,17 @@ import enum
 
 class SkillError(enum.Enum):
     NONE = "NONE"
-    CANCELLED = "CANCELLED"              # stopped by the caller, not a fault
-    TIMEOUT = "TIMEOUT"                  # did not finish within its time limit
     NAVIGATION_FAILED = "NAVIGATION_FAILED"   # no path, or blocked for too long
     LOCALISATION_LOST = "LOCALISATION_LOST"   # pose confidence fell below the limit
-    ALIGN_FAILED = "ALIGN_FAILED"        # the station's tag was not seen or not reached
+    MACHINE_NOT_FOUND = "MACHINE_NOT_FOUND"   # the station's pose or tag is not known / not seen
+    ALIGN_FAILED = "ALIGN_FAILED"        # could not line up with the conveyor, shelf or slide
     GRAB_FAILED = "GRAB_FAILED"          # the gripper does not hold a workpiece after a grab
     PUT_FAILED = "PUT_FAILED"            # the gripper still holds the workpiece after a put
-    MACHINE_UNKNOWN = "MACHINE_UNKNOWN"  # the station's pose is not known yet
-    BAD_GOAL = "BAD_GOAL"                # the goal is outside the field or inside an obstacle
-    HARDWARE = "HARDWARE"                # the backend reported an error (gripper, base)
+    GRIPPER_ERROR = "GRIPPER_ERROR"      # the gripper reported a fault
+    TIMEOUT = "TIMEOUT"                  # did not finish within its time limit
+    CANCELLED = "CANCELLED"              # stopped by the caller, not a fault
+    INVALID_TASK = "INVALID_TASK"        # a goal outside the field, an unknown place
+    INTERNAL = "INTERNAL"                # the backend failed in an unexpected way
 
 
 class SkillFailure(Exception):

@@ -77,7 +77,7 @@ class ZoneGoal:
         try:
             rect = prof.zones.bounds(self.zone)
         except ValueError as exc:
-            raise SkillFailure(SkillError.BAD_GOAL, str(exc)) from None
+            raise SkillFailure(SkillError.INVALID_TASK, str(exc)) from None
         cx, cy = rect.centre
         cm = ctx.costmap
         if bool(cm.is_free(cx, cy)):
@@ -88,7 +88,7 @@ class ZoneGoal:
             lethal, _ = cm.grids()
             ok = inside & ~lethal
             if not ok.any():
-                raise SkillFailure(SkillError.BAD_GOAL, f"zone {prof.zone_name(self.zone)} has no free spot")
+                raise SkillFailure(SkillError.INVALID_TASK, f"zone {prof.zone_name(self.zone)} has no free spot")
             d = np.where(ok, np.hypot(xs - cx, ys - cy), np.inf)
             r, c = np.unravel_index(int(np.argmin(d)), d.shape)
             x, y = float(xs[r, c]), float(ys[r, c])
@@ -111,13 +111,13 @@ class StationSideGoal:
     def resolve(self, ctx) -> tuple[Pose2D, bool]:
         pose = ctx.machines.get(self.machine)
         if pose is None:
-            raise SkillFailure(SkillError.MACHINE_UNKNOWN, f"the pose of {self.machine} is not known")
+            raise SkillFailure(SkillError.MACHINE_NOT_FOUND, f"the pose of {self.machine} is not known")
         mps = ctx.profile.mps
         try:
             lateral = target_lateral(self.place, mps)
             return approach_pose(pose, self.side, self.distance, lateral, mps), True
         except ValueError as exc:
-            raise SkillFailure(SkillError.BAD_GOAL, str(exc)) from None
+            raise SkillFailure(SkillError.INVALID_TASK, str(exc)) from None
 
     def describe(self) -> str:
         return f"{self.machine} {self.side.lower()} ({self.place})"

@@ -9,11 +9,13 @@ counted as a collision (once per contact).  Tags are reported like a simulation 
 station tags in the camera's field of view and range, facing the camera,
 with OpenCV's rvec/tvec in the camera optical frame.
 
-The gripper has three axes (x forward from its home, y left, z up; metres)
-moving at ``gripper_speed``; its fingers sit ``RobotGeometry.gripper_reach``
-ahead of the robot centre plus the x axis.  Closing on a workpiece whose
-centre is within ``grip_tolerance`` of the fingers picks it up; opening
-puts it down where the fingers are.
+The gripper follows the simulation's conventions: axes x (0..0.15 m,
+forward beyond ``RobotGeometry.gripper_reach``), y (-0.1..0.1 m, left) and
+z (0..1 m, height above the floor), commands queued and run one after the
+other (moves at ``gripper_speed`` per axis, fingers in ``finger_time``).
+Closing picks up a workpiece whose centre is within ``grab_tolerance``
+horizontally and vertically of the gripper point (unless
+``fail_next_grab``); opening puts it down where the gripper is.
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from rll_bt.backend import (Backend, Capability, CameraExtrinsics, Detections, GripperState,
+from rll_bt.backend import (Backend, BackendError, Capability, CameraExtrinsics, Detections, GripperState,
                             GripperStatus, LaserScan, Odometry, Pose2D, TagDetection, wrap_angle)
 from rll_bt.clock import SimClock
 from rll_bt.rules import MPS, ROBOT, MpsGeometry, Profile, RobotGeometry
@@ -48,18 +50,55 @@ class Station:
 
 @dataclass
 class Workpiece:
+    """A base; ``z`` is the height of its bottom (0 on the floor)."""
     x: float
     y: float
+    z: float = 0.0
     held_by: int | None = None
 
 
-@dataclass
 class _Gripper:
-    pos: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    target: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    is_open: bool = True
-    busy_until: float = 0.0
-    holding: Workpiece | None = None
+    """Queued gripper actions: ("move", (x, y, z)), ("open",), ("close",)."""
+
+    def __init__(self, home: tuple[float, float, float], speed: float = 0.1, finger_time: float = 0.5):
+        self.pos = np.array(home, dtype=float)
+        self.is_open = True
+        self.speed = speed
+        self.finger_time = finger_time
+        self.queue: list[tuple] = []
+        self.current: tuple | None = None
+        self.until = 0.0
+        self.holding: Workpiece | None = None
+
+    @property
+    def busy(self) -> bool:
+        return self.current is not None or bool(self.queue)
+
+    def advance(self, now: float, dt: float) -> list[str]:
+        """Run the queue up to ``now``; returns finger actions that finished."""
+        done = []
+        while True:
+            if self.current is None:
+                if not self.queue:
+                    return done
+                self.current = self.queue.pop(0)
+                if self.current[0] != "move":
+                    self.until = now + self.finger_time
+            kind = self.current[0]
+            if kind == "move":
+                d = np.asarray(self.current[1]) - self.pos
+                n = float(np.linalg.norm(d, ord=np.inf))
+                step = self.speed * dt
+                if n > step:
+                    self.pos = self.pos + d * (step / n)
+                    return done
+                self.pos = np.asarray(self.current[1], dtype=float)
+            else:
+                if now < self.until:
+                    return done
+                self.is_open = kind == "open"
+                done.append(kind)
+            self.current = None
 
 
 class FlatWorld:
@@ -81,6 +120,8 @@ class FlatWorld:
         self.robots: list[FlatRobot] = []
         self.collisions = 0
         self.fail_next_grab = False
+        self.grab_tolerance = 0.03
+        self.gripper_home_z = mps.belt_height + 0.0225 / 2.0
         self._walls = np.array(field_map.segments()[:len(field_map.boundary)])
         self._segments = self._walls
 
@@ -101,19 +142,24 @@ class FlatWorld:
         self.robots.append(robot)
         return robot
 
-    def add_workpiece(self, x: float, y: float) -> Workpiece:
-        wp = Workpiece(x, y)
+    def add_workpiece(self, x: float, y: float, z: float = 0.0) -> Workpiece:
+        wp = Workpiece(x, y, z)
         self.workpieces.append(wp)
         return wp
 
-    def workpiece_at(self, station: str, side: str, lateral: float = 0.0, inset: float = 0.03) -> Workpiece:
-        """Put a workpiece on a station's conveyor end (``lateral`` along the
-        face from the belt centre line, ``inset`` inside the face)."""
+    def slot_point(self, station: str, side: str, lateral: float | None = None,
+                   inset: float = 0.03) -> tuple[float, float, float]:
+        """Field point of a place on a station face: ``lateral`` machine-frame
+        y (default the belt), ``inset`` inside the face, at belt height."""
         st = self.stations[station]
         sx = 1.0 if side == "INPUT" else -1.0
-        p = st.pose.compose(Pose2D(sx * (self.mps.depth / 2.0 - inset),
-                                   self.mps.belt_offset_y + lateral, 0.0))
-        return self.add_workpiece(p.x, p.y)
+        y = self.mps.belt_offset_y if lateral is None else lateral
+        p = st.pose.compose(Pose2D(sx * (self.mps.depth / 2.0 - inset), y, 0.0))
+        return p.x, p.y, self.mps.belt_height
+
+    def workpiece_at(self, station: str, side: str, lateral: float | None = None) -> Workpiece:
+        """Put a workpiece on a station's slot (conveyor end, shelf, slide)."""
+        return self.add_workpiece(*self.slot_point(station, side, lateral))
 
     # -- stepping ---------------------------------------------------------
     def step(self, dt: float = 0.05) -> None:
@@ -174,7 +220,7 @@ class FlatRobot(Backend):
         self.odom_pose = Pose2D()
         self.cmd = np.zeros(3)
         self.vel = np.zeros(3)
-        self.gripper = _Gripper()
+        self.gripper = _Gripper((0.0, 0.0, world.gripper_home_z))
         self.laser_beams = world.geometry.laser_beams
         self.laser_fov = world.geometry.laser_fov
         self.range_max = world.geometry.laser_range[1]
@@ -281,52 +327,45 @@ class FlatRobot(Backend):
 
     # -- gripper ----------------------------------------------------------
     def gripper_move(self, x: float, y: float, z: float) -> None:
-        self.gripper.target = np.array([x, y, z], dtype=float)
-        self.gripper.busy_until = math.inf
+        for name, v, (lo, hi) in (("x", x, (0.0, 0.15)), ("y", y, (-0.1, 0.1)), ("z", z, (0.0, 1.0))):
+            if not lo - 1e-9 <= v <= hi + 1e-9:
+                raise BackendError(f"gripper {name}={v:.3f} m is outside {lo}..{hi} m")
+        self.gripper.queue.append(("move", (x, y, z)))
 
     def gripper_open(self) -> None:
-        gr = self.gripper
-        if gr.holding is not None:
-            fx, fy = self._fingers()
-            gr.holding.x, gr.holding.y, gr.holding.held_by = fx, fy, None
-            gr.holding = None
-        gr.is_open = True
-        gr.busy_until = self.world.clock.now() + 0.3
+        self.gripper.queue.append(("open",))
 
     def gripper_close(self) -> None:
-        gr = self.gripper
-        gr.is_open = False
-        gr.busy_until = self.world.clock.now() + 0.3
-        if gr.holding is not None:
-            return
-        fx, fy = self._fingers()
-        for wp in self.world.workpieces:
-            if wp.held_by is None and math.hypot(wp.x - fx, wp.y - fy) <= 0.015:
-                if self.world.fail_next_grab:
-                    self.world.fail_next_grab = False
-                    break
-                wp.held_by = self.index
-                gr.holding = wp
-                break
+        self.gripper.queue.append(("close",))
 
     def gripper_status(self) -> GripperStatus:
         gr = self.gripper
-        moving = self.world.clock.now() < gr.busy_until or not np.allclose(gr.pos, gr.target)
-        return GripperStatus(GripperState.MOVING if moving else GripperState.IDLE, gr.is_open,
+        return GripperStatus(GripperState.MOVING if gr.busy else GripperState.IDLE, gr.is_open,
                              tuple(map(float, gr.pos)), gr.holding is not None)
 
-    def _fingers(self) -> tuple[float, float]:
+    def gripper_point(self) -> tuple[float, float, float]:
         p = self.true_pose.compose(Pose2D(self.world.geometry.gripper_reach + self.gripper.pos[0],
                                           self.gripper.pos[1], 0.0))
-        return p.x, p.y
+        return p.x, p.y, float(self.gripper.pos[2])
 
     def _advance_gripper(self, dt: float) -> None:
         gr = self.gripper
-        d = gr.target - gr.pos
-        n = float(np.linalg.norm(d))
-        step = 0.15 * dt
-        gr.pos = gr.target.copy() if n <= step else gr.pos + d * (step / n)
-        if gr.busy_until == math.inf and np.allclose(gr.pos, gr.target):
-            gr.busy_until = self.world.clock.now()
+        for action in gr.advance(self.world.clock.now(), dt):
+            gx, gy, gz = self.gripper_point()
+            if action == "close" and gr.holding is None:
+                for wp in self.world.workpieces:
+                    if (wp.held_by is None and math.hypot(wp.x - gx, wp.y - gy) <= self.world.grab_tolerance
+                            and abs(wp.z + 0.0225 / 2.0 - gz) <= self.world.grab_tolerance):
+                        if self.world.fail_next_grab:
+                            self.world.fail_next_grab = False
+                            break
+                        wp.held_by = self.index
+                        gr.holding = wp
+                        break
+            elif action == "open" and gr.holding is not None:
+                gr.holding.x, gr.holding.y, gr.holding.z = gx, gy, gz - 0.0225 / 2.0
+                gr.holding.held_by = None
+                gr.holding = None
         if gr.holding is not None:
-            gr.holding.x, gr.holding.y = self._fingers()
+            gx, gy, gz = self.gripper_point()
+            gr.holding.x, gr.holding.y, gr.holding.z = gx, gy, gz - 0.0225 / 2.0

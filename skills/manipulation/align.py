@@ -1,0 +1,199 @@
+"""Lining up with a station face: by its tag (visual servoing), then by
+laser to the final distance.
+
+:class:`AlignToTag` drives (on odometry) to the pose ``distance`` metres in
+front of the tag, facing it, shifted along the face to the spot (belt,
+shelf slot, slide).  Every new sighting of the tag gives that pose in the
+odometry frame; the running mean of the last sightings is the target, so
+the target sharpens as the robot closes in and odometry noise does not
+matter over these few centimetres.  Once ``tag_sightings`` sightings are in,
+the tag may leave the image (a shelf slot or the slide lies beside it) and
+the robot finishes on odometry.  Tags come from ``ctx.tags`` (the
+backend's oracle, or a perception source for rendered or real images).
+
+:class:`Dock` covers the last stretch, where the camera no longer sees the
+tag: it fits a line to the laser points of the face ahead, turns square to
+it and drives until the face is ``distance`` metres from the robot centre,
+holding its lateral position on odometry.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rll_bt.backend import CapabilityError, Pose2D
+
+from ..activity import Activity, Status
+from ..errors import SkillError, SkillFailure
+from ..navigation.controller import Limits, VelocityLimiter, heading_command
+from ..navigation.safety import scan_points
+from ..localisation.particles import circular_mean
+from .places import Place, check_place, lateral_offset
+from .tagview import tag_pose_in_robot
+
+
+class AlignToTag(Activity):
+    name = "align to tag"
+
+    def __init__(self, ctx, place: Place, distance: float | None = None, window: int = 10):
+        m = ctx.settings.manipulation
+        super().__init__(ctx, None)
+        self.place = place
+        self.distance = m.coarse_distance if distance is None else distance
+        self.window = window
+        self.sightings = 0
+        self.name = f"align to {place.describe()}"
+
+    def _on_start(self) -> None:
+        prof = self.ctx.profile
+        check_place(self.place, prof)
+        self.tag_id = prof.tag_ids(self.place.machine)[0 if self.place.side == "INPUT" else 1]
+        self.lateral = lateral_offset(self.place, prof)
+        self.targets: list[Pose2D] = []
+        self.sightings = 0
+        self.last_seen: float | None = None
+        self._last_stamp = None
+        self._settled_since: float | None = None
+        self._last = None
+        self.seen_other: set[int] = set()
+        self.limiter = VelocityLimiter(Limits.from_settings(self.ctx.settings,
+                                                            self.ctx.settings.manipulation.align_speed))
+
+    def _look(self, odom: Pose2D, now: float) -> None:
+        dets = self.ctx.tags.detections()
+        if dets is None or dets.stamp == self._last_stamp:
+            return
+        self._last_stamp = dets.stamp
+        tag = tag_pose_in_robot(dets, self.tag_id)
+        if tag is None:
+            self.seen_other.update(d.tag_id for d in dets.tags)
+            return
+        target = odom.compose(tag.compose(Pose2D(self.distance, self.lateral, math.pi)))
+        self.targets = (self.targets + [target])[-self.window:]
+        self.sightings += 1
+        self.last_seen = now
+
+    def target(self) -> Pose2D:
+        xs = np.array([[t.x, t.y, t.theta] for t in self.targets])
+        w = np.full(len(xs), 1.0 / len(xs))
+        return Pose2D(float(xs[:, 0].mean()), float(xs[:, 1].mean()), circular_mean(xs[:, 2], w))
+
+    def _step(self, now: float) -> Status:
+        m = self.ctx.settings.manipulation
+        odom = self.ctx.backend.odometry().pose
+        self._look(odom, now)
+        waited = now - (self.last_seen if self.last_seen is not None else self.started_at)
+        if waited > m.tag_search_time and self.sightings < m.tag_sightings:
+            what = "lost sight of" if self.targets else "does not see"
+            others = f" (sees tags {sorted(self.seen_other)})" if self.seen_other else ""
+            raise SkillFailure(SkillError.ALIGN_FAILED,
+                               f"the robot {what} tag {self.tag_id} of {self.place.describe()}{others}")
+        if now - self.started_at > m.align_time:
+            raise SkillFailure(SkillError.ALIGN_FAILED,
+                               f"not lined up with {self.place.describe()} after {m.align_time:.0f} s")
+        if not self.targets:
+            self.ctx.backend.drive(0.0, 0.0, 0.0)
+            return Status.RUNNING
+        err = self.target().relative_to(odom)
+        ok = (abs(err.x) <= m.align_tolerance and abs(err.y) <= m.align_tolerance
+              and abs(err.theta) <= m.align_heading_tolerance and self.sightings >= m.tag_sightings)
+        if ok:
+            if self._settled_since is None:
+                self._settled_since = now
+            if now - self._settled_since >= m.align_settle:
+                self.message = f"lined up with {self.place.describe()} from {self.sightings} sightings"
+                return Status.SUCCESS
+        else:
+            self._settled_since = None
+        dt = self.ctx.settings.control_period if self._last is None else max(now - self._last, 1e-3)
+        self._last = now
+        d = math.hypot(err.x, err.y)
+        speed = min(m.align_speed, 1.2 * d)
+        v = np.array([err.x, err.y]) / d * speed if d > 1e-9 else np.zeros(2)
+        lim = self.limiter.limits
+        self.limiter.apply(v, heading_command(err.theta, Limits(lim.max_speed, 0.6, lim.max_accel,
+                                                                lim.max_decel, lim.max_alpha)), dt)
+        vx, vy, w = self.limiter.to_robot(0.0)
+        self.ctx.backend.drive(vx, vy, w)
+        return Status.RUNNING
+
+
+def fit_face(points: np.ndarray, half_width: float = 0.25, max_ahead: float = 1.2,
+             iterations: int = 3, inlier: float = 0.02) -> tuple[float, float, int] | None:
+    """Line x = a + b*y through the laser points (robot frame) straight ahead
+    within ``half_width`` to the sides; returns (distance of the line from
+    the robot centre, the robot's yaw relative to the face normal, inliers)
+    or None when too few points."""
+    ahead = points[(points[:, 0] > 0.0) & (points[:, 0] < max_ahead) & (np.abs(points[:, 1]) < half_width)]
+    if len(ahead) < 8:
+        return None
+    near = ahead[:, 0] < ahead[:, 0].min() + 0.1        # the nearest surface
+    pts = ahead[near]
+    keep = np.ones(len(pts), dtype=bool)
+    a = b = 0.0
+    for _ in range(iterations):
+        if keep.sum() < 8:
+            return None
+        b, a = np.polyfit(pts[keep, 1], pts[keep, 0], 1)
+        keep = np.abs(pts[:, 0] - (a + b * pts[:, 1])) < inlier
+    yaw = math.atan(b)
+    return a * math.cos(yaw), yaw, int(keep.sum())
+
+
+class Dock(Activity):
+    name = "dock"
+
+    def __init__(self, ctx, distance: float | None = None):
+        m = ctx.settings.manipulation
+        super().__init__(ctx, m.dock_time)
+        self.distance = m.final_distance if distance is None else distance
+
+    def _on_start(self) -> None:
+        self.odom0 = self.ctx.backend.odometry().pose
+        self._settled_since = None
+        self._last = None
+        self._last_stamp = None
+        self._fit = None
+        self._misses = 0
+
+    def _step(self, now: float) -> Status:
+        m = self.ctx.settings.manipulation
+        try:
+            scan = self.ctx.backend.laser_scan()
+        except CapabilityError:
+            raise SkillFailure(SkillError.ALIGN_FAILED, "docking needs a laser") from None
+        if scan is not None and scan.stamp != self._last_stamp:
+            self._last_stamp = scan.stamp
+            fit = fit_face(scan_points(scan, max_range=1.5))
+            if fit is None:
+                self._misses += 1
+                if self._misses >= 5:
+                    raise SkillFailure(SkillError.ALIGN_FAILED, "no station face in front of the robot")
+            else:
+                self._misses = 0
+                self._fit = (fit[0], fit[1], self.ctx.backend.odometry().pose)
+        if self._fit is None:
+            self.ctx.backend.drive(0.0, 0.0, 0.0)
+            return Status.RUNNING
+        # the last fit, moved on by the odometry since that scan
+        odom = self.ctx.backend.odometry().pose
+        dist0, yaw0, odom_fit = self._fit
+        moved = odom.relative_to(odom_fit)
+        dist, yaw = dist0 - moved.x, yaw0 + moved.theta
+        e_d = dist - self.distance
+        drift = odom.relative_to(self.odom0).y
+        if abs(e_d) <= m.dock_tolerance and abs(yaw) <= m.align_heading_tolerance:
+            if self._settled_since is None:
+                self._settled_since = now
+            if now - self._settled_since >= 0.2:
+                self.ctx.backend.drive(0.0, 0.0, 0.0)
+                self.message = f"docked {dist:.3f} m from the face"
+                return Status.SUCCESS
+        else:
+            self._settled_since = None
+        vx = float(np.clip(1.0 * e_d, -m.dock_speed, m.dock_speed))
+        vy = float(np.clip(-1.0 * drift, -0.05, 0.05))
+        w = float(np.clip(-1.5 * yaw, -0.3, 0.3))
+        self.ctx.backend.drive(vx, vy, w)
+        return Status.RUNNING

@@ -1,0 +1,100 @@
+"""Short motions without planning, closed on odometry: move by an offset
+in the robot frame (backing away from a station) and turn on the spot.
+
+Both are non-blocking activities within the speed and acceleration limits;
+the laser is not consulted (they are used where the robot just came from or
+where it stands), so keep them short.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rll_bt.backend import Pose2D, wrap_angle
+
+from ..activity import Activity, Status
+from .controller import Limits, VelocityLimiter, heading_command
+
+
+class MoveRelative(Activity):
+    """Move by (dx, dy, dtheta) from where the robot stands when it starts
+    (robot frame), at most ``speed`` m/s."""
+
+    name = "move relative"
+
+    def __init__(self, ctx, dx: float, dy: float = 0.0, dtheta: float = 0.0, speed: float = 0.15,
+                 tolerance: float = 0.01, heading_tolerance: float = 0.02, timeout: float | None = None):
+        if timeout is None:
+            timeout = 2.0 * math.hypot(dx, dy) / speed + abs(dtheta) / 0.5 + 5.0
+        super().__init__(ctx, timeout)
+        self.offset = Pose2D(dx, dy, dtheta)
+        self.speed = speed
+        self.tolerance = tolerance
+        self.heading_tolerance = heading_tolerance
+
+    def _on_start(self) -> None:
+        self.goal = self.ctx.backend.odometry().pose.compose(self.offset)
+        self.limiter = VelocityLimiter(Limits.from_settings(self.ctx.settings, self.speed))
+        self._last = None
+
+    def _step(self, now: float) -> Status:
+        odom = self.ctx.backend.odometry().pose
+        err = self.goal.relative_to(odom)
+        d = math.hypot(err.x, err.y)
+        if d <= self.tolerance and abs(err.theta) <= self.heading_tolerance:
+            return Status.SUCCESS
+        dt = self.ctx.settings.control_period if self._last is None else max(now - self._last, 1e-3)
+        self._last = now
+        lim = self.limiter.limits
+        speed = min(self.speed, 1.5 * d, math.sqrt(2.0 * lim.max_decel * 0.8 * d))
+        v = np.array([err.x, err.y]) / d * speed if d > 1e-9 else np.zeros(2)
+        self.limiter.apply(v, heading_command(err.theta, lim), dt)
+        vx, vy, w = self.limiter.to_robot(0.0)
+        self.ctx.backend.drive(vx, vy, w)
+        return Status.RUNNING
+
+
+class Turn(Activity):
+    """Turn on the spot to the field heading ``heading`` (rad), or by
+    ``by`` radians (any size: ``by=2*pi`` is a full turn to look around),
+    at most ``omega`` rad/s."""
+
+    name = "turn"
+
+    def __init__(self, ctx, heading: float | None = None, by: float | None = None, omega: float = 0.8,
+                 tolerance: float = 0.03, timeout: float | None = None):
+        if (heading is None) == (by is None):
+            raise ValueError("give exactly one of heading= or by=")
+        span = abs(by) if by is not None else math.pi
+        super().__init__(ctx, timeout if timeout is not None else span / omega * 2.0 + 5.0)
+        self.heading = heading
+        self.by = by
+        self.omega = omega
+        self.tolerance = tolerance
+
+    def _on_start(self) -> None:
+        odom = self.ctx.backend.odometry().pose
+        if self.by is not None:
+            self.remaining = float(self.by)
+        else:
+            self.remaining = wrap_angle(self.heading - self.ctx.pose().theta)
+        self._last_theta = odom.theta
+        self._omega = 0.0
+        self._last = None
+
+    def _step(self, now: float) -> Status:
+        odom = self.ctx.backend.odometry().pose
+        self.remaining -= wrap_angle(odom.theta - self._last_theta)
+        self._last_theta = odom.theta
+        if abs(self.remaining) <= self.tolerance:
+            return Status.SUCCESS
+        dt = self.ctx.settings.control_period if self._last is None else max(now - self._last, 1e-3)
+        self._last = now
+        s = self.ctx.settings
+        lim = Limits(s.max_speed, min(self.omega, s.max_omega), s.max_accel, s.max_decel, s.max_alpha)
+        want = heading_command(self.remaining, lim)
+        step = s.max_alpha * dt
+        self._omega += float(np.clip(want - self._omega, -step, step))
+        self.ctx.backend.drive(0.0, 0.0, self._omega)
+        return Status.RUNNING

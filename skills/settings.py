@@ -1,0 +1,51 @@
+"""Limits and tolerances of the skills, in one place (SI units: metres,
+seconds, radians).  ``SkillContext.settings`` holds a :class:`SkillSettings`;
+its ``manipulation`` field the station-handling values."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class ManipulationSettings:
+    """Station approach and gripper use.
+
+    Distances are from the robot centre to the station face.  The camera
+    cannot see the tag closer than about 0.55 m (it sits 35 cm below the
+    belt, the camera at 0.57 m), so the robot lines up with the tag at
+    ``coarse_distance`` and covers the rest by laser (``final_distance``).
+    """
+    coarse_distance: float = 0.62
+    final_distance: float = 0.27      # 4.5 cm between the robot and the face
+    slot_inset: float = 0.03          # a slot's centre lies this far inside the face
+    align_tolerance: float = 0.008    # m, lateral and along the tag normal
+    align_heading_tolerance: float = 0.015   # rad
+    align_speed: float = 0.15         # m/s
+    align_settle: float = 0.3         # s inside the tolerance before success
+    tag_sightings: int = 5            # sightings needed before trusting the tag
+    tag_search_time: float = 3.0      # s without the tag before ALIGN_FAILED
+    align_time: float = 20.0          # s to line up before ALIGN_FAILED
+    dock_speed: float = 0.1           # m/s on the final approach
+    dock_tolerance: float = 0.005     # m
+    dock_time: float = 15.0           # s
+    back_off: float = 0.35            # m driven backwards after a grab or put
+    gripper_step_time: float = 10.0   # s for one gripper action before GRIPPER_ERROR
+
+
+@dataclass
+class SkillSettings:
+    max_speed: float = 0.7            # m/s, the rules' limit
+    max_omega: float = 1.6            # rad/s
+    max_accel: float = 0.8            # m/s^2
+    max_decel: float = 1.2            # m/s^2, planned; the base can do 1.5
+    max_alpha: float = 1.6            # rad/s^2
+    control_period: float = 0.1       # s, the expected time between polls
+    position_tolerance: float = 0.05  # m, a navigation goal is reached
+    heading_tolerance: float = 0.05   # rad
+    safety_margin: float = 0.08       # m, kept free around the robot by the laser check
+    blind_speed: float = 0.2          # m/s, top speed toward where the laser cannot see
+    plan_padding: float = 0.05        # m, added to the robot radius in the costmap
+    costmap_resolution: float = 0.05  # m
+    obstacle_ttl: float = 4.0         # s, laser obstacles stay in the costmap
+    block_replan_after: float = 1.0   # s blocked before replanning around it
+    manipulation: ManipulationSettings = field(default_factory=ManipulationSettings)
