@@ -71,7 +71,8 @@ class KnowledgeBase:
             from rll_bt.errors import UserError
             raise UserError(f"state database holds a {saved} game, not {profile.name}",
                             where=store.path, hint="use another --state file")
-        store.set_meta("profile", profile.name)
+        if saved is None:
+            store.set_meta("profile", profile.name)
         for machine, prop, value, conf, robot, t in store.observations():
             kb._fuse(M.Observation(machine, prop, value, conf, robot, t))
         for attr, kind, rec, keyf in cls._TABLES:

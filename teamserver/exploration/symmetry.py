@@ -87,10 +87,12 @@ def _pair_options(profile: Profile, kind: str, zc_belief, zm_belief) -> list[_Op
         s = math.log(max(pc.get(z, oc), 1e-300)) + math.log(
             max(pm.get(profile.mirror_zone(z), om), 1e-300))
         opts.append(_Option(z, s, profile.zone_team(z)))
-    n_unknown = len(valid) - len(cands)
-    if n_unknown > 0:
-        opts.append(_Option(None, math.log(n_unknown) + math.log(max(oc, 1e-300))
-                            + math.log(max(om, 1e-300))))
+    # "somewhere nobody saw it", per half, so the one-swapped-per-kind rule still binds
+    for half in (CYAN, MAGENTA):
+        n_unknown = sum(1 for z in valid if z not in cands and profile.zone_team(z) == half)
+        if n_unknown > 0:
+            opts.append(_Option(None, math.log(n_unknown) + math.log(max(oc, 1e-300))
+                                + math.log(max(om, 1e-300)), half))
     opts.sort(key=lambda o: -o.score)
     return opts
 
@@ -130,11 +132,10 @@ def consistent_set(profile: Profile, beliefs: dict) -> ConsistentSet:
             if len(members) < 2:
                 continue
             chosen = [choice[kd] for kd in members if kd in choice]
-            swapped = sum(1 for o in chosen if o.zone is not None and o.half == MAGENTA)
+            swapped = sum(1 for o in chosen if o.half == MAGENTA)
             if swapped > 1:
                 return False
-            known = [o for o in chosen if o.zone is not None]
-            if len(known) == len(members) and swapped != 1:
+            if len(chosen) == len(members) and swapped != 1:
                 return False
         return True
 
@@ -158,9 +159,8 @@ def consistent_set(profile: Profile, beliefs: dict) -> ConsistentSet:
 
     search(0, 0.0)
     result = ConsistentSet(score=best["score"])
-    picked: dict[str, _Option] = best["choice"] or {kd: next(o for o in options[kd]
-                                                           if o.zone is None)
-                                                    for kd in kinds}
+    picked: dict[str, _Option] = best["choice"] or {
+        kd: next((o for o in options[kd] if o.zone is None), options[kd][0]) for kd in kinds}
     for kd in kinds:
         opt = picked[kd]
         conf = _normalised(options[kd], opt)

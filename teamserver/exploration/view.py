@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from rll_bt.rules import PREFIX, Profile
+from rll_bt.rules import PREFIX, Profile, mirror_machine_name
 
 from .. import model as M
 from .symmetry import ConsistentSet, MachineGuess, consistent_set
@@ -58,6 +58,7 @@ class ExplorationView:
     guesses: dict[str, MachineGuess] = field(default_factory=dict)   # own machines
     raw_zones: dict[str, int] = field(default_factory=dict)  # own machine -> best single zone
     consistent: ConsistentSet | None = None
+    observed: set[str] = field(default_factory=set)   # machines some robot reported
 
     @classmethod
     def from_kb(cls, kb, team: str, zones: list[int], busy: set[int] = frozenset()
@@ -69,17 +70,23 @@ class ExplorationView:
             est = mb.estimate(M.ZONE)
             if name.startswith(prefix) and est is not None:
                 raw[name] = int(est.value)
+        observed = {n for n in kb.observed_machines()}
         return cls(kb.profile, team, list(zones), set(kb.visited), set(busy),
-                   cs.own(team), raw, cs)
+                   cs.own(team), raw, cs, observed)
 
     @property
     def n_mps(self) -> int:
         return len(self.profile.machine_types)
 
     def hypotheses(self) -> dict[int, float]:
-        """Zone -> identification confidence of the machine believed there."""
+        """Zone -> identification confidence of the machine believed there.
+
+        Only machines a robot reported (or whose twin it reported) count: a
+        zone the rules fix (2016 BS and DS) is no observation by itself."""
         hyp: dict[int, float] = {}
         for name, g in self.guesses.items():
+            if name not in self.observed and mirror_machine_name(name) not in self.observed:
+                continue
             if g.zone is not None:
                 hyp[g.zone] = max(hyp.get(g.zone, 0.0), identification(self.profile, g))
         for name, z in self.raw_zones.items():

@@ -1,0 +1,136 @@
+"""``rll-bt teamserver``: run the team server; ``rll-bt teamserver status``: look at it.
+
+    rll-bt teamserver --profile rcll2016 --team Carologistics --key randomkey \\
+        [--listen 0.0.0.0:4460] [--state teamserver.sqlite] [--strategy algorithm1] \\
+        [--refbox-host 127.0.0.1] [--ports sim|competition]
+    rll-bt teamserver status [--state teamserver.sqlite]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from rll_bt import rules
+from rll_bt.errors import Unavailable, UserError
+
+DEFAULT_STATE = "teamserver.sqlite"
+STRATEGIES = ("algorithm1", "random", "nearest")
+
+
+def register(cli) -> None:
+    sub = cli.group("teamserver")
+    gp = cli.group_parser("teamserver")
+    gp.description = ("Run the team server: knowledge base, exploration, HTN production "
+                      "planning and dispatch, between the refbox and the robots.  "
+                      "'status' shows a server's state database.")
+    gp.add_argument("--profile", default=rules.DEFAULT, choices=rules.PROFILES,
+                    help="rules profile (default %(default)s)")
+    gp.add_argument("--team", help="our team name, exactly as configured in the refbox")
+    gp.add_argument("--key", help="the team's crypto key (team channel and robot link)")
+    gp.add_argument("--listen", default="0.0.0.0:4460", metavar="HOST:PORT",
+                    help="where robots connect (default %(default)s)")
+    gp.add_argument("--state", default=DEFAULT_STATE, metavar="FILE",
+                    help="SQLite state database; a restarted server resumes from it "
+                         "(default %(default)s)")
+    gp.add_argument("--strategy", default="algorithm1", choices=STRATEGIES,
+                    help="exploration strategy (default %(default)s)")
+    gp.add_argument("--seed", type=int, default=0, help="seed of the random choices")
+    gp.add_argument("--refbox-host", default="127.0.0.1",
+                    help="refbox address or broadcast address (default %(default)s)")
+    gp.add_argument("--ports", default="sim", choices=("sim", "competition"),
+                    help="refbox port layout: split local ports or one port per channel")
+    gp.add_argument("--color", choices=("CYAN", "MAGENTA"), type=str.upper,
+                    help="force our colour (training games without team names)")
+    gp.add_argument("--heartbeat-timeout", type=float, default=10.0, metavar="S",
+                    help="drop a robot silent this long (default %(default)s s)")
+    gp.add_argument("--beacon", type=int, metavar="NUMBER",
+                    help="send a BeaconSignal of the team server with this jersey number")
+    gp.add_argument("--duration", type=float, default=0.0, metavar="S",
+                    help="stop after this many seconds (0: run until interrupted)")
+    gp.set_defaults(func=run)
+    st = sub.add_parser("status", help="robots, tasks, orders and machines of a state database",
+                        description="Print the robots, tasks, orders and known machines "
+                                    "stored in a team server's state database.")
+    st.add_argument("--state", default=DEFAULT_STATE, metavar="FILE",
+                    help="the state database (default %(default)s)")
+    st.add_argument("--recent", type=int, default=10, help="closed tasks to list")
+    st.set_defaults(func=status)
+
+
+def _host_port(text: str) -> tuple[str, int]:
+    host, _, port = text.rpartition(":")
+    try:
+        p = int(port)
+        if not 0 <= p < 65536:
+            raise ValueError
+    except ValueError:
+        raise UserError(f"not HOST:PORT: {text!r}", where="--listen") from None
+    return host or "0.0.0.0", p
+
+
+def status(args: argparse.Namespace) -> int:
+    from .status import load, render
+    kb = load(args.state)
+    try:
+        print(render(kb, args.recent))
+    finally:
+        kb.store.close()
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    if not args.team or not args.key:
+        raise UserError("--team and --key are required to run the team server",
+                        hint="rll-bt teamserver --team NAME --key KEY  (or: rll-bt teamserver "
+                             "status)")
+    from rll_bt import msgs
+    from rll_bt.clock import WallClock
+    from rll_bt.comm import MessageRegistry, StreamServer
+
+    from .links import udp_refbox_link
+    from .server import ServerConfig, TeamServer
+
+    host, port = _host_port(args.listen)
+    clock = WallClock()
+    config = ServerConfig(strategy=args.strategy, seed=args.seed)
+    config.dispatch.heartbeat_timeout = args.heartbeat_timeout
+    if args.beacon is not None:
+        config.beacon, config.beacon_number = True, args.beacon
+    try:
+        refbox = udp_refbox_link(args.profile, args.refbox_host, args.ports, clock)
+    except OSError as exc:
+        raise Unavailable(f"cannot open the refbox channels: {exc}",
+                          where=f"{args.refbox_host} ({args.ports} ports)") from None
+    try:
+        agents = StreamServer(port, host=host, key=args.key, clock=clock,
+                              registry=MessageRegistry.from_message_set(
+                                  msgs.message_set("team")))
+    except OSError as exc:
+        refbox.close()
+        raise Unavailable(f"cannot listen for robots: {exc}", where=args.listen) from None
+    server = TeamServer(args.profile, args.team, clock=clock, refbox=refbox, agents=agents,
+                        key=args.key, state=args.state, config=config, team_color=args.color)
+    print(f"team server for {args.team} ({args.profile}) listening on {host}:{agents.port}, "
+          f"state in {args.state}", file=sys.stderr)
+    start, last = clock.now(), -1e9
+    try:
+        while not args.duration or clock.now() - start < args.duration:
+            server.tick()
+            agents.wait(0.05)
+            if clock.now() - last >= 5.0:
+                last = clock.now()
+                print(_progress(server), file=sys.stderr)
+    finally:
+        agents.close()
+        refbox.close()
+        server.close()
+    return 0
+
+
+def _progress(server) -> str:
+    kb = server.kb
+    active = sum(1 for r in kb.robots.values() if r.status == "ACTIVE")
+    open_tasks = len(kb.open_tasks())
+    return (f"[{server.refbox.phase} {server.refbox.state} {server.refbox.game_time():6.1f} s] "
+            f"colour {server.color or '?'}, robots {active}/{len(kb.robots)}, "
+            f"open tasks {open_tasks}, points {kb.meta.get('points', 0)}")

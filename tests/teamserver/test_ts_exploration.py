@@ -1,0 +1,113 @@
+"""Exploration: Algorithm 1 branch by branch, and the baseline strategies."""
+import pytest
+
+from rll_bt import rules
+from teamserver import model as M
+from teamserver.exploration.strategies import (Algorithm1, NearestStrategy, OracleStrategy,
+                                               RandomStrategy, make_strategy)
+from teamserver.exploration.view import ExplorationView, opposite_zone
+from teamserver.kb import KnowledgeBase
+
+P16 = rules.profile("rcll2016")
+CYAN_ZONES = list(range(1, 13))
+
+
+def view(kb, zones=CYAN_ZONES, busy=()):
+    return ExplorationView.from_kb(kb, "CYAN", zones, set(busy))
+
+
+def observe(kb, machine, zone, zconf=0.95, light=None, lconf=0.95, robot="R1"):
+    kb.add_observation(M.Observation(machine, M.ZONE, zone, zconf, robot))
+    if light:
+        kb.add_observation(M.Observation(machine, M.LIGHT, light, lconf, robot))
+
+
+def test_opposite_zone_is_top_left_for_the_right_start_box_and_top_right_for_the_left():
+    assert opposite_zone(P16, "CYAN", CYAN_ZONES) == 4            # x in [0,2], top row
+    assert opposite_zone(P16, "MAGENTA", list(range(13, 25))) == 16
+    p25 = rules.profile("rcll2025")
+    z = opposite_zone(p25, "CYAN", p25.machine_zones("CYAN"))
+    assert p25.zone_name(z) == "C_Z18"
+
+
+def test_line_3_no_observations_sends_the_first_robot_to_the_opposite_zone():
+    kb = KnowledgeBase(P16)
+    d = Algorithm1(seed=1).next_zone(view(kb))
+    assert (d.zone, d.branch) == (4, "opposite")
+
+
+def test_line_5_opposite_zone_taken_or_visited_gives_a_random_unvisited_zone():
+    kb = KnowledgeBase(P16)
+    kb.mark_visited(4, 0.0)
+    kb.mark_visited(1, 0.0)
+    picks = {Algorithm1(seed=s).next_zone(view(kb, busy={7})).zone for s in range(30)}
+    assert picks <= set(CYAN_ZONES) - {1, 4, 7}
+    assert len(picks) > 3                                   # random, not a fixed order
+    d1 = Algorithm1(seed=5).next_zone(view(kb))
+    d2 = Algorithm1(seed=5).next_zone(view(kb))
+    assert d1 == d2 and d1.branch == "random-start"        # seeded: reproducible
+
+
+def test_line_11_unvisited_observed_zone_with_the_lowest_confidence_first():
+    kb = KnowledgeBase(P16)
+    observe(kb, "C-RS1", 6, zconf=0.9)
+    observe(kb, "C-CS1", 10, zconf=0.5)
+    observe(kb, "C-CS2", 2, zconf=0.7)
+    kb.mark_visited(10, 0.0)
+    d = Algorithm1().next_zone(view(kb))
+    assert d.branch == "observed-unvisited"
+    assert d.zone == 2                                      # 10 is visited; 2 is weaker than 6
+    d = Algorithm1().next_zone(view(kb, busy={2}))
+    assert d.zone == 6                                      # another robot is heading to 2
+
+
+def test_line_15_too_few_machines_found_explores_a_random_unvisited_zone():
+    kb = KnowledgeBase(P16)
+    observe(kb, "C-RS1", 6, light=("GREEN",))
+    kb.mark_visited(6, 0.0)
+    v = view(kb)
+    assert v.m_found(0.9) < v.n_mps
+    d = Algorithm1(seed=3).next_zone(v)
+    assert d.branch == "random-fallback" and d.zone in set(CYAN_ZONES) - {6}
+
+
+def test_line_19_all_found_revisits_the_lowest_confidence_zone():
+    kb = KnowledgeBase(P16)
+    placement = {"C-BS": 9, "C-DS": 4, "C-RS1": 6, "C-RS2": 19, "C-CS1": 22, "C-CS2": 2}
+    codes = {"BS": ("GREEN",), "DS": ("YELLOW",), "RS1": ("RED",), "RS2": ("GREEN", "RED"),
+             "CS1": ("GREEN", "YELLOW"), "CS2": ("RED", "YELLOW")}
+    for name, z in placement.items():
+        observe(kb, name, z, zconf=0.97, light=codes[name[2:]], lconf=0.99 if name != "C-CS2"
+                else 0.95)
+        observe(kb, name, z, zconf=0.97, light=codes[name[2:]], robot="R2")
+    for z in placement.values():
+        kb.mark_visited(z, 0.0)
+    zones = sorted(placement.values())
+    v = view(kb, zones=zones)
+    assert v.m_found(0.9) == v.n_mps == 6
+    d = Algorithm1().next_zone(v)
+    assert d.branch == "lowest-confidence"
+    hyp = v.hypotheses()
+    assert hyp[d.zone] == min(hyp.values())
+
+
+def test_twin_observation_counts_for_our_machine():
+    kb = KnowledgeBase(P16)
+    observe(kb, "M-RS2", 19, zconf=0.9)          # magenta's RS2 in Z19: ours is in Z7
+    hyp = view(kb).hypotheses()
+    assert 7 in hyp
+
+
+def test_baselines_and_oracle():
+    kb = KnowledgeBase(P16)
+    kb.mark_visited(1, 0.0)
+    assert RandomStrategy(seed=2).next_zone(view(kb)).zone in set(CYAN_ZONES) - {1}
+    near = NearestStrategy().next_zone(view(kb), pose=(5.0, 5.9, 0.0))
+    assert near.zone == 12                                   # x [4,6], y [4.5,6]
+    truth = {"C-RS1": 6, "C-CS1": 11, "M-RS1": 18}
+    o = OracleStrategy(truth).next_zone(view(kb), pose=(5.0, 5.9, 0.0))
+    assert o.zone == 11 and o.branch == "oracle"
+    with pytest.raises(ValueError, match="true machine zones"):
+        make_strategy("oracle")
+    with pytest.raises(ValueError, match="unknown exploration strategy"):
+        make_strategy("greedy")
