@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rll_bt.backend import light_state_code
+from rll_bt.backend import Pose2D, light_state_code, wrap_angle
 from rll_bt.rules import CYAN, Profile, machine_team, machine_type
 
 from .bullet import Part, ShapeCache, matrix_quaternion, multibody, pybullet, yaw_quaternion
@@ -56,7 +56,7 @@ def blink_on(state: str, t: float, blink_hz: float) -> bool:
     if state == "ON":
         return True
     if state == "BLINK":
-        return int(math.floor(t * 2.0 * blink_hz)) % 2 == 0
+        return int(math.floor(t * 2.0 * blink_hz + 1e-6)) % 2 == 0   # tolerate float sums of steps
     return False
 
 
@@ -113,6 +113,15 @@ class Station:
     def slot_point(self, name: str) -> tuple[float, float, float]:
         """Field-frame centre of the slot's surface (where a workpiece's bottom sits)."""
         return self.to_world(*self.slot(name).local)
+
+    def approach_pose(self, slot: str, gap: float = 0.005) -> Pose2D:
+        """Ground-truth robot pose facing the face of ``slot``, its body
+        ``gap`` metres off the face and its centre in line with the slot, so
+        the gripper at rest is over the slot."""
+        x, y, _ = self.slot(slot).local
+        sign = 1.0 if x > 0 else -1.0
+        wx, wy, _ = self.to_world(sign * (self.profile.mps.depth / 2.0 + self.profile.robot.radius + gap), y)
+        return Pose2D(wx, wy, wrap_angle(self.pose.theta + (math.pi if sign > 0 else 0.0)))
 
     def tag_id(self, side: str) -> int:
         return self.tag_ids[0 if side == "input" else 1]
@@ -183,8 +192,8 @@ class Station:
         for side in (-1.0, 1.0):
             box((0.0, m.belt_offset_y + side * 0.035, (top + belt_top + 0.02) / 2.0),
                 (m.depth / 2.0, 0.005, (belt_top + 0.02 - top) / 2.0), (0.55, 0.55, 0.58, 1.0))
-        box((m.tower_x, m.tower_y, (top + m.tower_base) / 2.0),
-            (0.05, 0.05, (m.tower_base - top) / 2.0), (0.3, 0.3, 0.3, 1.0))
+        box((m.tower_x, m.tower_y, (top + m.tower_base) / 2.0),         # post under the tower
+            (0.022, 0.022, (m.tower_base - top) / 2.0), (0.3, 0.3, 0.3, 1.0))
         for side in (-1.0, 1.0):
             box((0.0, side * (m.width / 2.0 + 0.001), top - 0.06),
                 (m.depth / 2.0, 0.001, 0.03), TEAM_RGBA[self.team])

@@ -64,7 +64,7 @@ class World:
             raise ValueError(f"time_step must be positive, not {time_step}")
         self.profile = profile if isinstance(profile, Profile) else rules.profile(profile)
         self.seed = int(seed)
-        self.layout = layout or generate_layout(self.profile, self.seed)
+        self.layout = layout if layout is not None else generate_layout(self.profile, self.seed)
         if layout is not None and layout.profile != self.profile.name:
             raise ValueError(f"layout is for {layout.profile}, the world plays {self.profile.name}")
         self.perception = perception
@@ -218,9 +218,11 @@ class World:
         return self.robot(team, number).pose
 
     def teleport(self, team: str, number: int, pose: Pose2D) -> None:
-        """Set a robot's true pose (velocity zeroed; odometry untouched)."""
+        """Set a robot's true pose (velocity and drive command zeroed;
+        odometry untouched)."""
         r = self.robot(team, number)
         r.pose, r.velocity = pose, (0.0, 0.0, 0.0)
+        r.stop(self.time)
         if r.holding is not None:
             self.store.move(r.holding, self.gripper_point(r, bottom=True))
 

@@ -60,7 +60,7 @@ class RefboxGame:
         self.timing = timing or Timing.from_profile(self.profile)
         self.config = config or StationConfig()
         self.world = world if world is not None else TableWorld.generated(self.profile, self.seed)
-        self.layout = self.world.layout()
+        self.layout = self.world.layout
         missing = set(self.profile.machines()) - set(self.layout.machines)
         if missing:
             raise ValueError(f"the world has no station {', '.join(sorted(missing))}")
@@ -90,8 +90,7 @@ class RefboxGame:
             st.set_lights(ALL_OFF)
             if isinstance(st, CapStation):
                 for slot in SHELF_SLOTS:
-                    if self.world.workpiece_at(st.name, slot) is None:
-                        self.world.spawn_workpiece(st.name, slot, st.carrier())
+                    st.spawn_carrier(slot)
         self._last_now = clock.now()
 
     def rng(self, stream: str) -> random.Random:

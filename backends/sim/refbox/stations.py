@@ -39,7 +39,8 @@ from typing import Protocol
 from rll_bt.rules import BASE_COLORS
 
 from . import events as E
-from .world import (ALL_OFF, BLINK, INPUT, ON, OUTPUT, SHELF_SLOTS, SLIDE, Workpiece, lights)
+from .world import (ALL_OFF, BLINK, INPUT, ON, OUTPUT, SHELF_SLOTS, SLIDE, Workpiece, describe,
+                    lights, station_slots)
 
 IDLE, PREPARED, PROCESSING = "IDLE", "PREPARED", "PROCESSING"
 READY_AT_OUTPUT, WAIT_IDLE, BROKEN, DOWN = "READY-AT-OUTPUT", "WAIT-IDLE", "BROKEN", "DOWN"
@@ -173,9 +174,9 @@ class Station:
         self.on_prepared()
         self._maybe_start()
 
-    def on_put(self, slot: str, wp: Workpiece) -> None:
+    def on_put(self, slot: str, wp) -> None:
         if slot == INPUT:
-            self.input_wp = wp
+            self.input_wp = describe(wp)
             self._maybe_start()
 
     def on_take(self, slot: str, wp: Workpiece | None) -> None:
@@ -234,7 +235,8 @@ class Station:
     def _maybe_start(self) -> None:
         if (self.active and self.state == PREPARED and self.input_wp is not None
                 and self.kind != "BS"):
-            wp = self.host.world.remove_workpiece(self.name, INPUT) or self.input_wp
+            taken = self.host.world.remove_workpiece(self.name, INPUT)
+            wp = describe(taken) if taken is not None else self.input_wp
             self.input_wp = None
             reason = self.start(wp)
             if reason:
@@ -249,7 +251,7 @@ class Station:
 
     def _ready(self, wp: Workpiece, slot: str = OUTPUT) -> None:
         self.out_slot = slot
-        self.host.world.spawn_workpiece(self.name, slot, wp)
+        self.host.world.spawn_workpiece(self.name, slot, wp.base, tuple(wp.rings), wp.cap)
         self.host.emit(E.WORKPIECE, f"{self.name} put {wp} on {slot}", team=self.team,
                        machine=self.name, workpiece=wp, slot=slot)
         self.inside = None
@@ -323,7 +325,8 @@ class Station:
 
     def _clear_slots(self) -> None:
         for slot in (INPUT, OUTPUT):
-            if self.host.world.workpiece_at(self.name, slot) is not None:
+            if slot in station_slots(self.name) and \
+                    self.host.world.workpiece_at(self.name, slot) is not None:
                 self.host.world.remove_workpiece(self.name, slot)
         self.input_wp = None
 
@@ -343,7 +346,8 @@ class Station:
     def set_lights(self, want: dict) -> None:
         if want != self.lights:
             self.lights = dict(want)
-            self.host.world.set_lights(self.name, self.lights)
+            self.host.world.set_lights(self.name, red=want["RED"], yellow=want["YELLOW"],
+                                       green=want["GREEN"])
             self.host.emit(E.LIGHTS, f"{self.name} lights {_light_text(want)}", team=self.team,
                            machine=self.name, lights=dict(want))
 
@@ -363,7 +367,7 @@ class BaseStation(Station):
     def validate(self, instr) -> str | None:
         if not isinstance(instr, BSInstruction):
             return "prepare without base station instruction"
-        if instr.side not in (INPUT, OUTPUT):
+        if instr.side not in ("INPUT", "OUTPUT"):
             return f"invalid side {instr.side}"
         if instr.color not in BASE_COLORS:
             return f"invalid base color {instr.color}"
@@ -375,7 +379,7 @@ class BaseStation(Station):
         self.deadline = self.now + self.duration
 
     def finish(self) -> None:
-        side = self.instruction.side
+        side = self.instruction.side.lower()         # MachineSide INPUT/OUTPUT -> slot
         if self.host.world.workpiece_at(self.name, side) is not None:
             self.break_(f"cannot dispense, {side} is occupied")
             return
@@ -393,9 +397,9 @@ class RingStation(Station):
             return f"invalid ring color {instr.ring_color} (has {', '.join(colors)})"
         return None
 
-    def on_put(self, slot: str, wp: Workpiece) -> None:
+    def on_put(self, slot: str, wp) -> None:
         if slot == SLIDE and self.active:
-            self.host.world.remove_workpiece(self.name, SLIDE)
+            self.host.world.remove_workpiece(self.name, SLIDE, getattr(wp, "id", None))
             self.bases_added += 1
             if self.slide_loaded > self.host.config.slide_max:
                 if self.state != BROKEN:
@@ -434,13 +438,19 @@ class CapStation(Station):
 
     def on_take(self, slot: str, wp: Workpiece | None) -> None:
         if slot in SHELF_SLOTS and self.host.config.refill_shelf:
-            self.host.world.spawn_workpiece(self.name, slot, self.carrier())
+            self.spawn_carrier(slot)
             return
         super().on_take(slot, wp)
 
     def carrier(self) -> Workpiece:
         cfg = self.host.config
         return Workpiece(cfg.carrier_base, (), cfg.cap_of(self.name[2:]))
+
+    def spawn_carrier(self, slot: str) -> None:
+        """Put a cap carrier on shelf ``slot`` unless something is there."""
+        if self.host.world.workpiece_at(self.name, slot) is None:
+            c = self.carrier()
+            self.host.world.spawn_workpiece(self.name, slot, c.base, (), c.cap)
 
     def start(self, wp: Workpiece) -> str | None:
         if self.instruction.operation == "RETRIEVE_CAP" and wp.cap is None:
@@ -453,7 +463,7 @@ class CapStation(Station):
         wp = self.inside
         if self.instruction.operation == "RETRIEVE_CAP":
             self.cap_buffer = wp.cap
-            self._ready(wp.without_cap())
+            self._ready(wp.with_cap(None))
         else:
             cap, self.cap_buffer = self.cap_buffer, None
             self._ready(wp.with_cap(cap))
