@@ -1,0 +1,186 @@
+"""Exploring a zone: drive to viewpoints around it, look, report.
+
+:class:`ExploreZone` visits up to ``max_viewpoints`` free points on a ring
+around the zone (nearest first, then the one farthest round the ring from
+those visited, since a tag shows only on a station's input and output
+faces), turns to face the zone and sweeps the camera across it, feeding
+:class:`~.sightings.SightingCollector` at every poll (which publishes the
+machine observations).  It stops early once a station in the zone is known
+with ``min_confidence`` and, when ``want_light``, its light state has been
+read; if the light is still missing it looks from in front of the
+station's output face.  The zone is explored when the activity succeeds:
+``found`` lists the stations seen in it (possibly none).  It fails with
+NAVIGATION_FAILED only when no viewpoint could be reached.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rll_bt.backend import Pose2D
+
+from ..activity import Activity, Status
+from ..errors import SkillError, SkillFailure
+from ..navigation import Navigate, PoseGoal, approach_pose
+from ..navigation.motions import Turn
+from .sightings import SightingCollector
+
+
+def ring_viewpoints(ctx, zone: int, radius: float | None = None, count: int = 8) -> list[Pose2D]:
+    """Free poses on a ring around the zone centre, facing the centre."""
+    rect = ctx.profile.zones.bounds(zone)
+    cx, cy = rect.centre
+    if radius is None:
+        radius = 0.5 * math.hypot(rect.x_max - rect.x_min, rect.y_max - rect.y_min) + 0.5
+    out = []
+    for k in range(count):
+        a = 2.0 * math.pi * k / count
+        x, y = cx + radius * math.cos(a), cy + radius * math.sin(a)
+        if bool(ctx.costmap.is_free(x, y)):
+            out.append(Pose2D(x, y, math.atan2(cy - y, cx - x)))
+    return out
+
+
+def order_viewpoints(points: list[Pose2D], start: Pose2D, centre: tuple[float, float],
+                     limit: int) -> list[Pose2D]:
+    """Nearest first, then each next one farthest round the ring from those chosen."""
+    if not points:
+        return []
+    left = list(points)
+    first = min(left, key=lambda p: math.hypot(p.x - start.x, p.y - start.y))
+    chosen = [first]
+    left.remove(first)
+
+    def bearing(p):
+        return math.atan2(p.y - centre[1], p.x - centre[0])
+
+    while left and len(chosen) < limit:
+        def separation(p):
+            return min(abs(math.remainder(bearing(p) - bearing(c), 2 * math.pi)) for c in chosen)
+        nxt = max(left, key=separation)
+        chosen.append(nxt)
+        left.remove(nxt)
+    return chosen
+
+
+class ExploreZone(Activity):
+    name = "explore zone"
+
+    def __init__(self, ctx, zone: int, viewpoints: list[Pose2D] | None = None,
+                 want_light: bool | None = None, max_viewpoints: int = 3, sweep: float = math.radians(100),
+                 min_confidence: float = 0.5, collector: SightingCollector | None = None,
+                 timeout: float | None = 240.0):
+        super().__init__(ctx, timeout)
+        self.zone = zone
+        self.given = list(viewpoints) if viewpoints else None
+        prof = ctx.profile
+        self.want_light = (prof.exploration_reports == "type+zone") if want_light is None else want_light
+        self.max_viewpoints = max_viewpoints
+        self.sweep = sweep
+        self.min_confidence = min_confidence
+        self.collector = collector or getattr(ctx, "sightings", None) or SightingCollector(ctx)
+        self.found: list[str] = []
+        self.visited = 0
+        self.name = f"explore {prof.zone_name(zone)}" if zone in prof.zones.all_zones else "explore"
+
+    def _on_start(self) -> None:
+        prof = self.ctx.profile
+        if self.zone not in prof.zones.all_zones:
+            raise SkillFailure(SkillError.INVALID_TASK, f"{self.zone} is not a zone of {prof.name}")
+        self.ctx.update()
+        centre = prof.zone_centre(self.zone)
+        points = self.given or ring_viewpoints(self.ctx, self.zone)
+        if not points:
+            raise SkillFailure(SkillError.NAVIGATION_FAILED, f"no free viewpoint around {self.name[8:]}")
+        self.plan = order_viewpoints(points, self.ctx.pose(), centre, self.max_viewpoints)
+        self.light_visit_done = False
+        self.child: Activity | None = None
+        self.phase = "next"
+        self.visited = 0
+        self.failures = 0
+
+    # -- phases -----------------------------------------------------------
+    def _done_enough(self) -> bool:
+        found = self.collector.machines_in_zone(self.zone, self.min_confidence)
+        if not found:
+            return False
+        return not self.want_light or all(self.collector.light_state(m) is not None for m in found)
+
+    def _next_child(self) -> Activity | None:
+        if self.plan:
+            vp = self.plan.pop(0)
+            self.phase = "go"
+            return Navigate(self.ctx, PoseGoal(vp), position_tolerance=0.1, heading_tolerance=0.1,
+                            timeout=90.0)
+        found = self.collector.machines_in_zone(self.zone, self.min_confidence)
+        missing = [m for m in found if self.want_light and self.collector.light_state(m) is None]
+        if missing and not self.light_visit_done:
+            self.light_visit_done = True
+            est = self.collector.tracker.estimate(missing[0])
+            self.phase = "go"
+            return Navigate(self.ctx, PoseGoal(approach_pose(est.pose, "OUTPUT", 1.0, mps=self.ctx.profile.mps)),
+                            position_tolerance=0.1, heading_tolerance=0.1, timeout=90.0)
+        return None
+
+    def _step(self, now: float) -> Status:
+        self.collector.look()
+        if self.child is None:
+            if self.visited and self._done_enough():
+                return self._succeed()
+            self.child = self._next_child()
+            if self.child is None:
+                if self.visited == 0:
+                    raise SkillFailure(SkillError.NAVIGATION_FAILED, f"no viewpoint of {self.name[8:]} reached")
+                return self._succeed()
+            self.child.start()
+        status = self.child.poll()
+        if status is Status.RUNNING:
+            return Status.RUNNING
+        if self.phase == "go":
+            if status is Status.SUCCESS:
+                self.visited += 1
+                self.phase = "look"
+                self.child = _Sweep(self.ctx, self.sweep).start()
+                return Status.RUNNING
+            if status is Status.FAILURE and self.child.error is SkillError.LOCALISATION_LOST:
+                raise SkillFailure(self.child.error, self.child.message)
+            self.failures += 1
+        self.child = None
+        return Status.RUNNING
+
+    def _succeed(self) -> Status:
+        self.found = self.collector.machines_in_zone(self.zone, self.min_confidence)
+        zone = self.ctx.profile.zone_name(self.zone)
+        self.message = f"{zone}: {', '.join(self.found) if self.found else 'no station'} " \
+                       f"({self.visited} viewpoints)"
+        return Status.SUCCESS
+
+    def _on_stop(self, status: Status) -> None:
+        if self.child is not None and self.child.status is Status.RUNNING:
+            self.child.cancel()
+        self.ctx.stop_base()
+
+
+class _Sweep(Activity):
+    """Turn -sweep/2, then +sweep: the camera passes over the zone."""
+    name = "look around"
+
+    def __init__(self, ctx, sweep: float):
+        super().__init__(ctx, None)
+        self.sweep = sweep
+
+    def _on_start(self) -> None:
+        self.turns = [Turn(self.ctx, by=-self.sweep / 2.0, omega=0.6),
+                      Turn(self.ctx, by=self.sweep, omega=0.6)]
+        self.turns[0].start()
+
+    def _step(self, now: float) -> Status:
+        st = self.turns[0].poll()
+        if st is Status.RUNNING:
+            return Status.RUNNING
+        self.turns.pop(0)
+        if not self.turns:
+            return Status.SUCCESS
+        self.turns[0].start()
+        return Status.RUNNING
