@@ -24,7 +24,7 @@ def test_correct_type_and_zone_score_and_blink_green(harness):
     t, z = _truth(g, "C-RS1")
     assert g.machine_report(CYAN, [ReportEntry("C-RS1", t, z)], channel_team=CYAN) == 5 + 3
     assert h.station("C-RS1").lights == {"RED": "OFF", "YELLOW": "OFF", "GREEN": "BLINK"}
-    assert g.world.lights["C-RS1"]["GREEN"] == "BLINK"
+    assert g.world.lights("C-RS1")["GREEN"] == "BLINK"
     h.run(5.5)                                         # feedback ends: the light code again
     assert h.station("C-RS1").lights == g.exploration.machine_lights("C-RS1")
     assert g.points(CYAN) == 8

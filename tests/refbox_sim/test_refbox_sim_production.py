@@ -31,9 +31,9 @@ def deliver(h, wp, gate, team=CYAN):
     ds = f"{'C' if team == CYAN else 'M'}-DS"
     n = len(h.game.ledger.entries)
     assert h.game.prepare(team, ds, DSInstruction(gate), team) == "prepared"
-    h.world.put(ds, "INPUT", wp)
+    h.world.put(ds, "input", wp)
     h.run(8.25)
-    assert h.station(ds).state == "IDLE" and h.world.workpiece_at(ds, "INPUT") is None
+    assert h.station(ds).state == "IDLE" and h.world.workpiece_at(ds, "input") is None
     return (sum(e.points for e in h.game.ledger.entries[n:]), h.events("delivery")[-1])
 
 
@@ -46,12 +46,12 @@ def test_bs_dispenses_base_and_runs_the_state_machine_with_lights(harness):
     assert g.prepare(CYAN, "C-BS", BSInstruction("OUTPUT", "BASE_RED"), CYAN) == "prepared"
     assert (h.station("C-BS").state, h.station("C-BS").lights) == ("PROCESSING", BUSY)
     h.run(4.75)
-    assert h.station("C-BS").state == "PROCESSING" and h.world.workpiece_at("C-BS", "OUTPUT") is None
+    assert h.station("C-BS").state == "PROCESSING" and h.world.workpiece_at("C-BS", "output") is None
     h.run(0.25)
     assert (h.station("C-BS").state, h.station("C-BS").lights) == ("READY-AT-OUTPUT", READY)
-    assert h.world.workpiece_at("C-BS", "OUTPUT") == Workpiece("BASE_RED")
-    assert h.world.lights["C-BS"] == READY
-    assert h.world.take("C-BS", "OUTPUT") == Workpiece("BASE_RED")
+    assert h.world.workpiece_at("C-BS", "output") == Workpiece("BASE_RED")
+    assert h.world.lights("C-BS") == READY
+    assert h.world.take("C-BS", "output") == Workpiece("BASE_RED")
     h.run(0.25)
     assert (h.station("C-BS").state, h.station("C-BS").lights) == ("WAIT-IDLE", WAIT_IDLE)
     h.run(5)
@@ -64,8 +64,8 @@ def test_bs_input_side(harness):
     h = harness().production()
     h.game.prepare(MAGENTA, "M-BS", BSInstruction("INPUT", "BASE_SILVER"), MAGENTA)
     h.run(5.25)
-    assert h.world.workpiece_at("M-BS", "INPUT") == Workpiece("BASE_SILVER")
-    h.world.take("M-BS", "INPUT")
+    assert h.world.workpiece_at("M-BS", "input") == Workpiece("BASE_SILVER")
+    h.world.take("M-BS", "input")
     h.run(0.25)
     assert h.station("M-BS").state == "WAIT-IDLE"
 
@@ -92,13 +92,13 @@ def test_rs_mounts_a_free_ring(harness):
     g = h.game
     color = rs_color(g, "C-RS1", cost=0)
     assert g.prepare(CYAN, "C-RS1", RSInstruction(color), CYAN) == "prepared"
-    h.world.put("C-RS1", "INPUT", Workpiece("BASE_BLACK"))
+    h.world.put("C-RS1", "input", Workpiece("BASE_BLACK"))
     h.run(0.25)
     assert (h.station("C-RS1").state, h.station("C-RS1").lights) == ("PROCESSING", BUSY)
-    assert h.world.workpiece_at("C-RS1", "INPUT") is None
+    assert h.world.workpiece_at("C-RS1", "input") is None
     h.run(15)
     assert h.station("C-RS1").state == "READY-AT-OUTPUT"
-    assert h.world.workpiece_at("C-RS1", "OUTPUT") == Workpiece("BASE_BLACK", (color,))
+    assert h.world.workpiece_at("C-RS1", "output") == Workpiece("BASE_BLACK", (color,))
 
 
 def test_additional_bases_score_2_each_and_are_consumed_by_a_costly_ring(harness):
@@ -107,21 +107,21 @@ def test_additional_bases_score_2_each_and_are_consumed_by_a_costly_ring(harness
     rs = next(r for r in ("C-RS1", "C-RS2") if any(g.ring_costs[c] == 2 for c in g.rs_colors(r)))
     color = rs_color(g, rs, cost=2)
     for _ in range(3):
-        h.world.put(rs, "SLIDE", Workpiece("BASE_RED"))
+        h.world.put(rs, "slide", Workpiece("BASE_RED"))
         h.run(0.25)
-    assert h.world.workpiece_at(rs, "SLIDE") is None and h.station(rs).slide_loaded == 3
+    assert h.world.workpiece_at(rs, "slide") is None and h.station(rs).slide_loaded == 3
     assert h.award_sum(CYAN) == 6
     g.prepare(CYAN, rs, RSInstruction(color), CYAN)
-    h.world.put(rs, "INPUT", Workpiece("BASE_RED"))
+    h.world.put(rs, "input", Workpiece("BASE_RED"))
     h.run(15.25)
-    assert h.world.workpiece_at(rs, "OUTPUT") == Workpiece("BASE_RED", (color,))
+    assert h.world.workpiece_at(rs, "output") == Workpiece("BASE_RED", (color,))
     assert h.station(rs).slide_loaded == 1
 
 
 def test_a_fourth_base_on_the_slide_breaks_the_rs(harness):
     h = harness().production()
     for _ in range(4):
-        h.world.put("M-RS2", "SLIDE", Workpiece("BASE_SILVER"))
+        h.world.put("M-RS2", "slide", Workpiece("BASE_SILVER"))
         h.run(0.25)
     assert h.station("M-RS2").state == "BROKEN"
     assert h.award_sum(MAGENTA) == 6
@@ -131,22 +131,22 @@ def test_a_fourth_base_on_the_slide_breaks_the_rs(harness):
 def test_cs_retrieves_a_cap_then_mounts_it(harness):
     h = harness().production()
     g = h.game
-    carrier = h.world.take("C-CS1", "SHELF0")
+    carrier = h.world.take("C-CS1", "shelf0")
     assert carrier.cap == "CAP_GREY"
     h.run(0.25)
-    assert h.world.workpiece_at("C-CS1", "SHELF0") is not None            # refilled
+    assert h.world.workpiece_at("C-CS1", "shelf0") is not None            # refilled
     assert g.prepare(CYAN, "C-CS1", CSInstruction("RETRIEVE_CAP"), CYAN) == "prepared"
-    h.world.put("C-CS1", "INPUT", carrier)
+    h.world.put("C-CS1", "input", carrier)
     h.run(12.25)
-    assert h.world.workpiece_at("C-CS1", "OUTPUT") == Workpiece(carrier.base)
+    assert h.world.workpiece_at("C-CS1", "output") == Workpiece(carrier.base)
     assert h.station("C-CS1").cap_buffer == "CAP_GREY"
-    h.world.take("C-CS1", "OUTPUT")
+    h.world.take("C-CS1", "output")
     h.run(5.25)
     assert h.station("C-CS1").state == "IDLE"
     assert g.prepare(CYAN, "C-CS1", CSInstruction("MOUNT_CAP"), CYAN) == "prepared"
-    h.world.put("C-CS1", "INPUT", Workpiece("BASE_BLACK", ("RING_BLUE",)))
+    h.world.put("C-CS1", "input", Workpiece("BASE_BLACK", ("RING_BLUE",)))
     h.run(12.25)
-    assert h.world.workpiece_at("C-CS1", "OUTPUT") == Workpiece("BASE_BLACK", ("RING_BLUE",),
+    assert h.world.workpiece_at("C-CS1", "output") == Workpiece("BASE_BLACK", ("RING_BLUE",),
                                                                 "CAP_GREY")
     assert h.station("C-CS1").cap_buffer is None
 
@@ -156,7 +156,7 @@ def test_cs_retrieves_a_cap_then_mounts_it(harness):
 def test_wrong_rs_colour_breaks_and_recovers_after_30_s_with_the_slide_cleared(harness):
     h = harness().production()
     g = h.game
-    h.world.put("C-RS2", "SLIDE", Workpiece("BASE_RED"))
+    h.world.put("C-RS2", "slide", Workpiece("BASE_RED"))
     h.run(0.25)
     wrong = next(c for c in g.ring_costs if c not in g.rs_colors("C-RS2"))
     assert g.prepare(CYAN, "C-RS2", RSInstruction(wrong), CYAN) == "broken"
@@ -196,17 +196,17 @@ def test_rs_without_the_additional_bases_breaks_when_fed(harness):
     rs = next(r for r in ("C-RS1", "C-RS2") if any(g.ring_costs[c] > 0 for c in g.rs_colors(r)))
     costly = next(c for c in g.rs_colors(rs) if g.ring_costs[c] > 0)
     assert g.prepare(CYAN, rs, RSInstruction(costly), CYAN) == "prepared"
-    h.world.put(rs, "INPUT", Workpiece("BASE_RED"))
+    h.world.put(rs, "input", Workpiece("BASE_RED"))
     h.run(0.25)
     assert h.station(rs).state == "BROKEN"
-    assert h.world.workpiece_at(rs, "INPUT") is None                   # taken off by the referee
+    assert h.world.workpiece_at(rs, "input") is None                   # taken off by the referee
     assert any("insufficient bases" in a for a in h.attention(CYAN))
 
 
 def test_cs_retrieve_from_a_capless_workpiece_breaks(harness):
     h = harness().production()
     h.game.prepare(CYAN, "C-CS1", CSInstruction("RETRIEVE_CAP"), CYAN)
-    h.world.put("C-CS1", "INPUT", Workpiece("BASE_RED"))
+    h.world.put("C-CS1", "input", Workpiece("BASE_RED"))
     h.run(0.25)
     assert h.station("C-CS1").state == "BROKEN"
 
@@ -259,7 +259,7 @@ def test_down_period_shows_red_and_delays_processing(harness):
     st = h.station("C-RS1")
     st.down = (5.0, 25.0)
     g.prepare(CYAN, "C-RS1", RSInstruction(color), CYAN)
-    h.world.put("C-RS1", "INPUT", Workpiece("BASE_RED"))
+    h.world.put("C-RS1", "input", Workpiece("BASE_RED"))
     h.run(5.25)
     assert (st.state, st.lights) == ("DOWN", DOWN)
     assert g.prepare(CYAN, "C-RS1", RSInstruction(color), CYAN).startswith("ignored")
@@ -384,7 +384,7 @@ def test_full_c1_production_chain(harness):
     cs = "C-CS1" if o.cap == "CAP_GREY" else "C-CS2"
     cost = g.ring_costs[ring]
 
-    def take_when_ready(machine, slot="OUTPUT"):
+    def take_when_ready(machine, slot="output"):
         for _ in range(200):
             if h.station(machine).state == "READY-AT-OUTPUT":
                 return w.take(machine, slot)
@@ -393,20 +393,20 @@ def test_full_c1_production_chain(harness):
 
     for _ in range(cost):                            # bases for the slide from the BS
         g.prepare(CYAN, "C-BS", BSInstruction("OUTPUT", "BASE_BLACK"), CYAN)
-        w.put(rs, "SLIDE", take_when_ready("C-BS"))
+        w.put(rs, "slide", take_when_ready("C-BS"))
         h.run(5.25)
     g.prepare(CYAN, "C-BS", BSInstruction("OUTPUT", o.base), CYAN)
     wp = take_when_ready("C-BS")
     h.run(5.25)
     assert g.prepare(CYAN, rs, RSInstruction(ring), CYAN) == "prepared"
-    w.put(rs, "INPUT", wp)
+    w.put(rs, "input", wp)
     wp = take_when_ready(rs)
     assert g.prepare(CYAN, cs, CSInstruction("RETRIEVE_CAP"), CYAN) == "prepared"
-    w.put(cs, "INPUT", w.take(cs, "SHELF1"))
+    w.put(cs, "input", w.take(cs, "shelf1"))
     take_when_ready(cs)                              # the cap-less carrier
     h.run(5.25)
     assert g.prepare(CYAN, cs, CSInstruction("MOUNT_CAP"), CYAN) == "prepared"
-    w.put(cs, "INPUT", wp)
+    w.put(cs, "input", wp)
     wp = take_when_ready(cs)
     assert wp == _product(o)
     pts, ev = deliver(h, wp, o.gate)
