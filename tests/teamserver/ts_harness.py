@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from rll_bt import msgs, rules
 from rll_bt.clock import SimClock
-from rll_bt.comm import Bus, MessageRegistry
+from rll_bt.comm import Bus, MessageRegistry, StreamClient, StreamServer
 
 from teamserver.links import RefboxLink
 from teamserver.server import ServerConfig, TeamServer
@@ -119,7 +119,9 @@ class FakeAgent:
 class Lockstep:
     """A team server, a fake refbox and fake agents on one bus and one clock."""
 
-    def __init__(self, profile="rcll2016", robots=3, state=":memory:", config=None, **kw):
+    def __init__(self, profile="rcll2016", robots=3, state=":memory:", config=None,
+                 tcp=False, **kw):
+        self.tcp = tcp
         self.clock = SimClock()
         self.bus = Bus(self.clock)
         self.profile_name = profile
@@ -130,15 +132,26 @@ class Lockstep:
         self.kw = kw
         self.team_reg = MessageRegistry.from_message_set(msgs.message_set("team"))
         self.server = self._server()
-        self.agents = [FakeAgent(self.bus.stream_client("teamserver", registry=self.team_reg,
-                                                        key=KEY, name=f"robot{i}"), i)
-                       for i in range(1, robots + 1)]
+        self.agents = [FakeAgent(self._client(f"robot{i}"), i) for i in range(1, robots + 1)]
+        if tcp:
+            for a in self.agents:
+                assert a.t.wait_connected(5.0), "loopback TCP connect failed"
+
+    def _client(self, name):
+        if self.tcp:
+            return StreamClient("127.0.0.1", self.server.agents.port, registry=self.team_reg,
+                                key=KEY, clock=self.clock)
+        return self.bus.stream_client("teamserver", registry=self.team_reg, key=KEY, name=name)
 
     def _server(self):
         reg = MessageRegistry.from_message_set(msgs.message_set(self.profile_name))
         link = RefboxLink(self.bus.peer("public", registry=reg, name="ts"),
                           lambda color: self.bus.peer(color, registry=reg, name="ts"))
-        agents = self.bus.stream_server("teamserver", registry=self.team_reg, key=KEY)
+        if self.tcp:
+            agents = StreamServer(0, host="127.0.0.1", registry=self.team_reg, key=KEY,
+                                  clock=self.clock)
+        else:
+            agents = self.bus.stream_server("teamserver", registry=self.team_reg, key=KEY)
         return TeamServer(self.profile_name, TEAM, key=KEY, clock=self.clock, refbox=link,
                           agents=agents, state=self.state, config=self.config, **self.kw)
 
@@ -148,13 +161,63 @@ class Lockstep:
         self.server.close()
         self.server = self._server()
         for a in self.agents:       # the clients reconnect to the new server
-            a.t = self.bus.stream_client("teamserver", registry=self.team_reg, key=KEY,
-                                         name=f"robot{a.number}-again")
+            a.t = self._client(f"robot{a.number}-again")
+
+    def close(self):
+        self.server.agents.close()
+        for a in self.agents:
+            a.t.close()
+        self.server.close()
 
     def step(self, dt=0.1, n=1):
         for _ in range(n):
             self.clock.advance(dt)
+            if self.tcp:        # let loopback frames arrive (bounded, real time)
+                self.server.agents.wait(0.002)
             self.server.tick()
+            if self.tcp:
+                for a in self.agents:
+                    a.t.wait(0.002)
             for a in self.agents:
                 a.take()
             self.refbox.take()
+
+
+C0 = dict(complexity=0, quantity_requested=1, quantity_delivered_cyan=0,
+          quantity_delivered_magenta=0, delivery_period_begin=0, delivery_period_end=900,
+          delivery_gate=1)
+PLACES_2016 = {"C-BS": 9, "C-DS": 4, "C-RS1": 2, "C-RS2": 7, "C-CS1": 11, "C-CS2": 6}
+RS_2016 = {"C-RS1": ("RING_BLUE", "RING_GREEN"), "C-RS2": ("RING_ORANGE", "RING_YELLOW")}
+COSTS_2016 = {"RING_BLUE": 2, "RING_GREEN": 0, "RING_ORANGE": 1, "RING_YELLOW": 0}
+
+
+def production_setup(ls, orders, t=0.0):
+    """Our colour, PRODUCTION running, known machines, ring costs, idle stations, orders."""
+    for a in ls.agents:
+        a.hello()
+        a.status()
+    ls.refbox.game_state("PRODUCTION", "RUNNING", t)
+    ls.step()
+    for name, z in PLACES_2016.items():
+        ls.agents[0].observe(name, zone=z, zconf=0.99)
+    ls.refbox.rings(COSTS_2016)
+    ls.station_states = {m: "IDLE" for m in PLACES_2016}
+    ls.refbox.machines(ls.station_states, RS_2016)
+    bc, cc = ls.refbox.ms.enum("BaseColor"), ls.refbox.ms.enum("CapColor")
+    rc = ls.refbox.ms.enum("RingColor")
+    full = []
+    for o in orders:
+        o = dict(C0, **o)
+        o.setdefault("base_color", bc.Value("BASE_RED"))
+        o.setdefault("cap_color", cc.Value("CAP_BLACK"))
+        if "rings" in o:
+            o["ring_colors"] = [rc.Value(r) for r in o.pop("rings")]
+        full.append(o)
+    ls.refbox.orders(full)
+    ls.step(n=2)
+
+
+def task_kinds(agent):
+    return [(t.task_id, t.WhichOneof("kind"), getattr(t, t.WhichOneof("kind")).machine
+             if t.WhichOneof("kind") not in ("explore_zone", "discard") else None)
+            for t in agent.tasks()]

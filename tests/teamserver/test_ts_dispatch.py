@@ -1,0 +1,177 @@
+"""The dispatcher with scripted robots over loopback TCP (and the in-process bus):
+assignment by travel cost, station locks, PrepareMachine timing, failures and repair."""
+import pytest
+
+from teamserver import model as M
+from ts_harness import Lockstep, production_setup, task_kinds
+
+
+@pytest.fixture
+def tcp():
+    ls = Lockstep(tcp=True)
+    yield ls
+    ls.close()
+
+
+def place(ls, poses):
+    for a, pose in zip(ls.agents, poses):
+        a.pose = pose
+        a.status()
+
+
+def prepares(ls):
+    return [m for m in ls.refbox.received if m.DESCRIPTOR.name == "PrepareMachine"]
+
+
+def test_tasks_go_to_the_nearest_idle_robot_over_tcp(tcp):
+    ls = tcp
+    place(ls, [(0.5, 5.5, 0.0), (5.0, 1.6, 0.0), (3.0, 3.2, 0.0)])
+    production_setup(ls, [dict(id=1)])
+    ls.step(n=5)
+    by_robot = {a.number: task_kinds(a) for a in ls.agents}
+    assert by_robot[2] == [(by_robot[2][0][0], "get_workpiece", "C-BS")]     # next to the BS
+    assert [k[1:] for k in by_robot[3]] == [("retrieve_cap", "C-CS2")]       # next to CS2
+    assert by_robot[1] == []
+    t = ls.agents[2].tasks()[0]
+    assert t.retrieve_cap.shelf_slot == 0 and t.team_color == 0 and t.robot_id == 3
+
+
+def test_prepare_machine_waits_until_the_robot_is_about_to_arrive(tcp):
+    ls = tcp
+    ls.server.config.dispatch.prepare_retry = 3.0
+    place(ls, [(0.5, 5.5, 0.0), (1.0, 5.0, 0.0), (0.2, 5.8, 0.0)])
+    production_setup(ls, [dict(id=1)])
+    ls.step(n=5)
+    got_bs = [a for a in ls.agents if any(k[2] == "C-BS" for k in task_kinds(a))]
+    assert len(got_bs) == 1
+    assert not [p for p in prepares(ls) if p.machine == "C-BS"]               # still far away
+    robot = got_bs[0]
+    robot.pose = (5.0, 1.2, 0.0)                                              # 0.45 m away
+    robot.status()
+    ls.step(n=3)
+    pm = [p for p in prepares(ls) if p.machine == "C-BS"]
+    assert len(pm) == 1
+    assert pm[0].instruction_bs.color == ls.refbox.ms.enum("BaseColor").Value("BASE_RED")
+    assert pm[0].instruction_bs.side == 2 and pm[0].team_color == 0
+    ls.step(dt=1.0, n=4)                                    # the station never reacted: resend
+    assert len([p for p in prepares(ls) if p.machine == "C-BS"]) == 2
+    ls.station_states["C-BS"] = "PREPARED"
+    ls.refbox.machines(ls.station_states)
+    ls.step(dt=1.0, n=6)
+    assert len([p for p in prepares(ls) if p.machine == "C-BS"]) == 2         # it reacted
+
+
+def test_one_robot_at_a_station_at_a_time(tcp):
+    ls = tcp
+    place(ls, [(5.0, 1.6, 0.0), (4.8, 1.7, 0.0), (5.2, 1.7, 0.0)])
+    production_setup(ls, [dict(id=1), dict(id=2, delivery_gate=2)])
+    ls.step(n=5)
+    bs = [(a, k) for a in ls.agents for k in task_kinds(a) if k[2] == "C-BS"]
+    assert len(bs) == 1                                      # two products, one BS
+    agent, (tid, _, _) = bs[0]
+    agent.result(tid, holding=True)
+    ls.step(n=5)
+    bs = [(a, k) for a in ls.agents for k in task_kinds(a) if k[2] == "C-BS"]
+    assert len(bs) == 2                                      # the next one once it is free
+
+
+def run_tasks(ls, until, fail=None, steps=400):
+    """Complete every task the agents get; ``fail(agent, task)`` may return a failure."""
+    answered = {a.number: 0 for a in ls.agents}     # a re-sent task is answered again
+    for _ in range(steps):
+        for a in ls.agents:
+            a.beat()
+            tasks = a.tasks()
+            new, answered[a.number] = tasks[answered[a.number]:], len(tasks)
+            for t in new:
+                outcome = fail(a, t) if fail else None
+                if outcome:
+                    a.result(t.task_id, "FAILED", **outcome)
+                else:
+                    a.result(t.task_id, holding=t.WhichOneof("kind") == "get_workpiece")
+        ls.step(dt=0.5)
+        if until():
+            return True
+    return False
+
+
+def test_a_lost_workpiece_is_repaired_and_the_product_still_delivered():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=1)])
+    kb = ls.server.kb
+    failed = []
+
+    def fail(agent, t):
+        if t.WhichOneof("kind") == "mount_cap" and not failed:
+            failed.append(t.task_id)
+            return dict(error="PUT_FAILED", holding=False)
+        return None
+
+    delivered = lambda: any(p.state == "DELIVERED" and p.order_id == 1
+                            for p in kb.products.values())
+    assert run_tasks(ls, delivered, fail)
+    [p] = [p for p in kb.products.values() if p.order_id == 1]
+    assert p.repairs == 1
+    states = [kb.tasks[i].state for i in p.tasks]
+    assert kb.tasks[failed[0]].state == M.FAILED
+    assert M.CANCELLED in states or states.count(M.DONE) > 7     # re-planned from a new base
+    gets = [kb.tasks[i] for i in p.tasks if kb.tasks[i].kind == M.GET_WORKPIECE
+            and kb.tasks[i].machine == "C-BS" and kb.tasks[i].state == M.DONE]
+    assert len(gets) == 2
+    # the cap buffered before the failure was mounted after it: one retrieval only
+    assert sum(1 for i in p.tasks if kb.tasks[i].kind == M.RETRIEVE_CAP
+               and kb.tasks[i].state == M.DONE) == 1
+
+
+def test_a_retryable_failure_tries_the_same_step_again():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=1)])
+    kb = ls.server.kb
+    failed = []
+
+    def fail(agent, t):
+        if t.WhichOneof("kind") == "deliver" and not failed:
+            failed.append((agent.number, t.task_id))
+            return dict(error="NAVIGATION_FAILED", holding=True)
+        return None
+
+    assert run_tasks(ls, lambda: any(p.state == "DELIVERED" for p in kb.products.values()),
+                     fail)
+    number, tid = failed[0]
+    t = kb.tasks[tid]
+    assert t.state == M.DONE and t.attempts == 2 and t.robot == number   # same robot, again
+    assert all(p.repairs == 0 for p in kb.products.values())
+
+
+def test_a_broken_station_with_our_workpiece_inside_triggers_repair():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=1, complexity=1, rings=["RING_GREEN"])])
+    kb = ls.server.kb
+    mounted = lambda: any(t.kind == M.MOUNT_RING and t.state == M.DONE
+                          for t in kb.tasks.values())
+    assert run_tasks(ls, mounted)
+    ls.station_states["C-RS1"] = "BROKEN"
+    ls.refbox.machines(ls.station_states)
+    ls.step(n=2)
+    [p] = [p for p in kb.products.values() if p.order_id == 1]
+    assert p.repairs == 1
+    open_kinds = [(kb.tasks[i].kind, kb.tasks[i].machine) for i in p.tasks
+                  if kb.tasks[i].state in M.OPEN_STATES]
+    assert (M.GET_WORKPIECE, "C-BS") in open_kinds            # start again from a base
+    assert not any(m == "C-RS1" and kb.tasks[i].state == M.ASSIGNED
+                   for i in p.tasks for k, m in [(kb.tasks[i].kind, kb.tasks[i].machine)])
+    ls.station_states["C-RS1"] = "IDLE"
+    ls.refbox.machines(ls.station_states)
+    assert run_tasks(ls, lambda: p.state == "DELIVERED" or kb.products[p.id].state ==
+                     "DELIVERED")
+
+
+def test_new_order_is_planned_at_once():
+    ls = Lockstep()
+    production_setup(ls, [])
+    assert not ls.server.kb.products
+    ls.refbox.orders([dict(id=5, complexity=0, base_color=1, cap_color=2, quantity_requested=1,
+                           quantity_delivered_cyan=0, quantity_delivered_magenta=0,
+                           delivery_period_begin=0, delivery_period_end=900, delivery_gate=3)])
+    ls.step(n=2)
+    assert [p.order_id for p in ls.server.kb.products.values()] == [5]
