@@ -256,6 +256,13 @@ class RobotinoEmulator:
         with self.lock:
             return self.firmware.watchdog_trips
 
+    def inject(self, data: bytes, which: str = "base") -> None:
+        """Send raw bytes to the host (test hook: partial frames, bad lines)."""
+        with self.lock:
+            ep = self._base if which == "base" else self._grip
+            if ep is not None and ep.pty.is_open:
+                ep.pty.write(data)
+
     def fail_gripper(self, message: str) -> None:
         """Put the gripper into its error state."""
         with self.lock:

@@ -115,6 +115,7 @@ class BaseFirmware:
         self.pose = [0.0, 0.0, 0.0]
         self.twist = (0.0, 0.0, 0.0)
         self.setpoint_log: deque = deque(maxlen=log_size)
+        self.rx_log: deque = deque(maxlen=log_size)        # (time, payload) of valid frames
         self.errors_sent: deque = deque(maxlen=1000)
         # watchdog
         self.rx_counter = 0
@@ -219,6 +220,7 @@ class BaseFirmware:
                 self._error(f"payload to long: {event.length} > {MAX_PAYLOAD}\n\r")
             else:
                 self.rx_counter += 1
+                self.rx_log.append((self.now, event.payload))
                 self._ticks_since_frame = 0
                 self.com_active = True
                 self._parse(event.payload)

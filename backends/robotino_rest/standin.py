@@ -49,16 +49,18 @@ class RestStandIn:
         return f"http://{host}:{port}"
 
     def start(self) -> "RestStandIn":
-        self._thread = threading.Thread(target=self._server.serve_forever, name="rest-standin",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._server.serve_forever, args=(0.05,),
+                                        name="rest-standin", daemon=True)
         self._thread.start()
         return self
 
     def stop(self) -> None:
+        if self._thread is None:
+            return
         self._server.shutdown()
         self._server.server_close()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
+        self._thread.join(timeout=2.0)
+        self._thread = None
 
     def __enter__(self) -> "RestStandIn":
         return self.start()
