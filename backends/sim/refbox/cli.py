@@ -9,7 +9,6 @@ PyBullet could not be opened.
 """
 from __future__ import annotations
 
-import argparse
 import signal
 import sys
 

@@ -242,25 +242,21 @@ class RefboxNode:
     def _control_allowed(self, label: str) -> bool:
         return label == STREAM or (label == PUBLIC and self.control_via_public)
 
-    def _on_SetGameState(self, msg, rec, label, team) -> bool:
-        state = enum_name(msg, "state")
-        if not self._control_allowed(label) or state is None:
+    def _control(self, label: str, value, apply) -> bool:
+        """Apply an operator command if it came on a control channel."""
+        if not self._control_allowed(label) or value is None:
             return False
-        self.game.set_state(state)
-        return True
+        return apply(value) is not False
+
+    def _on_SetGameState(self, msg, rec, label, team) -> bool:
+        return self._control(label, enum_name(msg, "state"), self.game.set_state)
 
     def _on_SetGamePhase(self, msg, rec, label, team) -> bool:
-        phase = enum_name(msg, "phase")
-        if not self._control_allowed(label) or phase is None:
-            return False
-        self.game.set_phase(phase)
-        return True
+        return self._control(label, enum_name(msg, "phase"), self.game.set_phase)
 
     def _on_SetTeamName(self, msg, rec, label, team) -> bool:
-        color = enum_name(msg, "team_color")
-        if not self._control_allowed(label) or color is None:
-            return False
-        return self.game.set_team(color, msg.team_name)
+        return self._control(label, enum_name(msg, "team_color"),
+                             lambda color: self.game.set_team(color, msg.team_name))
 
     # -- crypto ----------------------------------------------------------------------
     def _apply_crypto(self) -> None:
