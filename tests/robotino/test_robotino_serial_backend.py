@@ -209,3 +209,17 @@ def test_device_found_by_usb_id(monkeypatch, emu):
     monkeypatch.setattr(serial_port.list_ports, "comports", lambda: ports[:1])
     with pytest.raises(BackendUnavailable, match="1E29:040D"):
         RobotinoBackend()
+
+
+def test_periodic_unplugging_and_delayed_replies():
+    faults = Faults(delay_ms=30, close_every=0.5, closed_for=0.15, seed=2)
+    with RobotinoEmulator(faults=faults) as emu:
+        t0 = time.monotonic()
+        robot = RobotinoBackend(emu.device, handshake_timeout=2.0, reopen_interval=0.05)
+        try:
+            assert time.monotonic() - t0 >= 0.03            # the version reply came 30 ms late
+            drive_for(robot, 1.5, (0.0, 0.2, 0.0))
+            assert robot.link_stats().reopens >= 2 and emu.stats()["connects"] >= 3
+            assert wait_for(lambda: emu.setpoints()[:3] == expected_setpoints(0.0, 0.2, 0.0), 0.5)
+        finally:
+            robot.close()
