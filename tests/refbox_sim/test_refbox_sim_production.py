@@ -413,3 +413,23 @@ def test_full_c1_production_chain(harness):
     assert ev.data["how"] == "in-time"
     assert pts == 20 + (5, 10, 20)[cost] + 10 + 10
     assert g.points(CYAN) == 2 * cost + pts
+
+
+def test_profiles_that_require_a_report_refuse_prepare_until_reported():
+    """The hook a 2025 rule set relies on, exercised with a 2016 profile variant."""
+    from dataclasses import replace
+
+    from backends.sim.refbox import RefboxGame, ReportEntry
+    from rll_bt.clock import SimClock
+    from rll_bt.rules import profile
+    prof = replace(profile("rcll2016"), prepare_requires_report=True)
+    g = RefboxGame(prof, SimClock(), seed=2, team_cyan="Caro", team_magenta="Grips")
+    g.start()
+    g.set_phase("EXPLORATION")
+    ex = g.exploration
+    g.machine_report(CYAN, [ReportEntry("C-BS", ex.expected_type("C-BS"),
+                                        g.layout.machines["C-BS"].zone)], CYAN)
+    g.set_phase("PRODUCTION")
+    instr = DSInstruction(1)
+    assert g.prepare(CYAN, "C-DS", instr, CYAN) == "ignored: C-DS is not yet correctly reported"
+    assert g.prepare(CYAN, "C-BS", BSInstruction("OUTPUT", "BASE_RED"), CYAN) == "prepared"

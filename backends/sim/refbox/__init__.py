@@ -1,18 +1,72 @@
-"""The simulated referee box (2016 rules; 2025 to come as a rule set).
+"""The simulated referee box: the 2016 rules (``rcll2016``) on the real wire protocol.
 
-- :class:`RefboxGame` (:mod:`.game`): the pure game core, driven by a clock.
-- :class:`RefboxNode` (:mod:`.node`): the game on the wire, over UDP or the
+Layers (each usable alone):
+
+- :class:`RefboxGame` (:mod:`.game`): the pure game core.  No threads, no
+  sockets; it takes a clock and moves only in :meth:`RefboxGame.tick`.
+- :class:`RefboxNode` (:mod:`.node`): the game behind the refbox's channels
+  (public plain, cyan/magenta AES-128-CBC, TCP control stream) over UDP or the
   in-process bus.
 - ``rll-bt refbox sim`` (:mod:`.cli`): a standalone refbox process.
+
+Lockstep (one process, one simulated clock, the PyBullet world)::
+
+    from backends.sim import World
+    from backends.sim.refbox import RefboxGame, RefboxNode, Timing
+    from rll_bt.comm import Bus
+
+    world = World("rcll2016", seed=7)
+    game = RefboxGame("rcll2016", world.clock, world, seed=7,
+                      team_cyan="Caro", team_magenta="Grips",
+                      timing=Timing.from_profile(world.profile, production=300))
+    bus = Bus(world.clock)
+    node = RefboxNode.on_bus(game, bus, keys={"Caro": "k1", "Grips": "k2"})
+    game.start()                        # or a SetGameState RUNNING on the "refbox" stream
+    while game.phase != "POST_GAME":
+        world.step(0.05)                # the world owns the clock
+        node.step()                     # receive, game.tick(), send what is due
+        ...                             # team server and agents poll their bus endpoints
+
+  Robots join ``bus.peer("public", registry=...)`` and
+  ``bus.peer("cyan", registry=..., key="k1")``; a controller
+  ``bus.stream_client("refbox", registry=...)``.  Without a world,
+  ``RefboxGame(profile, clock)`` builds an in-memory :class:`TableWorld` with
+  the same seeded layout.
+
+Network (own process, wall clock)::
+
+    game = RefboxGame("rcll2016", WallClock(), world, seed=7, team_cyan="Caro")
+    node = RefboxNode.on_udp(game, host="127.0.0.1", layout="sim",   # or "competition"
+                             keys={"Caro": "k1"}, stream_port=None)  # None: layout's 4444
+    while True:
+        node.step(); node.channels.public.wait(0.02)
+    node.close()
+
+Reading the game: ``game.phase``, ``game.state``, ``game.game_time`` (game s
+in the phase), ``game.points("CYAN")`` (per-phase floored total),
+``game.points_by_phase(team)``, ``game.ledger.entries`` (every
+:class:`~.ledger.PointsEntry` with reason), ``game.events`` /
+``game.pop_events()`` (:class:`Event`: phase, state, points, attention,
+machine, lights, robot, order, report, delivery, workpiece),
+``game.stations[name]`` (``state``, ``lights``, ``slide_loaded``,
+``cap_buffer``), ``game.orders`` / ``game.active_orders()``,
+``game.ring_costs``, ``game.rs_colors(machine)``, ``game.layout``,
+``game.exploration`` (light codes, type strings, reports),
+``game.robots``.  Plain-value inputs (what the node calls):
+``game.beacon(...)``, ``game.machine_report(team, [ReportEntry], channel_team)``,
+``game.prepare(team, machine, instruction, channel_team)`` -> "prepared" |
+"broken" | "ignored: ...", ``game.set_team``, ``game.set_state``,
+``game.set_phase``, ``game.advance(game_seconds)``.
 """
 from .events import Event
 from .exploration2016 import ReportEntry
 from .game import RefboxGame
+from .node import RefboxNode
 from .stations import (BSInstruction, CSInstruction, DSInstruction, RSInstruction,
                        StationConfig)
 from .timing import Timing, parse_phase_lengths
 from .world import RefboxWorld, SlotEvent, TableWorld, Workpiece
 
-__all__ = ["RefboxGame", "Event", "ReportEntry", "BSInstruction", "CSInstruction",
+__all__ = ["RefboxGame", "RefboxNode", "Event", "ReportEntry", "BSInstruction", "CSInstruction",
            "DSInstruction", "RSInstruction", "StationConfig", "Timing", "parse_phase_lengths",
            "RefboxWorld", "SlotEvent", "TableWorld", "Workpiece"]

@@ -32,12 +32,13 @@ INVALID_REPORT_POINTS = -6
 
 @dataclass(frozen=True)
 class ReportEntry:
-    """One MachineReportEntry: machine ``name``, the ``type`` string, the ``zone`` number;
-    None for a field the report left out."""
+    """One MachineReportEntry: machine ``name``, the ``type`` string, the ``zone`` number
+    (and ``rotation``); None for a field the report left out."""
 
     name: str
     type: str | None = None
     zone: int | None = None
+    rotation: int | None = None      # degrees (2017+ reports; unused by the 2016 rules)
 
 
 @dataclass

@@ -201,6 +201,10 @@ class RefboxGame:
             return "ignored: not a machine of that team"
         if st.state != "IDLE":
             return f"ignored: {machine} is {st.state}"
+        why = self.rules.refuse_prepare(self, st)
+        if why:
+            self._attention(team_color, f"Prepare refused: {why}")
+            return f"ignored: {why}"
         st.prepare(instruction)
         return "broken" if st.state == "BROKEN" else "prepared"
 

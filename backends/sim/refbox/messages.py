@@ -209,7 +209,8 @@ class Messages:
         for e in msg.machines:
             etype = e.type if e.HasField("type") and e.type else None
             zone = e.zone if e.HasField("zone") else None
-            entries.append(ReportEntry(e.name, etype, zone))
+            rot = e.rotation if has_field(e, "rotation") and e.HasField("rotation") else None
+            entries.append(ReportEntry(e.name, etype, zone, rot))
         return team, entries
 
     @staticmethod

@@ -38,6 +38,16 @@ class Rules2016:
                          feedback_time: float = 5.0) -> Exploration2016:
         return Exploration2016(profile, zones, rng, feedback_time)
 
+    def refuse_prepare(self, game, station) -> str | None:
+        """Why a PrepareMachine for an IDLE ``station`` of the sender is refused, or None.
+        Profiles with ``prepare_requires_report`` (2025) refuse stations not yet
+        correctly reported."""
+        if game.profile.prepare_requires_report:
+            rep = game.exploration.state(station.team, station.name)
+            if rep is None or not rep.fully_correct:
+                return f"{station.name} is not yet correctly reported"
+        return None
+
     def make_orders(self, profile, rng: random.Random, timing):
         return schedule_2016(profile, rng, timing)
 
