@@ -72,7 +72,7 @@ class Scoring:
     cap_retrieved: int = 0
     delivery_by_complexity: tuple[int, int, int, int] = (20, 20, 20, 20)
     delivery_late_grace: float = 10.0     # seconds after the window end with reduced points
-    delivery_late_reduced: int = 15
+    delivery_late_penalty: float = 1.5   # points per full second late, inside the grace period
     delivery_too_late: int = 5
     delivery_wrong: int = 1
     competitive_first: int = 0
@@ -224,8 +224,10 @@ class Profile:
         full = s.delivery_by_complexity[complexity]
         if delivered_at <= window_end:
             return full
-        if delivered_at <= window_end + s.delivery_late_grace:
-            return s.delivery_late_reduced if self.year < 2022 else max(full - 5, 0)
+        late = delivered_at - window_end
+        if late <= s.delivery_late_grace:
+            # the refbox's orders.clp: int(points - 1.5 * floor(seconds late))
+            return max(int(full - s.delivery_late_penalty * math.floor(late)), 0)
         return s.delivery_too_late
 
     def ring_points(self, cost: int) -> int:

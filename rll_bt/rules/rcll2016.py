@@ -22,7 +22,7 @@ PROFILE = Profile(
         explore_type_ok=5, explore_type_wrong=-4, explore_zone_ok=3, explore_zone_wrong=-2,
         additional_base=2, ring_by_cost=(5, 10, 20), precap_by_complexity=(0, 10, 30, 80),
         cap_mounted=10, cap_retrieved=0, delivery_by_complexity=(20, 20, 20, 20),
-        delivery_late_grace=10.0, delivery_late_reduced=15, delivery_too_late=5, delivery_wrong=1,
+        delivery_late_grace=10.0, delivery_too_late=5, delivery_wrong=1,
     ),
     # facts.clp: #1 C0 standing; #2-4 C0 (#3 quantity 2); #5 C1; #6 C2; #7 C3; #8 C0 overtime
     orders=(

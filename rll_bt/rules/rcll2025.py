@@ -28,7 +28,7 @@ PROFILE = Profile(
         type_feedback_wrong=-1,
         additional_base=2, ring_by_cost=(5, 10, 20), precap_by_complexity=(0, 0, 0, 0),
         cap_mounted=10, cap_retrieved=2, delivery_by_complexity=(20, 30, 50, 100),
-        delivery_late_grace=10.0, delivery_late_reduced=0, delivery_too_late=5, delivery_wrong=0,
+        delivery_late_grace=10.0, delivery_too_late=5, delivery_wrong=0,
         competitive_first=10, competitive_second=-10,
     ),
     # #1-2 standing (C0/C1 and C2/C3); #3-10 random; #11 C0 overtime, competitive;

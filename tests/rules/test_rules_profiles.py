@@ -128,7 +128,8 @@ def test_scoring_tables():
     assert (s25.competitive_first, s25.competitive_second) == (10, -10)
     p = rules.profile("rcll2016")
     assert p.delivery_points(0, 100, 200) == 20
-    assert p.delivery_points(0, 205, 200) == 15
+    assert p.delivery_points(0, 205.5, 200) == 12      # int(20 - 1.5 * 5)
+    assert p.delivery_points(0, 210, 200) == 5
     assert p.delivery_points(0, 300, 200) == 5
 
 
