@@ -8,11 +8,13 @@ the K - 1 other values.  From a uniform prior the posterior is then
     log P(v) = sum over robots r: log c_r            if r saw v
                                   log((1-c_r)/(K-1)) otherwise   (+ const)
 
-Repeated observations from one robot are *updates* (the paper's agents
-resend when a confidence rises or a value is corrected), so each robot
-contributes only its latest value, at the highest confidence it gave for
-that value.  Agreement between robots raises the confidence, disagreement
-lowers it.  Poses are fused as a confidence-weighted mean (orientation as a
+Observations a robot repeats while it looks at a machine are *updates*
+(the paper's agents resend when a confidence rises or a value is
+corrected): within one visit, i.e. until the robot has been silent about
+the property for ``revisit_gap`` seconds, it has one vote, its latest value
+at the highest confidence it gave for it.  A later visit is new evidence and
+votes again.  Agreement between robots or visits raises the confidence,
+disagreement lowers it.  Poses are fused as a confidence-weighted mean (orientation as a
 circular mean) with a noisy-OR confidence.
 """
 from __future__ import annotations
@@ -22,6 +24,8 @@ from dataclasses import dataclass
 from typing import Any, Hashable, Iterable
 
 _C_MIN, _C_MAX = 1e-3, 0.999
+#: seconds of silence after which a robot's next observation counts as a new visit
+REVISIT_GAP = 10.0
 
 
 @dataclass(frozen=True)
@@ -36,31 +40,43 @@ class Estimate:
 class DiscreteBelief:
     """Belief over one discrete property of one machine (``k`` possible values)."""
 
-    def __init__(self, k: int):
+    def __init__(self, k: int, revisit_gap: float = REVISIT_GAP):
         if k < 2:
             raise ValueError(f"a discrete property needs at least 2 values, not {k}")
         self.k = k
-        self._by_robot: dict[str, tuple[Hashable, float]] = {}
+        self.revisit_gap = revisit_gap
+        self._votes: list[list] = []          # [robot, value, confidence, last time]
+        self._last: dict[str, list] = {}      # robot -> its current vote
 
-    def add(self, robot: str, value: Hashable, confidence: float) -> None:
-        old = self._by_robot.get(robot)
-        if old is not None and old[0] == value:
-            confidence = max(confidence, old[1])
-        self._by_robot[robot] = (value, confidence)
+    def add(self, robot: str, value: Hashable, confidence: float, t: float = 0.0) -> None:
+        vote = self._last.get(robot)
+        if vote is not None and t - vote[3] < self.revisit_gap:
+            if vote[1] == value:
+                vote[2] = max(vote[2], confidence)
+            else:
+                vote[1], vote[2] = value, confidence
+            vote[3] = t
+            return
+        vote = [robot, value, confidence, t]
+        self._votes.append(vote)
+        self._last[robot] = vote
 
-    def add_fixed(self, robot: str, value: Hashable, confidence: float) -> None:
-        """Set a robot's statement outright (ground truth from the refbox)."""
-        self._by_robot[robot] = (value, confidence)
+    def add_fixed(self, robot: str, value: Hashable, confidence: float, t: float = 0.0) -> None:
+        """Set a source's statement outright (ground truth from the refbox)."""
+        self._votes = [v for v in self._votes if v[0] != robot]
+        vote = [robot, value, confidence, t]
+        self._votes.append(vote)
+        self._last[robot] = vote
 
     @property
     def empty(self) -> bool:
-        return not self._by_robot
+        return not self._votes
 
     def log_scores(self) -> tuple[dict[Hashable, float], float, int]:
         """(log score per observed value, log score of any unobserved value, #unobserved)."""
         seen: dict[Hashable, float] = {}
         base = 0.0
-        for value, c in self._by_robot.values():
+        for _robot, value, c, _t in self._votes:
             c = min(max(c, _C_MIN), _C_MAX)
             miss = math.log((1.0 - c) / (self.k - 1))
             base += miss
@@ -88,7 +104,7 @@ class DiscreteBelief:
         if not dist:
             return None
         value = max(dist, key=lambda v: (dist[v], _order_key(v)))
-        robots = tuple(sorted(r for r, (v, _) in self._by_robot.items() if v == value))
+        robots = tuple(sorted({r for r, v, _c, _t in self._votes if v == value}))
         return Estimate(value, dist[value], robots)
 
 
@@ -98,7 +114,7 @@ class PoseBelief:
     def __init__(self) -> None:
         self._by_robot: dict[str, tuple[tuple[float, float, float], float]] = {}
 
-    def add(self, robot: str, value: Iterable[float], confidence: float) -> None:
+    def add(self, robot: str, value: Iterable[float], confidence: float, t: float = 0.0) -> None:
         x, y, ori = (float(v) for v in value)
         self._by_robot[robot] = ((x, y, ori), confidence)
 

@@ -115,9 +115,9 @@ class KnowledgeBase:
         belief = self.machine(obs.machine).props[obs.prop]
         value = tuple(obs.value) if isinstance(obs.value, list) else obs.value
         if obs.robot == REFBOX:
-            belief.add_fixed(obs.robot, value, obs.confidence)
+            belief.add_fixed(obs.robot, value, obs.confidence, obs.time)
         else:
-            belief.add(obs.robot, value, obs.confidence)
+            belief.add(obs.robot, value, obs.confidence, obs.time)
         self.observation_count += 1
 
     def estimate(self, machine: str, prop: str) -> Estimate | None:

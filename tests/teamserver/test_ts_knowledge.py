@@ -42,6 +42,16 @@ def test_a_robot_updates_its_own_statement_instead_of_voting_twice():
     assert b.probability(90) < 0.1
 
 
+def test_a_later_visit_of_the_same_robot_is_new_evidence():
+    b = DiscreteBelief(24, revisit_gap=10.0)
+    b.add("R1", 5, 0.8, t=0.0)
+    b.add("R1", 5, 0.8, t=3.0)            # still the same look
+    once = b.estimate().confidence
+    assert once == pytest.approx(_single(24, 0.8))
+    b.add("R1", 5, 0.8, t=20.0)           # came back later
+    assert b.estimate().confidence > once and b.estimate().robots == ("R1",)
+
+
 def _single(k, c):
     b = DiscreteBelief(k)
     b.add("X", 1, c)
