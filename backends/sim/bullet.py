@@ -151,3 +151,45 @@ def matrix_quaternion(m) -> tuple[float, float, float, float]:
         return ((m01 + m10) / s, 0.25 * s, (m12 + m21) / s, (m02 - m20) / s)
     s = math.sqrt(1.0 + m22 - m00 - m11) * 2
     return ((m02 + m20) / s, (m12 + m21) / s, 0.25 * s, (m10 - m01) / s)
+
+
+def prism_mesh(polygon, z0: float, z1: float) -> tuple[list, list]:
+    """Vertices and triangle indices of a closed vertical prism over a convex
+    ``polygon`` [(x, y), ...] (counter-clockwise) from height ``z0`` to ``z1``."""
+    n = len(polygon)
+    verts = [[x, y, z] for z in (z0, z1) for x, y in polygon]
+    idx: list[int] = []
+    for k in range(n):
+        a, b = k, (k + 1) % n
+        idx += [a, b, n + b, a, n + b, n + a]
+    for k in range(1, n - 1):
+        idx += [0, k + 1, k, n, n + k, n + k + 1]
+    return verts, idx
+
+
+def box_polygon(hx: float, hy: float) -> list[tuple[float, float]]:
+    return [(hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)]
+
+
+def circle_polygon(radius: float, sides: int = 24, cx: float = 0.0, cy: float = 0.0) -> list[tuple[float, float]]:
+    """A polygon whose edges touch the circle (so face-on distances are exact)."""
+    r = radius / math.cos(math.pi / sides)
+    return [(cx + r * math.cos(2 * math.pi * (k + 0.5) / sides), cy + r * math.sin(2 * math.pi * (k + 0.5) / sides))
+            for k in range(sides)]
+
+
+def trimesh_shape(cid: int, parts: list[tuple[list, list]]) -> int:
+    """A static triangle-mesh collision shape made of (vertices, indices) parts.
+
+    Rays against triangle meshes cost a third of rays against Bullet's convex
+    boxes and cylinders (which go through GJK), which is what makes the
+    lasers cheap; the world never runs the dynamics, so static meshes are
+    moved with ``resetBasePositionAndOrientation``."""
+    p = pybullet()
+    verts: list = []
+    idx: list[int] = []
+    for v, i in parts:
+        idx += [len(verts) + k for k in i]
+        verts += v
+    return p.createCollisionShape(p.GEOM_MESH, vertices=verts, indices=idx,
+                                  flags=p.GEOM_FORCE_CONCAVE_TRIMESH, physicsClientId=cid)

@@ -83,3 +83,25 @@ def box_distance(a: Box2D, b: Box2D) -> float:
         return 0.0
     gaps = [b.sdf(x, y) for x, y in a.corners()] + [a.sdf(x, y) for x, y in b.corners()]
     return max(0.0, min(gaps))
+
+
+class ObstacleGrid:
+    """Static boxes bucketed into square cells, so a query returns only the
+    boxes that may lie within ``pad`` metres of a point."""
+
+    def __init__(self, items: list[tuple[str, Box2D]], cell: float = 1.0, pad: float = 0.5):
+        self.cell, self.pad = cell, pad
+        self._cells: dict[tuple[int, int], list[tuple[str, Box2D]]] = {}
+        for name, box in items:
+            ex, ey = box.half_extents_world()
+            x0, x1 = self._index(box.cx - ex - pad), self._index(box.cx + ex + pad)
+            y0, y1 = self._index(box.cy - ey - pad), self._index(box.cy + ey + pad)
+            for i in range(x0, x1 + 1):
+                for j in range(y0, y1 + 1):
+                    self._cells.setdefault((i, j), []).append((name, box))
+
+    def _index(self, v: float) -> int:
+        return int(math.floor(v / self.cell))
+
+    def near(self, x: float, y: float) -> list[tuple[str, Box2D]]:
+        return self._cells.get((self._index(x), self._index(y)), [])

@@ -50,8 +50,8 @@ def laser_scan(cid: int, robot: SimRobot, stamp: float) -> LaserScan:
     end[:, 1] += rmax * np.sin(a)
     hits = p.rayTestBatch(start, end, numThreads=1, collisionFilterMask=ray_mask(robot),
                           physicsClientId=cid)
-    frac = np.fromiter((h[2] if h[0] >= 0 else np.inf for h in hits), float, count=n)
-    ranges = frac * rmax
+    ranges = np.array([hit[2] for hit in hits]) * rmax
+    ranges[np.array([hit[0] for hit in hits]) < 0] = np.inf
     if cfg.laser_noise > 0.0:
         ranges = ranges + robot.rng.normal(0.0, cfg.laser_noise, n)
     ranges = np.where(np.isfinite(ranges), np.clip(ranges, rmin, rmax), np.inf)

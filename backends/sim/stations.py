@@ -28,7 +28,8 @@ import numpy as np
 from rll_bt.backend import Pose2D, light_state_code, wrap_angle
 from rll_bt.rules import CYAN, Profile, machine_team, machine_type
 
-from .bullet import Part, ShapeCache, matrix_quaternion, multibody, pybullet, yaw_quaternion
+from .bullet import (Part, ShapeCache, box_polygon, matrix_quaternion, multibody, prism_mesh, pybullet,
+                     trimesh_shape, yaw_quaternion)
 from .fieldgeom import footprint
 from .layout import MachinePlacement
 from .markers import quad_mesh, quad_size, texture_file
@@ -224,7 +225,7 @@ class Station:
             tag_links[side] = len(parts) - 1
         self.body = multibody(
             cid, shapes.box(half, CABINET_RGBA), parts,
-            base_collision=p.createCollisionShape(p.GEOM_BOX, halfExtents=list(half), physicsClientId=cid),
+            base_collision=trimesh_shape(cid, [prism_mesh(box_polygon(half[0], half[1]), -half[2], half[2])]),
             position=(self.pose.x, self.pose.y, zc), orientation=yaw_quaternion(self.pose.theta))
         for side, link in tag_links.items():
             tex = p.loadTexture(texture_file(self.tag_id(side), texture_dir), physicsClientId=cid)

@@ -21,8 +21,9 @@ from rll_bt.rules import TEAMS, WORKPIECE, Profile
 from rll_bt import rules
 
 from . import oracle, sensors
-from .bullet import ShapeCache, connect, pybullet, yaw_quaternion
-from .collide import Box2D
+from .bullet import (ShapeCache, box_polygon, circle_polygon, connect, prism_mesh, pybullet, trimesh_shape,
+                     yaw_quaternion)
+from .collide import Box2D, ObstacleGrid
 from .fieldgeom import WALL_HEIGHT, floor_rect, start_pose, walls
 from .layout import FieldLayout, generate_layout
 from .robot import Collision, RobotConfig, SimRobot
@@ -33,8 +34,9 @@ from .workpieces import Location, Workpiece
 PERCEPTION_MODES = ("oracle", "rendered")
 STATION_GROUP = 1
 ROBOT_COLORS = {"CYAN": (0.1, 0.8, 0.9, 1.0), "MAGENTA": (0.9, 0.2, 0.7, 1.0)}
-MAST_RADIUS, MAST_TOP = 0.10, 1.0
+MAST_RADIUS, MAST_TOP, MAST_X = 0.10, 1.0, -0.05
 CONTACT_GAP = 0.005          # a bumper feels anything closer than this, metres
+GRID_PAD = 0.5               # largest robot radius the collision grid serves, metres
 _KEEP = object()
 
 
@@ -98,9 +100,11 @@ class World:
             self.stations[name] = st
         self._station_list = [self.stations[n] for n in sorted(self.stations)]
         self._body_station = {st.body: st.name for st in self._station_list}
-        self._obstacles = [(st.name, st.box, st.box.bound_radius) for st in self._station_list]
-        self._obstacles += [("wall", b, b.bound_radius) for b in self._wall_boxes]
+        self._obstacles = [(st.name, st.box) for st in self._station_list]
+        self._obstacles += [("wall", b) for b in self._wall_boxes]
+        self._grid = ObstacleGrid(self._obstacles, pad=GRID_PAD)
         self.store = WorkpieceStore(self.cid, self._shapes, self.stations)
+        self._oracle = oracle.OracleScene(self._station_list, self.profile.tag_size)
 
     # -- construction -------------------------------------------------------
     def _build_floor_and_walls(self) -> None:
@@ -112,7 +116,7 @@ class World:
         self._wall_boxes = []
         for r in walls(self.profile):
             half = ((r.x_max - r.x_min) / 2, (r.y_max - r.y_min) / 2, WALL_HEIGHT / 2)
-            col = p.createCollisionShape(p.GEOM_BOX, halfExtents=list(half), physicsClientId=self.cid)
+            col = trimesh_shape(self.cid, [prism_mesh(box_polygon(half[0], half[1]), -half[2], half[2])])
             body = p.createMultiBody(0, col, self._shapes.box(half, (0.92, 0.92, 0.9, 1.0)),
                                      basePosition=[r.centre[0], r.centre[1], WALL_HEIGHT / 2],
                                      physicsClientId=self.cid)
@@ -125,10 +129,11 @@ class World:
         g = robot.config.geometry
         kw = dict(shapeTypes=[p.GEOM_CYLINDER, p.GEOM_CYLINDER], radii=[g.radius, MAST_RADIUS],
                   lengths=[g.height, MAST_TOP - g.height])
-        frames = [[0.0, 0.0, g.height / 2], [-0.05, 0.0, (g.height + MAST_TOP) / 2]]
-        col = p.createCollisionShapeArray(collisionFramePositions=frames, physicsClientId=self.cid, **kw)
+        frames = [[0.0, 0.0, g.height / 2], [MAST_X, 0.0, (g.height + MAST_TOP) / 2]]
+        col = trimesh_shape(self.cid, [prism_mesh(circle_polygon(g.radius), 0.0, g.height),
+                                       prism_mesh(circle_polygon(MAST_RADIUS, 12, MAST_X), g.height, MAST_TOP)])
         vis = p.createVisualShapeArray(visualFramePositions=frames, physicsClientId=self.cid, **kw)
-        body = p.createMultiBody(1.0, col, vis, basePosition=[robot.pose.x, robot.pose.y, 0.0],
+        body = p.createMultiBody(0.0, col, vis, basePosition=[robot.pose.x, robot.pose.y, 0.0],
                                  baseOrientation=yaw_quaternion(robot.pose.theta), physicsClientId=self.cid)
         p.changeVisualShape(body, -1, rgbaColor=list(ROBOT_COLORS.get(robot.team, (0.5, 0.5, 0.5, 1))),
                             physicsClientId=self.cid)
@@ -198,6 +203,8 @@ class World:
         if key in self.robots:
             raise ValueError(f"robot {team}/{number} is already in the world")
         cfg = (config or self.robot_config).with_options(**options)
+        if cfg.geometry.radius > GRID_PAD:
+            raise ValueError(f"robot radius {cfg.geometry.radius} m exceeds the supported {GRID_PAD} m")
         pose = pose or start_pose(self.profile, team, key[1])
         seq = np.random.SeedSequence([self.seed, TEAMS.index(team), key[1]])
         robot = SimRobot(team, key[1], pose, cfg, np.random.default_rng(seq),
@@ -242,9 +249,9 @@ class World:
             r.commit(pose, vel, h)
             r.blocked = False
             return
-        # advance to the contact point by bisection, then stop
+        # advance to the contact point by bisection (unless already pressing against it), then stop
         lo, hi, start = 0.0, 1.0, r.pose
-        for _ in range(6):
+        for _ in range(0 if r.blocked else 6):
             mid = (lo + hi) / 2
             cand = Pose2D(start.x + (pose.x - start.x) * mid, start.y + (pose.y - start.y) * mid,
                           start.theta)
@@ -265,10 +272,7 @@ class World:
         """What would overlap ``r`` at ``pose`` more than at its current pose."""
         x, y, rad = pose.x, pose.y, r.radius
         ox, oy = r.pose.x, r.pose.y
-        for name, box, br in self._obstacles:
-            reach = br + rad
-            if abs(x - box.cx) > reach or abs(y - box.cy) > reach:
-                continue
+        for name, box in self._grid.near(x, y):
             gap = box.sdf(x, y) - rad
             if gap < 0.0 and gap < box.sdf(ox, oy) - rad - 1e-9:
                 return name
@@ -287,7 +291,7 @@ class World:
     def clearance(self, team: str, number: int) -> float:
         """Smallest gap between the robot and any wall, station or robot (metres)."""
         r = self.robot(team, number)
-        gaps = [box.sdf(r.pose.x, r.pose.y) - r.radius for _, box, _ in self._obstacles]
+        gaps = [box.sdf(r.pose.x, r.pose.y) - r.radius for _, box in self._obstacles]
         gaps += [math.hypot(r.pose.x - o.pose.x, r.pose.y - o.pose.y) - r.radius - o.radius
                  for o in self.robots.values() if o is not r]
         return min(gaps)
@@ -332,8 +336,7 @@ class World:
     def detections(self, robot: SimRobot, camera: str = "front"):
         """Oracle detections (works in either mode; the backend exposes it only in oracle mode)."""
         self._sync_bodies()
-        return oracle.detect(self.cid, robot, self._station_list, self.time, self.blink_hz,
-                             self.profile.tag_size, camera)
+        return self._oracle.detect(self.cid, robot, self.time, self.blink_hz, camera)
 
     def ray(self, start, end, ignore: SimRobot | None = None) -> tuple[str | None, float]:
         """What a straight line hits first: (machine name, "wall", "robot T/N"
