@@ -42,6 +42,7 @@ ZONE_MARGIN_2016 = 0.1     # footprint to zone edge, metres
 MIN_STATION_GAP = 0.6      # between two footprints, so a robot fits through
 MIN_APPROACH_CLEARANCE = 0.3
 MAX_TRIES = 500
+TRIES_PER_MACHINE = 40
 
 
 class LayoutError(RuntimeError):
@@ -189,27 +190,39 @@ def placement_2016(profile: Profile, rng: random.Random, *, margin: float = ZONE
         if m not in cyan and profile.mirror_zone(fixed[mirror_machine_name(m)]) != z:
             raise LayoutError(f"{profile.name}: fixed zone of {m} is not the mirror of its twin's")
     free = [z for z in profile.machine_zones(CYAN) if z not in fixed.values()]
-    loose = [m for m in cyan if m not in fixed]
+
+    def draw(machine: str, placed: list[MachinePlacement]) -> MachinePlacement:
+        used = {pl.zone for pl in placed}
+        zone = fixed.get(machine) or rng.choice([z for z in free if z not in used])
+        rot = _random_rotation(profile, rng)
+        x, y = _pose_in_zone_2016(profile, zone, rot, rng, margin)
+        return _placement(machine, zone, rot, x, y)
+
+    return _generate(profile, rng, seed, draw, keep_xy=True)
+
+
+def _generate(profile: Profile, rng: random.Random, seed: int | None, draw, keep_xy: bool) -> FieldLayout:
+    """Place the cyan stations one by one with ``draw(machine, placed)`` (a
+    candidate, or None to give the layout up), each with its magenta twin,
+    keeping everything reachable; then swap.  Starts over when stuck."""
     for _ in range(MAX_TRIES):
-        zones = dict(fixed)
-        zones.update(zip(loose, rng.sample(free, len(loose))))
         placed: list[MachinePlacement] = []
-        for m in cyan:
-            for _ in range(50):
-                rot = _random_rotation(profile, rng)
-                x, y = _pose_in_zone_2016(profile, zones[m], rot, rng, margin)
-                pl = _placement(m, zones[m], rot, x, y)
-                pair = [pl, _twin(profile, pl, keep_xy=True)]
-                if _reachable(profile, pair, placed):
-                    placed += pair
-                    break
-            else:
-                break
-        else:
+        if all(_place_pair(profile, m, placed, draw, keep_xy) for m in profile.machines(CYAN)):
             machines = {pl.machine: pl for pl in placed}
-            swapped = _swap(profile, machines, rng)
-            return FieldLayout(profile.name, machines, seed, swapped)
+            return FieldLayout(profile.name, machines, seed, _swap(profile, machines, rng))
     raise LayoutError(f"{profile.name}: no reachable layout found in {MAX_TRIES} tries")
+
+
+def _place_pair(profile: Profile, machine: str, placed: list[MachinePlacement], draw, keep_xy: bool) -> bool:
+    for _ in range(TRIES_PER_MACHINE):
+        pl = draw(machine, placed)
+        if pl is None:
+            return False
+        pair = [pl, _twin(profile, pl, keep_xy)]
+        if _reachable(profile, pair, placed):
+            placed += pair
+            return True
+    return False
 
 
 def _grid(profile: Profile, zone: int) -> tuple[int, int]:
@@ -225,33 +238,22 @@ def _neighbours(profile: Profile, a: int, b: int) -> bool:
 
 def placement_2025(profile: Profile, rng: random.Random, *, seed: int | None = None) -> FieldLayout:
     """A random 2017+ placement with the refbox's constraints (module docstring)."""
-    cyan = profile.machines(CYAN)
-    candidates = profile.machine_zones(CYAN)
-    for _ in range(MAX_TRIES):
-        placed: list[MachinePlacement] = []
-        for m in cyan:
-            used = [pl.zone for pl in placed]
-            options = [z for z in candidates if not any(_neighbours(profile, z, u) for u in used)
-                       and not _neighbours(profile, z, profile.mirror_zone(z))]
-            ok = False
-            for _ in range(30):
-                if not options:
-                    break
-                zone = rng.choice(options)
-                x, y = profile.zone_centre(zone)
-                pl = _placement(m, zone, _random_rotation(profile, rng), x, y)
-                pair = [pl, _twin(profile, pl, keep_xy=False)]
-                if _reachable(profile, pair, placed):
-                    placed += pair
-                    ok = True
-                    break
-            if not ok:
-                break
-        else:
-            machines = {pl.machine: pl for pl in placed}
-            swapped = _swap(profile, machines, rng)
-            return FieldLayout(profile.name, machines, seed, swapped)
-    raise LayoutError(f"{profile.name}: no reachable layout found in {MAX_TRIES} tries")
+    candidates = [z for z in profile.machine_zones(CYAN)
+                  if not _neighbours(profile, z, profile.mirror_zone(z))]
+    free: dict[tuple[int, ...], list[int]] = {}      # zones left, by zones used so far
+
+    def draw(machine: str, placed: list[MachinePlacement]) -> MachinePlacement | None:
+        used = tuple(pl.zone for pl in placed)
+        if used not in free:
+            free[used] = [z for z in candidates if not any(_neighbours(profile, z, u) for u in used)]
+        options = free[used]
+        if not options:
+            return None
+        zone = rng.choice(options)
+        x, y = profile.zone_centre(zone)
+        return _placement(machine, zone, _random_rotation(profile, rng), x, y)
+
+    return _generate(profile, rng, seed, draw, keep_xy=False)
 
 
 def generate_layout(profile: Profile | str | None = None, seed: int = 0) -> FieldLayout:
