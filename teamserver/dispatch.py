@@ -284,11 +284,11 @@ class Dispatcher:
         retry = (not lost and error in RETRY_ERRORS
                  and task.attempts < self.config.max_attempts)
         if retry:
-            log.info("task %d failed (%s), trying again", task.id, error)
-            task.state, task.robot, task.prepared_at = M.PENDING, None, None
-            if task.carry:
-                task.holder = robot.number
-            self.kb.save_task(task)
+            again = self.production.retry(task)
+            log.info("task %d failed (%s), trying again as %d", task.id, error, again.id)
+            if again.carry:
+                again.holder = robot.number
+                self.kb.save_task(again)
             return
         task.state = M.FAILED
         self.kb.save_task(task)

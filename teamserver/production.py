@@ -296,7 +296,7 @@ class ProductionManager:
         if task.releases and product is not None:
             self.release(product.id, set(task.releases))
         if product is not None and product.state == ACTIVE and product.order_id == CLEANUP_ORDER:
-            if all(t.state == M.DONE for t in self.kb.tasks_of(product.tasks)):
+            if all(t.state in M.CLOSED_STATES for t in self.kb.tasks_of(product.tasks)):
                 product.state = DELIVERED
                 self.kb.save_product(product)
                 self.release(product.id)
@@ -321,6 +321,31 @@ class ProductionManager:
                     return wp
         base = task.params.get("base") if machine.endswith("BS") else "?"
         return M.Workpiece(f"{task.product}/{EXTRA}{task.id}", base=base, product=task.product)
+
+    def retry(self, task: M.Task) -> M.Task:
+        """A fresh copy of a failed step under a new id (agents remember the outcome
+        of a task id, so a retry must not reuse it); dependants follow the copy."""
+        new = M.Task.from_dict({**task.to_dict(), "id": self.kb.next_id("task"),
+                                "state": M.PENDING, "robot": None, "assigned_at": None,
+                                "prepared_at": None, "finished_at": None})
+        self.kb.save_task(new)
+        task.state = M.FAILED
+        self.kb.save_task(task)
+        product = self.kb.products.get(task.product or "")
+        if product is not None:
+            product.tasks = tuple(product.tasks) + (new.id,)
+            self.kb.save_product(product)
+            for t in self.kb.tasks_of(product.tasks):
+                changed = False
+                if task.id in t.deps:
+                    t.deps = tuple(new.id if d == task.id else d for d in t.deps)
+                    changed = True
+                if t.params.get("carry_from") == task.id:
+                    t.params["carry_from"] = new.id
+                    changed = True
+                if changed:
+                    self.kb.save_task(t)
+        return new
 
     def needs_repair(self, product_id: str | None, why: str) -> None:
         p = self.kb.products.get(product_id or "")

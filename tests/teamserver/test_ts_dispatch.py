@@ -138,8 +138,10 @@ def test_a_retryable_failure_tries_the_same_step_again():
     assert run_tasks(ls, lambda: any(p.state == "DELIVERED" for p in kb.products.values()),
                      fail)
     number, tid = failed[0]
-    t = kb.tasks[tid]
-    assert t.state == M.DONE and t.attempts == 2 and t.robot == number   # same robot, again
+    assert kb.tasks[tid].state == M.FAILED
+    [again] = [t for t in kb.tasks.values() if t.kind == M.DELIVER and t.id != tid]
+    assert again.state == M.DONE and again.attempts == 2 and again.robot == number
+    assert again.id > tid                     # a new id: agents remember finished task ids
     assert all(p.repairs == 0 for p in kb.products.values())
 
 
