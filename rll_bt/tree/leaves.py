@@ -75,8 +75,8 @@ class UnsetBlackboard(Node):
 
 @node_type("check_blackboard")
 class CheckBlackboard(Node):
-    """SUCCESS when ``condition`` (a condition expression over blackboard
-    keys, e.g. ``"holding == true and attempts < 3"``) holds, else FAILURE."""
+    """SUCCESS when ``condition`` holds, else FAILURE.  The condition is an
+    expression over blackboard keys such as ``"holding == true and attempts < 3"``."""
     kind = "condition"
     condition = Input(EXPR, "the condition expression", constant=True)
 

@@ -11,10 +11,15 @@ starts a planner), ``update`` polls and returns RUNNING, SUCCESS or FAILURE,
 interrupted (``new_status`` is INVALID then).
 
 Halt before start: when a node whose ``preempts`` is true (every action by
-default) is about to start, every RUNNING branch that its composites are
-abandoning is halted *first* (terminate is called on it), so two actions
-never command the robot at once, not even for part of a tick.  Parallel
-composites are the exception: their children run together by design.
+default) is about to start inside one branch of a selector while another
+branch of that selector is RUNNING, the running branch is halted *first*
+(terminate is called on it), so a higher-priority branch taking over never
+commands the robot while the old one still does, not even for part of a
+tick (BehaviorTree.CPP #1031 halts the old branch only afterwards).  In a
+``reactive_sequence`` the children before the running one are re-ticked
+every tick; they should be conditions or instant nodes (a child there that
+returns RUNNING halts the later running child right after it starts, as in
+py_trees).
 """
 from __future__ import annotations
 
@@ -139,13 +144,14 @@ class Node(py_trees.behaviour.Behaviour):
         yield self
 
     def halt_abandoned_branches(self) -> None:
-        """Stop every RUNNING sibling of this node and of its ancestors,
-        except under composites whose children run concurrently."""
+        """Before this node starts: under every selector above it, halt a
+        RUNNING child other than the one leading here (the branch the
+        selector is switching away from).  Sequences never have a running
+        child after the one being ticked, and parallels run children together."""
         child: py_trees.behaviour.Behaviour = self
         parent = self.parent
         while parent is not None:
-            if not getattr(parent, "concurrent_children", False) and \
-                    not isinstance(parent, py_trees.composites.Parallel):
+            if isinstance(parent, py_trees.composites.Selector) or getattr(parent, "exclusive_children", False):
                 for sibling in parent.children:
                     if sibling is not child and sibling.status is _RUNNING:
                         sibling.stop(_INVALID)

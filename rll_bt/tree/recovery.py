@@ -135,7 +135,8 @@ def _check(spec, opts):
 
 
 DEFAULT.register(structural(
-    "recovery", "composite", __doc__.split("\n\n", 1)[1],
+    "recovery", "composite", "Make an action succeed with ordered, escalating recoveries.  "
+    + __doc__.split("\n\n", 1)[1],
     (Input(int, "rounds of (recovery, try the action again) per level", default=1, constant=True,
            name="retries"),
      Input(str, "error code written when every level is used up", required=False, constant=True,

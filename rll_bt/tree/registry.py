@@ -53,7 +53,10 @@ class NodeType:
 
     @property
     def summary(self) -> str:
-        return self.doc.strip().split("\n\n")[0].replace("\n", " ") if self.doc else ""
+        """The first sentence of the documentation."""
+        para = self.doc.strip().split("\n\n")[0].replace("\n", " ") if self.doc else ""
+        head, dot, _ = para.partition(". ")
+        return head + "." if dot else para
 
     def describe(self) -> dict[str, Any]:
         return {"name": self.name, "kind": self.kind, "doc": inspect.cleandoc(self.doc or ""),
