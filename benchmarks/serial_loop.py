@@ -42,12 +42,8 @@ def start_emulator(args):
     cmd = [sys.executable, "-c", "import sys; from rll_bt.cli import main; sys.exit(main())",
            "robotino", "emulate", "--report", "0", *fault_args]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
-    device = None
-    for line in proc.stdout:
-        if line.strip().startswith("base:"):
-            device = line.split(":", 1)[1].strip()
-            break
-    if device is None:
+    device = proc.stdout.readline().strip()        # the base's path comes first
+    if not device:
         proc.kill()
         raise SystemExit("the emulator did not start")
 

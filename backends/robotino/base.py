@@ -145,12 +145,12 @@ class RobotinoBase:
         if self.device is None:
             self.device = find_device()
         self._port = open_serial(self.device)
+        self._stop.clear()
         try:
             self._handshake()
         except BaseException:
             self._close_port()
             raise
-        self._stop.clear()
         self._thread = threading.Thread(target=self._run, name="robotino-base", daemon=True)
         self._thread.start()
         return self
@@ -183,6 +183,12 @@ class RobotinoBase:
                 raise BackendUnavailable(
                     f"no reply to the version inquiry from {self.device} within "
                     f"{self.handshake_timeout:g} s (is it a Robotino base? is controld3 running?)")
+            if self._port is None:          # lost during the handshake: the device may come back
+                try:
+                    self._port = open_serial(self.device)
+                except BackendUnavailable:
+                    self._stop.wait(self.reopen_interval)
+                    continue
             self._write(VERSION_REQUEST)
             resend = self.clock.now() + 0.25
             while not (hw and sw) and self.clock.now() < min(resend, deadline):

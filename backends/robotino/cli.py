@@ -13,34 +13,22 @@ from rll_bt.errors import Unavailable, UserError
 EXIT_OK, EXIT_FAILURE = 0, 1
 
 
-def _probability(text: str) -> float:
-    try:
-        p = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not 0.0 <= p < 1.0:
-        raise argparse.ArgumentTypeError(f"probability must be in [0, 1), got {text}")
-    return p
+def _number(check, requirement: str):
+    """An argparse type: a float that passes ``check``, else ``requirement`` is the error."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        if not (math.isfinite(value) and check(value)):
+            raise argparse.ArgumentTypeError(f"{requirement}, got {text}")
+        return value
+    return parse
 
 
-def _non_negative(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (math.isfinite(v) and v >= 0):
-        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
-    return v
-
-
-def _finite(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(v):
-        raise argparse.ArgumentTypeError(f"must be finite, got {text}")
-    return v
+_probability = _number(lambda v: 0.0 <= v < 1.0, "probability must be in [0, 1)")
+_non_negative = _number(lambda v: v >= 0, "must be a finite number >= 0")
+_finite = _number(lambda v: True, "must be finite")
 
 
 def register(cli) -> None:
@@ -49,7 +37,8 @@ def register(cli) -> None:
     p = sub.add_parser("emulate", help="run a firmware-faithful Robotino 3 base on a pty",
                        description="Open a pty pair that behaves like the Robotino 3 base firmware "
                                    "(and with --gripper a second one like the RCLL gripper Arduino), "
-                                   "print the device paths and serve until Ctrl-C.")
+                                   "print the device paths (stdout, one per line, base first) and "
+                                   "serve until Ctrl-C; a JSON summary line follows at exit.")
     p.add_argument("--gripper", action="store_true", help="also emulate the gripper Arduino")
     p.add_argument("--corrupt", type=_probability, default=0.0, metavar="P",
                    help="per-byte probability of corrupting a byte (both directions)")
@@ -112,11 +101,16 @@ def _emulate(args) -> int:
                                clock=clock, firmware=firmware).start()
     except OSError as exc:
         raise UserError(f"cannot create the emulator's ptys: {exc}", where=args.link_dir) from None
-    print(f"Robotino 3 base emulator (firmware {args.firmware}) running", flush=True)
-    print(f"  base:    {emu.device}", flush=True)
+    # stdout: the device paths, one per line (base first), then the summary at exit;
+    # stderr: what a person watching wants to read
+    print(emu.device, flush=True)
     if emu.gripper_device:
-        print(f"  gripper: {emu.gripper_device}", flush=True)
-    print("press Ctrl-C to stop", flush=True)
+        print(emu.gripper_device, flush=True)
+    print(f"Robotino 3 base emulator (firmware {args.firmware}) running", file=sys.stderr)
+    print(f"  base:    {emu.device}", file=sys.stderr)
+    if emu.gripper_device:
+        print(f"  gripper: {emu.gripper_device}", file=sys.stderr)
+    print("press Ctrl-C to stop", file=sys.stderr, flush=True)
     start = time.monotonic()
     next_report = start + args.report if args.report > 0 else math.inf
     try:
@@ -127,7 +121,7 @@ def _emulate(args) -> int:
                 s, pose = emu.stats(), emu.ground_truth()
                 print(f"t={time.monotonic() - start:6.1f}s frames={s['frames']} replies={s['replies']} "
                       f"checksum_errors={s['checksum_errors']} watchdog_trips={s['watchdog_trips']} "
-                      f"pose=({pose[0]:.3f}, {pose[1]:.3f}, {pose[2]:.3f})", flush=True)
+                      f"pose=({pose[0]:.3f}, {pose[1]:.3f}, {pose[2]:.3f})", file=sys.stderr, flush=True)
     except KeyboardInterrupt:
         pass
     finally:

@@ -659,6 +659,20 @@ class ChargerInfo(Tag):
 
 
 @dataclass(frozen=True)
+class ChargerEvent(Tag):
+    """Defined by the firmware but never filled; kept as raw bytes."""
+    ID: ClassVar[int] = 81
+    raw: bytes = b""
+
+    def data(self) -> bytes:
+        return bytes(self.raw)
+
+    @classmethod
+    def from_data(cls, data: bytes):
+        return cls(bytes(data))
+
+
+@dataclass(frozen=True)
 class ChargerVersion(_Struct):
     ID: ClassVar[int] = 82
     FMT: ClassVar[str] = "<BBBB"

@@ -10,15 +10,6 @@ from backends.robotino_rest.standin import RestStandIn
 from rll_bt.backend import BackendUnavailable, Capability, CapabilityError, open_backend
 
 
-def wait_for(predicate, timeout, period=0.01):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if predicate():
-            return True
-        time.sleep(period)
-    return predicate()
-
-
 @pytest.fixture
 def standin():
     with RestStandIn() as s:
@@ -35,7 +26,7 @@ def test_standin_stops_the_robot_without_refresh(standin):
     assert standin.pose[0] == pytest.approx(0.2 * 0.2, abs=0.005)
 
 
-def test_omnidrive_is_refreshed_while_moving(standin):
+def test_omnidrive_is_refreshed_while_moving(standin, wait_for):
     robot = open_backend("robotino_rest", base_url=standin.url)
     try:
         assert isinstance(robot, RobotinoRestBackend)
@@ -91,7 +82,7 @@ def test_laser_scan_and_camera(standin):
         robot.close()
 
 
-def test_put_method_and_unreachable_server(standin):
+def test_put_method_and_unreachable_server(standin, wait_for):
     robot = RobotinoRestBackend(standin.url, method="PUT")
     try:
         robot.drive(0.1, 0.1, 0.0)

@@ -29,15 +29,6 @@ def drive_for(backend, seconds, v, period=0.05):
         time.sleep(period)
 
 
-def wait_for(predicate, timeout, period=0.01):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if predicate():
-            return True
-        time.sleep(period)
-    return predicate()
-
-
 @pytest.fixture
 def emu():
     with RobotinoEmulator() as e:
@@ -51,7 +42,7 @@ def robot(emu):
     backend.close()
 
 
-def test_handshake_as_fawkes_does_it(emu, robot):
+def test_handshake_as_fawkes_does_it(emu, robot, wait_for):
     assert robot.versions == ("3.0.0", "1.2.3")
     assert wait_for(lambda: len(emu.firmware.rx_log) > 20, 1.0)
     payloads = [p for _, p in emu.firmware.rx_log]
@@ -83,26 +74,26 @@ def test_velocity_gives_kinematic_setpoints_odometry_and_no_watchdog_stop(emu, r
     assert stats.frames > 200 and stats.checksum_errors == 0 and stats.link_losses == 0
 
 
-def test_deadman_stops_the_robot_when_commands_stop(emu, robot):
+def test_deadman_stops_the_robot_when_commands_stop(emu, robot, wait_for):
     drive_for(robot, 0.6, (0.3, 0.0, 0.0))
     last_command = time.monotonic()
     time.sleep(0.3)
     assert any(emu.wheel_speeds()[:3])                  # still moving before the deadman
-    assert wait_for(lambda: not any(emu.wheel_speeds()[:3]), 1.0)
+    assert wait_for(lambda: not any(emu.wheel_speeds()[:3]), 1.5)
     stopped_after = time.monotonic() - last_command
     # deadman 0.5 s + host ramp (0.3 m/s at 1.5 m/s^2) + wheel ramp (12 rpm/ms) + polling
-    assert 0.5 <= stopped_after < 0.5 + 0.2 + 0.13 + 0.15
+    assert 0.5 <= stopped_after < 0.5 + 0.2 + 0.13 + 0.45     # generous for loaded CI machines
     assert robot.link_stats().deadman_stops == 1
     assert emu.firmware.watchdog_motion_stops == 0      # the host stopped it, not the watchdog
     assert emu.setpoints()[:3] == (0, 0, 0)
 
 
-def test_stop_is_immediate(emu, robot):
+def test_stop_is_immediate(emu, robot, wait_for):
     drive_for(robot, 0.5, (0.0, 0.0, 1.0))
     robot.stop()
-    assert wait_for(lambda: emu.setpoints()[:3] == (0, 0, 0), 0.3)
+    assert wait_for(lambda: emu.setpoints()[:3] == (0, 0, 0), 0.5)
     # zero set-points at once (no host ramp): the wheels stop within the base's 12 rpm/ms ramp
-    assert wait_for(lambda: not any(emu.wheel_speeds()[:3]), 0.4)
+    assert wait_for(lambda: not any(emu.wheel_speeds()[:3]), 0.6)
     assert robot.link_stats().deadman_stops == 0
 
 
@@ -124,7 +115,7 @@ def test_corrupted_and_dropped_bytes_are_survived():
     assert odo.pose.theta == pytest.approx(truth[2], abs=0.05)
 
 
-def test_closed_port_is_reopened_and_driving_resumes(emu):
+def test_closed_port_is_reopened_and_driving_resumes(emu, wait_for):
     robot = RobotinoBackend(emu.device, reopen_interval=0.05)
     try:
         drive_for(robot, 0.4, (0.2, 0.0, 0.0))
@@ -140,7 +131,7 @@ def test_closed_port_is_reopened_and_driving_resumes(emu):
         robot.close()
 
 
-def test_silent_base_triggers_the_nodata_timeout_and_reconnects(emu):
+def test_silent_base_triggers_the_nodata_timeout_and_reconnects(emu, wait_for):
     robot = RobotinoBackend(emu.device, nodata_timeout=0.4)
     try:
         emu.set_silent(True)
@@ -152,7 +143,7 @@ def test_silent_base_triggers_the_nodata_timeout_and_reconnects(emu):
         robot.close()
 
 
-def test_read_timeout_on_an_unfinished_frame(emu, robot):
+def test_read_timeout_on_an_unfinished_frame(emu, robot, wait_for):
     emu.set_silent(True)
     time.sleep(0.05)
     emu.inject(bytes.fromhex("AA 2800 35"))             # a head and 1 of 40 payload bytes
@@ -162,7 +153,7 @@ def test_read_timeout_on_an_unfinished_frame(emu, robot):
     assert wait_for(lambda: robot.link_stats().frames > frames + 5, 1.0)
 
 
-def test_backend_interface_and_sensors(emu):
+def test_backend_interface_and_sensors(emu, wait_for):
     robot = open_backend("robotino", device=emu.device)
     with robot:
         assert robot.capabilities == (Capability.DRIVE | Capability.ODOMETRY | Capability.BUMPER
@@ -211,15 +202,29 @@ def test_device_found_by_usb_id(monkeypatch, emu):
         RobotinoBackend()
 
 
-def test_periodic_unplugging_and_delayed_replies():
-    faults = Faults(delay_ms=30, close_every=0.5, closed_for=0.15, seed=2)
+def test_periodic_unplugging_and_delayed_replies(wait_for):
+    faults = Faults(delay_ms=30, close_every=0.4, closed_for=0.1, seed=2)
     with RobotinoEmulator(faults=faults) as emu:
         t0 = time.monotonic()
         robot = RobotinoBackend(emu.device, handshake_timeout=2.0, reopen_interval=0.05)
         try:
             assert time.monotonic() - t0 >= 0.03            # the version reply came 30 ms late
-            drive_for(robot, 1.5, (0.0, 0.2, 0.0))
+            drive_for(robot, 2.0, (0.0, 0.2, 0.0))
             assert robot.link_stats().reopens >= 2 and emu.stats()["connects"] >= 3
             assert wait_for(lambda: emu.setpoints()[:3] == expected_setpoints(0.0, 0.2, 0.0), 0.5)
         finally:
             robot.close()
+
+
+def test_write_error_closes_and_reopens_the_port(emu, robot, wait_for):
+    import serial
+
+    def broken_write(data):
+        raise serial.SerialException("write failed: [Errno 5] Input/output error")
+
+    robot.base._port.write = broken_write
+    assert wait_for(lambda: robot.link_stats().reopens >= 1, 1.0)
+    stats = robot.link_stats()
+    assert stats.write_errors == 1 and stats.link_losses == 1
+    frames = stats.frames
+    assert wait_for(lambda: robot.link_stats().frames > frames + 5, 1.0)
