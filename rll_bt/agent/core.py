@@ -69,6 +69,10 @@ class RobotAgent:
         self.feed = ObservationFeed(self.profile, clock, config.robot_id)
         self.services: dict[str, Any] = services if services is not None else {}
         self.services.setdefault("observations", self.feed)
+        self.services.setdefault("profile", self.profile)
+        if start_pose is not None:
+            self.services.setdefault("start_pose", start_pose)
+        self._n_services = len(self.services)
         self.pose = PoseReader(backend, self.services, start_pose)
         self.run: TaskRun | None = None
         self.machines: KnownMachines | None = None
@@ -93,7 +97,6 @@ class RobotAgent:
         self._next_beacon = now
         self._attached: set[int] = set()
         if config.color:
-            self.gate.color = config.color
             self.refbox.set_color(config.color)
         if getattr(link, "connected", False):
             self._hello_due = True
@@ -122,6 +125,8 @@ class RobotAgent:
         if run is None or run.done or not self.gate.moving_allowed:
             return None
         outcome = run.tick()
+        if len(self.services) != self._n_services:     # a node made a service on first use
+            self._services_changed()
         if outcome is not None:
             self._finish(run, outcome)
         return outcome
@@ -159,8 +164,8 @@ class RobotAgent:
         c = self.config
         hello = self.tm.RobotHello(robot_id=c.robot_id, team_name=c.team_name, peer_name=c.peer_name,
                                    capabilities=list(c.capabilities), restarted=self._restarted_next)
-        if self.gate.color:
-            hello.team_color = self.tm.enum("TeamColor").Value(self.gate.color)
+        if self.color():
+            hello.team_color = self.tm.enum("TeamColor").Value(self.color())
         if self.link.send(hello):
             self.connected = True
             self._hello_due = False
@@ -184,9 +189,8 @@ class RobotAgent:
         elif name == "MachineMap":
             self._on_machine_map(m)
         elif name == "GamePhase":
-            color = self.gate.on_game_phase(m)
-            if color:
-                self.refbox.set_color(color)
+            self.gate.on_game_phase(m)
+            self._follow_color()
         elif name != "Heartbeat":
             log.debug("robot %d: ignoring %s from the team server", self.config.robot_id, name)
 
@@ -220,9 +224,7 @@ class RobotAgent:
             log.warning("robot %d: task %d rejected: %s", me, tid, exc)
             self._record(tid, self._result(tid, "FAILED", "INVALID_TASK", str(exc)), ok=False)
             return
-        self._attach_observers()
-        if self.machines is not None:
-            distribute(self.services, self.machines)
+        self._services_changed()
         self.run = TaskRun(task, params, tree, self.clock, max_gap=max(0.5, 5 * self.config.tick_period))
         log.info("robot %d: task %d %s %s", me, tid, kind,
                  {k: v for k, v in params.items() if k not in ("task_id", "robot_id", "kind")})
@@ -262,9 +264,17 @@ class RobotAgent:
     def _poll_refbox(self) -> None:
         for rec in self.refbox.receive():
             if rec.msg.DESCRIPTOR.name == "GameState":
-                color = self.gate.on_game_state(rec.msg)
-                if color and not self.config.color:
-                    self.refbox.set_color(color)
+                self.gate.on_game_state(rec.msg)
+                self._follow_color()
+
+    def color(self) -> str | None:
+        """Our team colour: as configured, else as the refbox (or the team server) says."""
+        return self.config.color or self.gate.color
+
+    def _follow_color(self) -> None:
+        color = self.color()
+        if color and color != self.refbox.color:
+            self.refbox.set_color(color)
 
     def _apply_gate(self) -> None:
         moving = self.gate.moving_allowed
@@ -292,7 +302,8 @@ class RobotAgent:
                 text = f"{outcome.code}: {text}" if text else str(outcome.code)
         if outcome.status == "SUCCEEDED" and run.kind == "explore_zone" and \
                 int(run.params["zone"]) not in self.feed.searched:
-            self.feed.zone_searched(int(run.params["zone"]))
+            found = run.tree.blackboard.get("/found")
+            self.feed.zone_searched(int(run.params["zone"]), found if isinstance(found, list) else None)
         result = self._result(run.task_id, outcome.status, code, text)
         log.info("robot %d: task %d %s %s%s", self.config.robot_id, run.task_id, run.kind, outcome.status,
                  f" {code} {text}" if code != "NONE" else "")
@@ -431,6 +442,13 @@ class RobotAgent:
         except BackendError as exc:
             self.fault = f"cannot stop the robot: {exc}"
             log.error("robot %d: %s", self.config.robot_id, self.fault)
+
+    def _services_changed(self) -> None:
+        """New services exist: let them feed observations and give them the machine map."""
+        self._n_services = len(self.services)
+        self._attach_observers()
+        if self.machines is not None:
+            distribute(self.services, self.machines)
 
     def _attach_observers(self) -> None:
         """Let services that publish sightings (``subscribe``) feed the observation stream."""

@@ -10,7 +10,8 @@ spoken the robot stands still (unless ``require`` is False).
 Both messages use the same numbers for state (INIT 0, WAIT_START 1,
 RUNNING 2, PAUSED 3) and phase (PRE_GAME 0, SETUP 10, EXPLORATION 20,
 PRODUCTION 30, POST_GAME 40).  GameState also names the teams, which is how
-the agent learns its colour when it was not given one.
+the agent learns its colour when it was not given one; the refbox's word on
+the colour outranks the team server's.
 """
 from __future__ import annotations
 
@@ -48,15 +49,21 @@ class GameGate:
         self.require = require
         self.refbox: GameView | None = None
         self.server: GameView | None = None
-        self.color: str | None = None       # learnt colour, "CYAN"/"MAGENTA"
+        self.refbox_color: str | None = None    # from GameState's team names
+        self.server_color: str | None = None    # from GamePhase.team_color
+
+    @property
+    def color(self) -> str | None:
+        """Our colour, "CYAN"/"MAGENTA": the refbox's word first, else the team server's."""
+        return self.refbox_color or self.server_color
 
     def on_game_state(self, msg) -> str | None:
         """A refbox GameState; returns our colour if it names our team."""
         self.refbox = GameView(int(msg.state), int(msg.phase), _seconds(msg.game_time), self.clock.now(), "refbox")
         if getattr(msg, "team_cyan", "") == self.team_name:
-            self.color = "CYAN"
+            self.refbox_color = "CYAN"
         elif getattr(msg, "team_magenta", "") == self.team_name:
-            self.color = "MAGENTA"
+            self.refbox_color = "MAGENTA"
         return self.color
 
     def on_game_phase(self, msg) -> str | None:
@@ -64,7 +71,7 @@ class GameGate:
         self.server = GameView(int(msg.state), int(msg.phase), float(msg.game_time), self.clock.now(),
                                "teamserver")
         if msg.HasField("team_color"):
-            self.color = ("CYAN", "MAGENTA")[int(msg.team_color)]
+            self.server_color = ("CYAN", "MAGENTA")[int(msg.team_color)]
         return self.color
 
     @property

@@ -112,6 +112,8 @@ class ObservationFeed:
             name = hit[0] if hit else None
         if not name:
             return False
+        if zone is not None and int(zone) <= 0:       # 0: unknown (no profile numbers a zone 0)
+            zone = None
         if zone is None and pose is not None:
             zone = self.profile.zone_at(pose.x, pose.y)
         if orientation is None and pose is not None:

@@ -40,17 +40,25 @@ def tree_file(trees_dir: Path, kind: str) -> Path:
 
 def load_task_tree(trees_dir: Path, kind: str, params: dict[str, Any], *, backend, clock: Clock,
                    services: dict[str, Any], registry=None, logger: logging.Logger | None = None) -> LoadedTree:
-    """Build the tree for a task; :class:`InvalidTask` when there is none or
-    it does not load for these parameters."""
+    """Build the tree for a task and make the services its nodes require;
+    :class:`InvalidTask` when there is no tree, it does not load for these
+    parameters or a service cannot be made."""
     path = tree_file(trees_dir, kind)
     if not path.is_file():
         raise InvalidTask(f"no tree for {kind!r} tasks ({path} not found)")
     ctx = RunContext(backend=backend, clock=clock, task=params, logger=logger or logging.getLogger("rll_bt.tree"),
                      services=services, blackboard=Blackboard())
     try:
-        return load_tree(path, task=params, ctx=ctx, registry=registry, search_path=[trees_dir])
+        tree = load_tree(path, task=params, ctx=ctx, registry=registry, search_path=[trees_dir])
     except TreeLoadError as exc:
         raise InvalidTask(f"{path.name} does not load for this task: {exc}") from None
+    # make the services the nodes use now, so they have the machine map before the first tick
+    for name in sorted({s for info in tree.nodes for s in getattr(info.behaviour, "requires_services", ())}):
+        try:
+            tree.ctx.service(name)
+        except Exception as exc:
+            raise InvalidTask(f"{path.name}: service {name!r} cannot be made: {exc}") from None
+    return tree
 
 
 @dataclass

@@ -10,7 +10,7 @@ tree ``<kind>.yaml`` of its trees directory with the parameters below as
 kind             parameters
 ===============  ==================================================================
 explore_zone     zone (int, profile zone number), zone_name (str, e.g. "Z12"),
-                 viewpoints (list of {x, y, theta}, field frame, may be empty)
+                 viewpoints (list of [x, y, theta], field frame, may be empty)
 get_workpiece    machine, machine_type ("BS" ...), side (INPUT/OUTPUT/SHELF),
                  shelf_slot (int), face (INPUT/OUTPUT), place (conveyor/shelf0..2)
 put_workpiece    machine, machine_type, side (INPUT/SLIDE), face, place (conveyor/slide)
@@ -89,7 +89,7 @@ def task_params(task, profile: Profile) -> dict[str, Any]:
         if zone not in profile.zones.all_zones:
             raise InvalidTask(f"zone {zone} does not exist in {profile.name}")
         p.update(zone=zone, zone_name=profile.zone_name(zone),
-                 viewpoints=[{"x": v.x, "y": v.y, "theta": v.theta} for v in body.viewpoints])
+                 viewpoints=[[v.x, v.y, v.theta] for v in body.viewpoints])
         return p
     if kind == "report_machines":
         p["entries"] = [{"name": e.name, "type": e.type, "zone": int(e.zone), "rotation": int(e.rotation)}

@@ -17,7 +17,7 @@ from rll_bt.tree import Input, Node, default_registry
 TEAM, KEY = "Testers", "s3cret-key"
 TM = msgs.message_set("team")
 TEAM_REG = MessageRegistry.from_message_set(TM)
-TREES = Path(__file__).parent / "trees"
+TREES = Path(__file__).parent / "agent_trees"
 
 
 # -- node types only the agent tests use ---------------------------------------------------
@@ -83,8 +83,13 @@ class ScriptedServer:
         self.got: list[tuple[object, object]] = []      # (client, msg)
         self.events: list = []
         self.client = None
+        self.pumps = 0
+        self.heartbeat_every = 20       # pumps between the server's heartbeats
 
     def pump(self) -> None:
+        self.pumps += 1
+        if self.client is not None and self.pumps % self.heartbeat_every == 0:
+            self.send(TM.Heartbeat(robot_id=0, seq=self.pumps))
         for ev in self.t.events():
             self.events.append(ev)
             if ev.kind == CONNECTED:
@@ -181,10 +186,13 @@ class Rig:
         while self.clock.now() < end:
             self.round()
 
-    def until(self, pred, seconds: float = 10.0, what: str = "condition") -> None:
+    def until(self, pred, seconds: float = 10.0, what: str = "condition", min_wall: float = 5.0) -> None:
+        """Round until ``pred()``; fail after ``seconds`` of sim time (and, over
+        real sockets, at least ``min_wall`` seconds of real time)."""
         end = self.clock.now() + seconds
+        wall_end = time.monotonic() + (min_wall if self.real_wait else 0.0)
         while not pred():
-            if self.clock.now() >= end:
+            if self.clock.now() >= end and time.monotonic() >= wall_end:
                 raise AssertionError(f"{what} not reached within {seconds} s of sim time")
             self.round()
 

@@ -1,0 +1,46 @@
+"""Tree node types the agent's task trees need beyond the skills
+(registered through the ``rll_bt.nodes`` entry point ``agent``).
+
+- ``drop_workpiece``: let go of the held workpiece where the robot stands
+  (a discard without a station).
+"""
+from __future__ import annotations
+
+from py_trees.common import Status
+
+from ..backend import BackendError, Capability
+from ..tree import Input, Node, node_type, write_error
+
+
+@node_type("drop_workpiece")
+class DropWorkpiece(Node):
+    """Open the gripper where it is, letting go of the held workpiece (a
+    discard without a station), and check after ``settle`` seconds that the
+    gripper is empty: PUT_FAILED when it still holds something,
+    GRIPPER_ERROR when the gripper refuses to open."""
+    settle = Input(float, "seconds to wait after opening before checking", default=1.0)
+    requires_capabilities = Capability.GRIPPER
+
+    def initialise(self) -> None:
+        self._until = self.ctx.clock.now() + max(0.0, float(self.settle))
+        self._error = None
+        try:
+            self.ctx.backend.gripper_open()
+        except BackendError as exc:
+            self._error = str(exc)
+
+    def update(self) -> Status:
+        if self._error is not None:
+            write_error(self._bb, "GRIPPER_ERROR", f"the gripper does not open: {self._error}", self.name)
+            return Status.FAILURE
+        if self.ctx.clock.now() < self._until:
+            return Status.RUNNING
+        try:
+            holding = self.ctx.backend.holding()
+        except BackendError as exc:
+            write_error(self._bb, "GRIPPER_ERROR", f"cannot read the gripper: {exc}", self.name)
+            return Status.FAILURE
+        if holding:
+            write_error(self._bb, "PUT_FAILED", "the workpiece is still in the gripper after opening", self.name)
+            return Status.FAILURE
+        return Status.SUCCESS
