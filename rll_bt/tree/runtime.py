@@ -102,7 +102,6 @@ class LoadedTree:
         ticks = 0
         try:
             while True:
-                t0 = clock.now()
                 status = self.tick()
                 ticks += 1
                 if on_tick is not None:
@@ -113,7 +112,7 @@ class LoadedTree:
                         (timeout is not None and clock.now() - start >= timeout):
                     self.interrupt()
                     return Status.RUNNING
-                rest = period - (clock.now() - t0)
+                rest = start + ticks * period - clock.now()   # a fixed schedule: no drift
                 if rest > 0:
                     clock.sleep(rest)
         except BaseException:
