@@ -9,13 +9,16 @@ counter-clockwise) is clipped to the speed limits of ``rules.ROBOT``
 ``max_alpha``) and integrated each time step.  A drive command older than
 ``RobotConfig.deadman`` seconds of sim time is dropped (the robot brakes).
 
-Odometry integrates the motion the robot really made (zero while blocked),
-with a random-walk error: per step the travelled distance gets Gaussian noise
-of ``odom_noise_trans * sqrt(distance)`` and the heading
+Odometry integrates the motion the wheels made, with a random-walk error:
+per step the travelled distance gets Gaussian noise of
+``odom_noise_trans * sqrt(distance)`` and the heading
 ``odom_noise_rot * sqrt(|turn| + distance)`` plus a systematic
-``odom_drift`` radians per metre.  Its frame starts at (0, 0, 0) at the start
-pose (``odom_frame="zero"``, like a real Robotino) or equals the field frame
-at the start (``odom_frame="field"``).
+``odom_drift`` radians per metre.  A blocked robot's wheels stall (odometry
+stands still), unless ``odom_slip`` is set: then they keep turning at the
+commanded, acceleration-limited speed and the odometry runs away from the
+truth.  Its frame starts at (0, 0, 0) at the start pose
+(``odom_frame="zero"``, like a real Robotino) or equals the field frame at
+the start (``odom_frame="field"``).
 """
 from __future__ import annotations
 
@@ -44,6 +47,7 @@ class RobotConfig:
     odom_noise_trans: float = 0.01        # m per sqrt(m)
     odom_noise_rot: float = 0.01          # rad per sqrt(rad or m)
     odom_drift: float = 0.0               # rad per metre, systematic
+    odom_slip: bool = False               # blocked: wheels keep turning, odometry integrates the command
     # laser (mount from rules.ROBOT.laser_mount)
     laser_beams: int = ROBOT.laser_beams
     laser_fov: float = ROBOT.laser_fov
@@ -180,15 +184,20 @@ class SimRobot:
                       wrap_angle(self.pose.theta + w * dt))
         return pose, (vx, vy, w)
 
-    def commit(self, pose: Pose2D, velocity, dt: float) -> None:
-        """Take the step the world allowed and integrate the odometry."""
+    def commit(self, pose: Pose2D, velocity, dt: float, wheels: Pose2D | None = None) -> None:
+        """Take the step the world allowed and integrate the odometry from
+        the wheels' motion (``wheels``, default: the motion made)."""
         old = self.pose
         self.pose, self.velocity = pose, velocity
-        if pose is old:
-            return
-        delta = pose.relative_to(old)
+        self.distance += math.hypot(pose.x - old.x, pose.y - old.y)
+        if wheels is None:
+            if pose is old:
+                return
+            wheels = pose.relative_to(old)
+        self._integrate_odometry(wheels)
+
+    def _integrate_odometry(self, delta: Pose2D) -> None:
         dist = math.hypot(delta.x, delta.y)
-        self.distance += dist
         cfg = self.config
         dx, dy, dth = delta.x, delta.y, delta.theta
         if cfg.odom_noise_trans > 0.0 or cfg.odom_noise_rot > 0.0:

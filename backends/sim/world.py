@@ -261,7 +261,10 @@ class World:
                 hi = mid
         stop = start if lo == 0.0 else Pose2D(start.x + (pose.x - start.x) * lo,
                                               start.y + (pose.y - start.y) * lo, start.theta)
-        r.commit(stop, (0.0, 0.0, 0.0), h)
+        if r.config.odom_slip:          # the wheels keep turning
+            r.commit(stop, vel, h, wheels=pose.relative_to(start))
+        else:
+            r.commit(stop, (0.0, 0.0, 0.0), h)
         if not r.blocked:
             r.collisions += 1
             self.collision_log.append(Collision(now, r.key, hit))

@@ -174,3 +174,20 @@ def test_battery_drains(world):
     half = bot.battery()
     assert full.soc == pytest.approx(1.0) and half.soc == pytest.approx(0.5)
     assert half.voltage < full.voltage
+
+
+def test_blocked_wheels_stall_or_slip(empty_world):
+    w = empty_world
+    stall = SimBackend(w, ("CYAN", 1), pose=_wall_test_pose(w), odom_noise_trans=0.0, odom_noise_rot=0.0)
+    f = w.profile.field
+    slip = SimBackend(w, ("CYAN", 2), pose=Pose2D(-3.0, f.y_max - 0.5, math.pi / 2), odom_slip=True,
+                      odom_noise_trans=0.0, odom_noise_rot=0.0)
+    for _ in range(40):
+        stall.drive(0.5, 0.0, 0.0)
+        slip.drive(0.5, 0.0, 0.0)
+        w.step(0.1)
+    assert stall.robot.collisions == 1 and slip.robot.collisions == 1
+    truth = 0.5 - ROBOT.radius                  # both stopped at the wall
+    assert stall.odometry().pose.x == pytest.approx(truth, abs=0.01)
+    assert slip.odometry().pose.x > truth + 0.8  # wheels spun on for about 3 s
+    assert slip.odometry().vx == pytest.approx(0.5)
