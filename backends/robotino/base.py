@@ -293,6 +293,7 @@ class RobotinoBase:
         self._last_frame = self.clock.now()
         self._last_cycle = None
         self._write(VERSION_REQUEST)
+        self._write((T.SetEmergencyBumper(int(self.emergency_bumper)),))   # in case the base rebooted
 
     def _lose_link(self, why: str) -> None:
         log.warning("Robotino base %s: %s; closing and reopening", self.device, why)

@@ -5,10 +5,12 @@ import argparse
 import json
 import math
 import sys
-import time
 
 from rll_bt.backend import BackendError, BackendUnavailable
+from rll_bt.clock import WallClock
 from rll_bt.errors import Unavailable, UserError
+
+CLOCK = WallClock()
 
 EXIT_OK, EXIT_FAILURE = 0, 1
 
@@ -88,13 +90,12 @@ def _emulate(args) -> int:
     from .emulator import RobotinoEmulator
     from .faults import Faults
     from .firmware import BaseFirmware
-    from rll_bt.clock import WallClock
 
     try:
         faults = Faults(args.corrupt, args.drop, args.delay, args.close_every, args.closed_for, args.seed)
     except ValueError as exc:
         raise UserError(str(exc)) from None
-    clock = WallClock()
+    clock = CLOCK
     firmware = BaseFirmware(sw_version=args.firmware, start=clock.now())
     try:
         emu = RobotinoEmulator(gripper=args.gripper, faults=faults, link_dir=args.link_dir,
@@ -111,15 +112,15 @@ def _emulate(args) -> int:
     if emu.gripper_device:
         print(f"  gripper: {emu.gripper_device}", file=sys.stderr)
     print("press Ctrl-C to stop", file=sys.stderr, flush=True)
-    start = time.monotonic()
+    start = CLOCK.now()
     next_report = start + args.report if args.report > 0 else math.inf
     try:
-        while args.duration <= 0 or time.monotonic() - start < args.duration:
-            time.sleep(0.05)
-            if time.monotonic() >= next_report:
+        while args.duration <= 0 or CLOCK.now() - start < args.duration:
+            CLOCK.sleep(0.05)
+            if CLOCK.now() >= next_report:
                 next_report += args.report
                 s, pose = emu.stats(), emu.ground_truth()
-                print(f"t={time.monotonic() - start:6.1f}s frames={s['frames']} replies={s['replies']} "
+                print(f"t={CLOCK.now() - start:6.1f}s frames={s['frames']} replies={s['replies']} "
                       f"checksum_errors={s['checksum_errors']} watchdog_trips={s['watchdog_trips']} "
                       f"pose=({pose[0]:.3f}, {pose[1]:.3f}, {pose[2]:.3f})", file=sys.stderr, flush=True)
     except KeyboardInterrupt:
@@ -142,12 +143,12 @@ def _open(device: str | None, **options):
 
 
 def _wait_for_readings(backend, timeout: float = 0.5) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+    deadline = CLOCK.now() + timeout
+    while CLOCK.now() < deadline:
         r = backend.readings()
         if r.power is not None and not math.isnan(r.stamp):
             return
-        time.sleep(0.01)
+        CLOCK.sleep(0.01)
 
 
 def _probe(args) -> int:
@@ -156,7 +157,7 @@ def _probe(args) -> int:
     try:
         _wait_for_readings(backend)
         if args.gripper_device:
-            time.sleep(0.3)
+            CLOCK.sleep(0.3)
         report = _probe_report(backend)
     finally:
         backend.close()
@@ -227,19 +228,19 @@ def _drive(args) -> int:
             raise UserError(f"{name} {value:g} is beyond the bring-up limit of {limit:g}")
     backend = _open(args.device)
     try:
-        start = time.monotonic()
+        start = CLOCK.now()
         next_print = start
         print(f"driving at vx={args.vx:g} m/s vy={args.vy:g} m/s omega={args.omega:g} rad/s "
               f"for {args.seconds:g} s", flush=True)
-        while (t := time.monotonic() - start) < args.seconds:
+        while (t := CLOCK.now() - start) < args.seconds:
             backend.drive(args.vx, args.vy, args.omega)
-            if time.monotonic() >= next_print:
+            if CLOCK.now() >= next_print:
                 next_print += 0.5
                 _print_odometry(backend, t)
-            time.sleep(0.02)
+            CLOCK.sleep(0.02)
         backend.stop()
-        time.sleep(0.5)
-        _print_odometry(backend, time.monotonic() - start, "stopped")
+        CLOCK.sleep(0.5)
+        _print_odometry(backend, CLOCK.now() - start, "stopped")
         stats = backend.link_stats()
     finally:
         backend.close()

@@ -116,6 +116,7 @@ class RobotinoRestBackend(Backend):
     def _run(self) -> None:
         zero_sent = True
         while not self._stop.is_set():
+            due = self.clock.now() + self.refresh      # period from start to start
             with self._lock:
                 command, stamp = self._command, self._command_time
                 if any(command) and self.clock.now() - stamp >= self.deadman:
@@ -126,7 +127,7 @@ class RobotinoRestBackend(Backend):
                 zero_sent = False
             elif not zero_sent:
                 zero_sent = self._post(command)
-            self._wake.wait(self.refresh)
+            self._wake.wait(max(0.0, due - self.clock.now()))
             self._wake.clear()
 
     # -- sensors --------------------------------------------------------------
