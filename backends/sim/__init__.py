@@ -82,7 +82,7 @@ from __future__ import annotations
 import importlib
 
 _EXPORTS = {
-    "World": "world", "SlotEvent": "world", "PERCEPTION_MODES": "world",
+    "World": "world", "SlotEvent": "stationapi", "PERCEPTION_MODES": "world",
     "SimBackend": "backend",
     "RobotConfig": "robot", "SimRobot": "robot", "Collision": "robot",
     "FieldLayout": "layout", "MachinePlacement": "layout", "LayoutError": "layout",

@@ -10,14 +10,13 @@ the same calls give bit-identical trajectories and sensor noise.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from rll_bt.backend import Pose2D
 from rll_bt.clock import SimClock
-from rll_bt.rules import TEAMS, WORKPIECE, Profile
+from rll_bt.rules import TEAMS, Profile
 from rll_bt import rules
 
 from . import oracle, sensors
@@ -27,9 +26,10 @@ from .collide import Box2D, ObstacleGrid
 from .fieldgeom import WALL_HEIGHT, floor_rect, start_pose, walls
 from .layout import FieldLayout, generate_layout
 from .robot import Collision, RobotConfig, SimRobot
+from .handling import GripperHandling
+from .stationapi import SlotEvent, StationAPI
 from .stations import Station
-from .store import SlotError, WorkpieceStore, grab_height, horizontal
-from .workpieces import Location, Workpiece
+from .store import WorkpieceStore
 
 PERCEPTION_MODES = ("oracle", "rendered")
 STATION_GROUP = 1
@@ -37,22 +37,9 @@ ROBOT_COLORS = {"CYAN": (0.1, 0.8, 0.9, 1.0), "MAGENTA": (0.9, 0.2, 0.7, 1.0)}
 MAST_RADIUS, MAST_TOP, MAST_X = 0.10, 1.0, -0.05
 CONTACT_GAP = 0.005          # a bumper feels anything closer than this, metres
 GRID_PAD = 0.5               # largest robot radius the collision grid serves, metres
-_KEEP = object()
 
 
-@dataclass(frozen=True)
-class SlotEvent:
-    """A robot put a workpiece at a station slot (``kind="put"``) or took one
-    from it (``kind="take"``)."""
-    kind: str
-    machine: str
-    slot: str
-    workpiece: Workpiece
-    robot: tuple[str, int]
-    time: float
-
-
-class World:
+class World(StationAPI, GripperHandling):
     """See the module and package docstrings."""
 
     def __init__(self, profile: str | Profile | None = None, seed: int = 0, *,
@@ -355,149 +342,6 @@ class World:
         if name is None:
             name = next((f"robot {r.name}" for r in self.robots.values() if r.body == hit[0]), "wall")
         return name, hit[2] * length
-
-    # -- gripper ------------------------------------------------------------
-    def gripper_point(self, r: SimRobot, bottom: bool = False) -> tuple[float, float, float]:
-        """The gripper point in the field frame (``bottom``: where the bottom
-        of a held workpiece is)."""
-        gx, gy, gz = r.gripper.position
-        fx = r.config.geometry.gripper_reach + gx
-        c, s = math.cos(r.pose.theta), math.sin(r.pose.theta)
-        z = gz - WORKPIECE.base_height / 2.0 if bottom else gz
-        return (r.pose.x + c * fx - s * gy, r.pose.y + s * fx + c * gy, z)
-
-    def _grab(self, r: SimRobot) -> None:
-        if r.holding is not None:
-            return
-        gp = self.gripper_point(r)
-        cfg = r.config
-        best, best_d = None, math.inf
-        for wp_id, pos in self.store.loose():
-            d = horizontal(gp, pos)
-            if d <= cfg.grab_tolerance and abs(gp[2] - grab_height(pos)) <= cfg.grab_tolerance_z and d < best_d:
-                best, best_d = wp_id, d
-        if best is None:
-            return
-        if cfg.grab_failure > 0.0 and r.rng.random() < cfg.grab_failure:
-            return
-        loc = self.store.location(best)
-        wp = self.store.hold(best, r.key, self.gripper_point(r, bottom=True))
-        r.holding = best
-        if loc.kind == "slot":
-            self._events.append(SlotEvent("take", loc.machine, loc.slot, wp, r.key, self.time))
-
-    def _release(self, r: SimRobot) -> None:
-        if r.holding is None:
-            return
-        gp = self.gripper_point(r)
-        cfg = r.config
-        best, best_d = None, math.inf
-        for st in self._station_list:
-            if math.hypot(gp[0] - st.pose.x, gp[1] - st.pose.y) > 1.0:
-                continue
-            for slot in st.slots:
-                sp = self.store.slot_position(st.name, slot, 0)
-                d = horizontal(gp, sp)
-                if (d <= cfg.place_tolerance and abs(gp[2] - grab_height(sp)) <= cfg.place_tolerance_z
-                        and d < best_d and self.store.free_capacity(st.name, slot) > 0):
-                    best, best_d = (st.name, slot), d
-        wp = self.store.get(r.holding)
-        r.holding = None
-        if best is None:
-            self.store.put_floor(wp, gp[0], gp[1])
-            return
-        self.store.put(wp, *best)
-        self._events.append(SlotEvent("put", best[0], best[1], wp, r.key, self.time))
-
-    def held_workpiece(self, team: str, number: int) -> Workpiece | None:
-        r = self.robot(team, number)
-        return None if r.holding is None else self.store.get(r.holding)
-
-    # -- stations: the referee box's handles ----------------------------------
-    def station(self, machine: str) -> Station:
-        return self.store.station(machine)
-
-    @property
-    def machines(self) -> list[str]:
-        return sorted(self.stations)
-
-    def set_lights(self, machine: str, *, red: str = "OFF", yellow: str = "OFF", green: str = "OFF") -> None:
-        """Set all three lights of a station ("OFF", "ON" or "BLINK")."""
-        self.station(machine).set_lights(RED=red, YELLOW=yellow, GREEN=green)
-        if self.gui:
-            self._show_lights()
-
-    def lights(self, machine: str) -> dict[str, str]:
-        """The station's light settings, e.g. {"RED": "OFF", "YELLOW": "BLINK", "GREEN": "ON"}."""
-        return dict(self.station(machine).lights)
-
-    def visible_light_code(self, machine: str) -> int:
-        """Lights lit right now (blink phase applied) as green 1 + yellow 2 + red 4."""
-        return self.station(machine).light_code(self.time, self.blink_hz)
-
-    def spawn_workpiece(self, machine: str, slot: str, base: str, rings=(), cap: str | None = None) -> Workpiece:
-        """A new workpiece at a station slot (e.g. a base dispensed at the BS output)."""
-        wp = Workpiece(self.store.new_id(), base, tuple(rings), cap)
-        return self.store.put(wp, machine, slot)
-
-    def spawn_workpiece_on_floor(self, x: float, y: float, base: str, rings=(), cap: str | None = None) -> Workpiece:
-        wp = Workpiece(self.store.new_id(), base, tuple(rings), cap)
-        return self.store.put_floor(wp, x, y)
-
-    def remove_workpiece(self, machine: str, slot: str, workpiece_id: int | None = None) -> Workpiece | None:
-        """Take a workpiece out of the world (the first at the slot, or the
-        given one); None when the slot is empty."""
-        return self.store.take(machine, slot, workpiece_id)
-
-    def modify_workpiece(self, machine: str, slot: str, *, add_ring: str | None = None,
-                         rings=None, cap=_KEEP) -> Workpiece:
-        """Change the workpiece at a slot: ``add_ring`` mounts a ring on top,
-        ``rings`` replaces the ring list, ``cap`` sets the cap colour (None
-        removes the cap: a cap retrieved).  Returns the new description."""
-        here = self.store.at(machine, slot)
-        if not here:
-            raise SlotError(f"{machine} {slot} is empty")
-        wp = here[0]
-        if rings is not None:
-            wp = Workpiece(wp.id, wp.base, tuple(rings), wp.cap)
-        if add_ring is not None:
-            wp = wp.with_ring(add_ring)
-        if cap is not _KEEP:
-            wp = wp.with_cap(cap)
-        return self.store.replace(wp)
-
-    def move_workpiece(self, machine: str, src: str, dst: str) -> Workpiece:
-        """Move the workpiece at ``src`` to ``dst`` of the same station (the
-        conveyor carrying it from input to output)."""
-        here = self.store.at(machine, src)
-        if not here:
-            raise SlotError(f"{machine} {src} is empty")
-        return self.store.put(here[0], machine, dst)
-
-    def workpiece_at(self, machine: str, slot: str) -> Workpiece | None:
-        here = self.store.at(machine, slot)
-        return here[0] if here else None
-
-    def workpieces_at(self, machine: str, slot: str) -> tuple[Workpiece, ...]:
-        return self.store.at(machine, slot)
-
-    def workpieces(self) -> list[tuple[Workpiece, Location]]:
-        """Every workpiece in the world and where it is."""
-        return self.store.all()
-
-    def add_slot_listener(self, fn: Callable[[SlotEvent], None]) -> None:
-        """Call ``fn(event)`` after each step in which a robot put a workpiece
-        at a slot or took one from it (events in order of occurrence)."""
-        self._listeners.append(fn)
-
-    def remove_slot_listener(self, fn: Callable[[SlotEvent], None]) -> None:
-        self._listeners.remove(fn)
-
-    def _fire_events(self) -> None:
-        while self._events:
-            ev = self._events.pop(0)
-            for fn in list(self._listeners):
-                fn(ev)
 
     # -- life cycle ---------------------------------------------------------
     @property
