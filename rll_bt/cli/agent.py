@@ -26,14 +26,13 @@ EXIT_OK, EXIT_INTERRUPTED = 0, 130
 
 
 def _hostport(text: str) -> tuple[str, int]:
+    """HOST:PORT, or HOST alone for the default port."""
     host, sep, port = text.rpartition(":")
     if not sep:
-        host, port = text, ""
-    if not host:
-        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
-    if not port:
         from ..comm import TEAM_SERVER_PORT
-        return host, TEAM_SERVER_PORT
+        host, port = text, str(TEAM_SERVER_PORT)
+    if not host or not port:
+        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
     return host, _port(port)
 
 
