@@ -11,10 +11,11 @@ zone search is :meth:`ObservationFeed.zone_searched`.  An object with
 ``subscribe(callback)`` (the skills' machine map) can be attached so its
 observations flow in by themselves.
 
-Only changes go out: a station's first sighting, a new zone, orientation,
-light pattern, type or name, a pose that moved more than ``pose_tolerance``
-metres or ``angle_tolerance`` radians, or a confidence that rose by
-``confidence_step``.  The agent drains the queue into the team-server
+Only changes go out: a station's first sighting, a new zone, light
+pattern or type, a pose that moved more than ``pose_tolerance`` metres or
+turned more than ``angle_tolerance`` radians (the orientation likewise), or
+a confidence that rose by ``confidence_step``.  Sightings with confidence 0
+say nothing and are dropped.  The agent drains the queue into the team-server
 link on every step; while the link is down the queue keeps the latest
 ``max_queue`` messages.
 """
@@ -119,6 +120,8 @@ class ObservationFeed:
         if orientation is None and pose is not None:
             orientation = int(round(math.degrees(pose.theta))) % 360
         conf = max(0.0, min(1.0, float(confidence)))
+        if conf <= 0.0:                  # says nothing
+            return False
         new = _Sent(pose, None if zone is None else int(zone), None if orientation is None else int(orientation),
                     None if lights is None else int(lights), type, conf)
         if not self._changed(self._sent.get(name), new):
@@ -191,9 +194,15 @@ class ObservationFeed:
     def _changed(self, old: _Sent | None, new: _Sent) -> bool:
         if old is None:
             return True
-        for attr in ("zone", "orientation", "pattern", "type"):
+        for attr in ("zone", "pattern", "type"):
             v = getattr(new, attr)
             if v is not None and v != getattr(old, attr):
+                return True
+        if new.orientation is not None:
+            if old.orientation is None:
+                return True
+            turned = abs((new.orientation - old.orientation + 180) % 360 - 180)
+            if turned > math.degrees(self.angle_tolerance):
                 return True
         if new.pose is not None:
             if old.pose is None:

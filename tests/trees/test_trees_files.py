@@ -1,0 +1,89 @@
+"""Every file in ``trees/`` validates, there is a tree for every task kind
+of the team protocol, and each tree takes exactly the task fields the
+agent gives it."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from rll_bt import msgs, rules
+from rll_bt.agent import TREE_KINDS, default_trees_dir, task_params
+from rll_bt.cli import main
+from rll_bt.tree import default_registry, parse_tree
+
+TREES = Path(__file__).resolve().parents[2] / "trees"
+ALL_FILES = sorted(TREES.rglob("*.yaml"))
+TM = msgs.message_set("team")
+
+#: one sample task per kind, as the team server sends them
+SAMPLES = {
+    "explore_zone": dict(zone=6),
+    "get_workpiece": dict(machine="C-CS1", side=TM.MachineSide.Value("SHELF"), shelf_slot=1),
+    "put_workpiece": dict(machine="C-RS1", side=TM.MachineSide.Value("SLIDE")),
+    "retrieve_cap": dict(machine="C-CS1", shelf_slot=0),
+    "mount_ring": dict(machine="C-RS1", ring_color=2),
+    "mount_cap": dict(machine="C-CS2", cap_color=1),
+    "deliver": dict(machine="C-DS", gate=3),
+    "discard": dict(),
+}
+
+
+def sample_params(kind: str) -> dict:
+    t = TM.Task(team_color=0, task_id=1, robot_id=1)
+    getattr(t, kind).SetInParent()
+    for k, v in SAMPLES[kind].items():
+        setattr(getattr(t, kind), k, v)
+    return task_params(t, rules.profile("rcll2016"))
+
+
+def test_the_agent_finds_these_trees():
+    assert default_trees_dir().resolve() == TREES
+
+
+@pytest.mark.parametrize("kind", TREE_KINDS)
+def test_a_tree_for_every_task_kind(kind):
+    assert (TREES / f"{kind}.yaml").is_file()
+
+
+@pytest.mark.parametrize("path", ALL_FILES, ids=lambda p: str(p.relative_to(TREES)))
+def test_every_file_validates(path):
+    spec = parse_tree(path)
+    assert spec.count() > 0
+
+
+def test_the_cli_validates_them_all(capsys):
+    assert main(["tree", "validate", *map(str, ALL_FILES)]) == 0
+    out = capsys.readouterr().out
+    assert out.count(": ok") == len(ALL_FILES)
+
+
+@pytest.mark.parametrize("kind", TREE_KINDS)
+def test_each_tree_loads_with_the_fields_the_agent_gives(kind):
+    params = sample_params(kind)
+    spec = parse_tree(TREES / f"{kind}.yaml", task=params, strict=True)
+    assert set(spec.task) <= set(params), f"{kind}.yaml declares fields the agent never gives"
+
+
+def test_the_trees_use_skill_nodes_and_recoveries():
+    used: dict[str, set[str]] = {}
+    for kind in TREE_KINDS:
+        spec = parse_tree(TREES / f"{kind}.yaml")
+        types = set()
+
+        def walk(ns):
+            types.add(ns.type)
+            for kids in ns.slots.values():
+                for k in kids:
+                    walk(k)
+        walk(spec.root)
+        used[kind] = types
+        assert "recovery" in types, f"{kind} has no recovery"
+        assert {"stop_robot", "fail_with_error"} <= types, f"{kind} has no final give-up branch"
+    skills = {name for name, nt in default_registry().types().items() if nt.module.startswith("skills")}
+    assert used["explore_zone"] >= {"explore_zone", "relocalise", "back_off", "localised"} and \
+        used["explore_zone"] & skills
+    for kind in ("get_workpiece", "retrieve_cap"):
+        assert used[kind] >= {"approach_station", "grab", "holding_workpiece", "back_off", "relocalise"}
+    for kind in ("put_workpiece", "mount_ring", "mount_cap", "deliver", "retrieve_cap", "discard"):
+        assert used[kind] >= {"approach_station", "put", "holding_workpiece", "back_off", "relocalise"}
