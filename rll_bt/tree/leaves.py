@@ -73,30 +73,29 @@ class UnsetBlackboard(Node):
         return Status.SUCCESS
 
 
-@node_type("check_blackboard")
-class CheckBlackboard(Node):
-    """SUCCESS when ``condition`` holds, else FAILURE.  The condition is an
-    expression over blackboard keys such as ``"holding == true and attempts < 3"``."""
-    kind = "condition"
+class _ExprNode(Node):
+    """Shared by the nodes that test a condition expression."""
     condition = Input(EXPR, "the condition expression", constant=True)
 
     def __init__(self, name, ports, ctx):
         super().__init__(name, ports, ctx)
         self._fn = self.condition.bind(self._bb)
+
+
+@node_type("check_blackboard")
+class CheckBlackboard(_ExprNode):
+    """SUCCESS when ``condition`` holds, else FAILURE.  The condition is an
+    expression over blackboard keys such as ``"holding == true and attempts < 3"``."""
+    kind = "condition"
 
     def update(self) -> Status:
         return Status.SUCCESS if self._fn() else Status.FAILURE
 
 
 @node_type("wait_for_blackboard")
-class WaitForBlackboard(Node):
+class WaitForBlackboard(_ExprNode):
     """RUNNING until ``condition`` holds, then SUCCESS (wrap in ``timeout`` to bound it)."""
-    condition = Input(EXPR, "the condition expression", constant=True)
     preempts = False
-
-    def __init__(self, name, ports, ctx):
-        super().__init__(name, ports, ctx)
-        self._fn = self.condition.bind(self._bb)
 
     def update(self) -> Status:
         return Status.SUCCESS if self._fn() else Status.RUNNING

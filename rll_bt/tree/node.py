@@ -66,6 +66,7 @@ class Node(py_trees.behaviour.Behaviour):
     requires_services: ClassVar[tuple[str, ...]] = ()
     requires_capabilities: ClassVar[Capability] = Capability.NONE
     node_type: ClassVar[str] = ""
+    _preempts: ClassVar[bool] = True
     ports: ClassVar[dict[str, Port]] = {}
 
     def __init_subclass__(cls, **kw) -> None:
@@ -81,8 +82,9 @@ class Node(py_trees.behaviour.Behaviour):
         cls.ports = ports
         if cls.kind not in ("action", "condition"):
             raise TypeError(f"{cls.__name__}: kind must be 'action' or 'condition', not {cls.kind!r}")
-        if "preempts" not in vars(cls) or cls.preempts is None:
-            cls.preempts = cls.kind == "action" if cls.preempts is None else cls.preempts
+        explicit = next((k.__dict__["preempts"] for k in cls.__mro__
+                         if k.__dict__.get("preempts") is not None), None)
+        cls._preempts = (cls.kind == "action") if explicit is None else bool(explicit)
 
     def __init__(self, name: str, ports: BoundPorts, ctx: RunContext):
         super().__init__(name)
@@ -131,7 +133,7 @@ class Node(py_trees.behaviour.Behaviour):
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """py_trees' tick contract, plus halt-before-start for preempting nodes."""
         if self.status is not _RUNNING:
-            if self.preempts:
+            if self._preempts:
                 self.halt_abandoned_branches()
             self.initialise()
         new_status = self.update()

@@ -160,30 +160,20 @@ def register_type(name: str, pytype: Any, coerce: Callable[[Any], Any] | None = 
     return t
 
 
-def _list_of(item: PortType) -> PortType:
-    name = f"list[{item.name}]"
+def _container(kind: str, item: PortType) -> PortType:
+    """``list[item]`` or ``dict[item]`` (text keys)."""
+    name = f"{kind}[{item.name}]"
     if name not in _BY_NAME:
         def coerce(v, _i=item):
-            out = _c_list(v)
             try:
-                return [_i.coerce(x) for x in out]
+                if kind == "list":
+                    return [_i.coerce(x) for x in _c_list(v)]
+                return {str(k): _i.coerce(x) for k, x in _c_dict(v).items()}
             except PortTypeError as exc:
-                raise PortTypeError(f"{name} item: {exc}") from None
-        _BY_NAME[name] = PortType(name, coerce, {"type": "array", "items": item.schema}, list, item.literal)
-    return _BY_NAME[name]
-
-
-def _dict_of(item: PortType) -> PortType:
-    name = f"dict[{item.name}]"
-    if name not in _BY_NAME:
-        def coerce(v, _i=item):
-            out = _c_dict(v)
-            try:
-                return {str(k): _i.coerce(x) for k, x in out.items()}
-            except PortTypeError as exc:
-                raise PortTypeError(f"{name} value: {exc}") from None
-        _BY_NAME[name] = PortType(name, coerce, {"type": "object", "additionalProperties": item.schema},
-                                  dict, item.literal)
+                raise PortTypeError(f"{name} element: {exc}") from None
+        schema = ({"type": "array", "items": item.schema} if kind == "list"
+                  else {"type": "object", "additionalProperties": item.schema})
+        _BY_NAME[name] = PortType(name, coerce, schema, list if kind == "list" else dict, item.literal)
     return _BY_NAME[name]
 
 
@@ -195,18 +185,18 @@ def port_type(spec: Any) -> PortType:
         s = spec.strip()
         if s in _BY_NAME:
             return _BY_NAME[s]
-        for prefix, make in (("list[", _list_of), ("dict[", _dict_of)):
-            if s.startswith(prefix) and s.endswith("]"):
-                return make(port_type(s[len(prefix):-1]))
+        for kind in ("list", "dict"):
+            if s.startswith(kind + "[") and s.endswith("]"):
+                return _container(kind, port_type(s[len(kind) + 1:-1]))
         raise KeyError(s)
     if spec in _BY_PY:
         return _BY_PY[spec]
     origin = typing.get_origin(spec)
     args = typing.get_args(spec)
     if origin is list and len(args) == 1:
-        return _list_of(port_type(args[0]))
+        return _container("list", port_type(args[0]))
     if origin is dict and len(args) == 2 and args[0] is str:
-        return _dict_of(port_type(args[1]))
+        return _container("dict", port_type(args[1]))
     if isinstance(spec, type):
         return register_type(spec.__name__, spec)
     raise TypeError(f"cannot use {spec!r} as a port type")

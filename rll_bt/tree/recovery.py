@@ -86,10 +86,7 @@ class Recovery(py_trees.composites.Composite):
                     clear_error(self.bb)
                 self.stop(_S)
             elif st is _F:
-                if self._escalate():
-                    self.status = _R
-                else:
-                    self._fail()
+                self._after_failure()
             else:
                 self.status = _R
         else:
@@ -103,15 +100,17 @@ class Recovery(py_trees.composites.Composite):
                 self._phase = "action"
                 self.status = _R
             elif st is _F:
-                # a failed recovery escalates at once
-                self.round = self.retries
-                if self._escalate():
-                    self.status = _R
-                else:
-                    self._fail()
+                self.round = self.retries      # a failed recovery escalates at once
+                self._after_failure()
             else:
                 self.status = _R
         yield self
+
+    def _after_failure(self) -> None:
+        if self._escalate():
+            self.status = _R
+        else:
+            self._fail()
 
     def stop(self, new_status: Status = _I) -> None:
         for child in self.children:

@@ -54,16 +54,21 @@ def clock():
     return SimClock()
 
 
+def _write(tmp_path, text, files, name):
+    for fname, body in (files or {}).items():
+        p = tmp_path / fname
+        p.parent.mkdir(parents=True, exist_ok=True)
+        p.write_text(textwrap.dedent(body))
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
 @pytest.fixture
 def make(tmp_path, registry, clock):
     """make(yaml_text, task=..., files={name: text}) -> (tree, events)"""
     def _make(text, task=None, params=None, files=None, name="tree.yaml"):
-        for fname, body in (files or {}).items():
-            p = tmp_path / fname
-            p.parent.mkdir(parents=True, exist_ok=True)
-            p.write_text(textwrap.dedent(body))
-        path = tmp_path / name
-        path.write_text(textwrap.dedent(text))
+        path = _write(tmp_path, text, files, name)
         events: list[str] = []
         ctx = RunContext(clock=clock, task=task or {}, services={"events": events})
         tree = load_tree(path, task=task or {}, params=params, ctx=ctx, registry=registry)
@@ -77,12 +82,7 @@ def check(tmp_path, registry):
     from rll_bt.tree import TreeLoadError
 
     def _check(text, files=None, name="tree.yaml", task=None):
-        for fname, body in (files or {}).items():
-            p = tmp_path / fname
-            p.parent.mkdir(parents=True, exist_ok=True)
-            p.write_text(textwrap.dedent(body))
-        path = tmp_path / name
-        path.write_text(textwrap.dedent(text))
+        path = _write(tmp_path, text, files, name)
         try:
             parse_tree(path, registry=registry, task=task, strict=task is not None)
         except TreeLoadError as exc:
