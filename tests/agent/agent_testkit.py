@@ -159,7 +159,7 @@ class Rig:
 
     def __init__(self, link, server: ScriptedServer, clock: SimClock | None = None, *, backend=None,
                  public=None, team=None, dt: float = 0.05, real_wait: float = 0.0, restarted: bool = True,
-                 services=None, **config):
+                 services=None, registry=REGISTRY, **config):
         self.clock = clock or SimClock()
         self.backend = backend or ScriptedBackend(clock=self.clock)
         self.server = server
@@ -167,7 +167,7 @@ class Rig:
         cfg = dict(robot_id=1, team_name=TEAM, trees_dir=TREES)
         cfg.update(config)
         self.agent = RobotAgent(AgentConfig(**cfg), clock=self.clock, backend=self.backend, link=link,
-                                public=public, team=team, registry=REGISTRY, restarted=restarted,
+                                public=public, team=team, registry=registry, restarted=restarted,
                                 services=services)
         self.extra: list = []           # more things to step each round (callables)
 

@@ -1,0 +1,164 @@
+"""The real task trees on the scripted backend, with scripted doubles of the
+skill nodes: every task kind succeeds, and the recovery branches fire in
+their order on injected failures (an empty gripper after a grab, drive
+faults, a lost pose), ending with the error code the team server gets."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "agent"))
+
+from agent_testkit import KEY, TEAM_REG, TM, Rig, ScriptedServer  # noqa: E402
+from backends.scripted import ScriptedBackend  # noqa: E402
+from rll_bt.clock import SimClock  # noqa: E402
+from rll_bt.comm import Bus  # noqa: E402
+from trees_doubles import CALLS, REGISTRY, Hands, calls  # noqa: E402
+
+TREES = Path(__file__).resolve().parents[2] / "trees"
+SIDE = TM.MachineSide.Value
+
+
+def make(holding=False, misses=0, stuck=0, **script):
+    CALLS.clear()
+    clock = SimClock()
+    bus = Bus(clock)
+    backend = ScriptedBackend(dict(script), clock=clock)
+    srv = ScriptedServer(bus.stream_server("ts", registry=TEAM_REG, key=KEY))
+    rig = Rig(bus.stream_client("ts", registry=TEAM_REG, key=KEY), srv, clock, backend=backend,
+              registry=REGISTRY, trees_dir=TREES)
+    rig.hands = Hands(backend, holding, misses, stuck)
+    rig.extra.append(rig.hands)
+    rig.until(lambda: rig.agent.gate.moving_allowed, what="game running")
+    return rig
+
+
+def run(rig, kind, seconds=120.0, **fields):
+    rig.server.next = getattr(rig.server, "next", 0) + 1
+    tid = rig.server.next
+    rig.server.task(tid, kind, **fields)
+    rig.until(lambda: [r for r in rig.server.results(tid) if r.status != TM.TaskResult.RUNNING],
+              seconds=seconds, what=f"{kind} finished")
+    return [r for r in rig.server.results(tid) if r.status != TM.TaskResult.RUNNING][-1]
+
+
+def outcome(res) -> tuple[str, str]:
+    return TM.TaskResult.Status.Name(res.status), TM.ErrorCode.Name(res.error)
+
+
+def skills_called() -> list[str]:
+    return [k for k, _v in CALLS if k != "localised"]
+
+
+@pytest.mark.parametrize("kind, fields, holding, after", [
+    ("explore_zone", dict(zone=6), False, False),
+    ("get_workpiece", dict(machine="C-BS"), False, True),
+    ("get_workpiece", dict(machine="C-CS1", side=SIDE("SHELF"), shelf_slot=2), False, True),
+    ("put_workpiece", dict(machine="C-RS1", side=SIDE("SLIDE")), True, False),
+    ("retrieve_cap", dict(machine="C-CS2", shelf_slot=1), False, False),
+    ("mount_ring", dict(machine="C-RS2", ring_color=1), True, False),
+    ("mount_cap", dict(machine="C-CS1"), True, False),
+    ("deliver", dict(machine="C-DS", gate=1), True, False),
+    ("discard", dict(), True, False),
+    ("discard", dict(machine="C-RS1", side=SIDE("SLIDE")), True, False),
+])
+def test_every_task_kind_succeeds(kind, fields, holding, after):
+    rig = make(holding=holding)
+    res = run(rig, kind, **fields)
+    assert outcome(res) == ("SUCCEEDED", "NONE"), res.text
+    assert rig.backend.holding() is after and res.HasField("holding") is after
+    assert rig.drives()[-1][1] == "stop"
+
+
+def test_retrieve_cap_takes_from_the_shelf_and_feeds_the_input():
+    rig = make()
+    run(rig, "retrieve_cap", machine="C-CS2", shelf_slot=1)
+    places = [(v["side"], v.get("shelf_slot")) for k, v in CALLS if k in ("grab", "put")]
+    assert places == [("SHELF", 1), ("INPUT", 0)]
+
+
+def test_an_empty_gripper_after_the_grab_re_aligns_and_retries():
+    rig = make(misses=1)
+    res = run(rig, "get_workpiece", machine="C-BS")
+    assert outcome(res) == ("SUCCEEDED", "NONE")
+    assert skills_called() == ["approach_station", "grab", "back_off", "approach_station", "grab"]
+    assert calls("back_off")[0][1]["distance"] == 0.2
+    assert rig.hands.closes == 2
+
+
+def test_a_grab_that_never_holds_escalates_and_reports_grab_failed():
+    rig = make(misses=99)
+    res = run(rig, "get_workpiece", machine="C-BS")
+    assert outcome(res) == ("FAILED", "GRAB_FAILED")
+    assert skills_called() == ["approach_station", "grab",
+                               "back_off", "approach_station", "grab",                 # re-align and retry
+                               "back_off", "relocalise", "approach_station", "grab"]   # back off, re-localise
+    assert [v["distance"] for _k, v in calls("back_off")] == [0.2, 0.5]
+    assert not res.HasField("holding") and rig.drives()[-1][1] == "stop"
+
+
+def test_a_navigation_failure_backs_off_and_replans():
+    rig = make(faults=[{"method": "drive", "call": 1, "message": "wheel slip"}])
+    res = run(rig, "get_workpiece", machine="C-BS")
+    assert outcome(res) == ("SUCCEEDED", "NONE")
+    assert skills_called() == ["approach_station", "back_off", "approach_station", "grab"]
+    assert calls("back_off")[0][1]["distance"] == 0.4
+
+
+def test_navigation_that_never_works_ends_in_navigation_failed():
+    rig = make(holding=True, faults=[{"method": "drive", "after": 0.0, "message": "motor fault"}])
+    res = run(rig, "put_workpiece", machine="C-RS1")
+    assert outcome(res) == ("FAILED", "NAVIGATION_FAILED")
+    assert skills_called() == ["approach_station", "back_off", "approach_station",
+                               "relocalise", "relocalise", "approach_station"]
+    assert "motor fault" in res.text
+    assert rig.drives()[-1][1] == "stop"
+
+
+def test_a_lost_pose_is_recovered_before_the_task():
+    rig = make(readings={"confidence": [{"t": 0.0, "value": 0.05}]})
+    res = run(rig, "get_workpiece", machine="C-BS")
+    assert outcome(res) == ("SUCCEEDED", "NONE")
+    assert [k for k, _v in CALLS][:3] == ["localised", "relocalise", "approach_station"]
+
+
+def test_a_put_that_does_not_let_go_reports_put_failed():
+    rig = make(holding=True, stuck=99)
+    res = run(rig, "mount_cap", machine="C-CS1")
+    assert outcome(res) == ("FAILED", "PUT_FAILED")
+    assert skills_called().count("put") == 3 and res.HasField("holding")
+
+
+def test_a_lost_workpiece_is_reported_before_driving():
+    rig = make(holding=False)
+    res = run(rig, "deliver", machine="C-DS", gate=1)
+    assert outcome(res) == ("FAILED", "PUT_FAILED") and "lost" in res.text
+    assert skills_called() == []
+
+
+@pytest.mark.parametrize("kind, machine", [("deliver", "C-RS1"), ("mount_ring", "C-CS1"), ("mount_cap", "C-BS"),
+                                           ("retrieve_cap", "C-RS2")])
+def test_the_wrong_kind_of_station_is_an_invalid_task(kind, machine):
+    rig = make(holding=True)
+    fields = dict(machine=machine)
+    if kind == "retrieve_cap":
+        fields["shelf_slot"] = 0
+    if kind == "mount_ring":
+        fields["ring_color"] = 1
+    res = run(rig, kind, **fields)
+    assert outcome(res) == ("FAILED", "INVALID_TASK") and skills_called() == []
+
+
+def test_a_pause_after_the_grab_does_not_grab_again():
+    rig = make()
+    rig.server.task(1, "get_workpiece", machine="C-BS")
+    rig.until(lambda: rig.hands.closes == 1, what="gripper closed")
+    rig.run(1.5)                                          # the grab is done, the task not yet reported
+    rig.server.send_phase("PAUSED")
+    rig.run(1.0)
+    assert rig.drives()[-1][1] == "stop"
+    rig.server.send_phase("RUNNING")
+    rig.until(lambda: rig.server.results(1, "SUCCEEDED"), what="done after the pause")
+    assert skills_called().count("grab") == 1
