@@ -42,7 +42,6 @@ ZONE_MARGIN_2016 = 0.1     # footprint to zone edge, metres
 MIN_STATION_GAP = 0.6      # between two footprints, so a robot fits through
 MIN_APPROACH_CLEARANCE = 0.3
 MAX_TRIES = 500
-TRIES_PER_MACHINE = 40
 
 
 class LayoutError(RuntimeError):
@@ -190,31 +189,41 @@ def placement_2016(profile: Profile, rng: random.Random, *, margin: float = ZONE
         if m not in cyan and profile.mirror_zone(fixed[mirror_machine_name(m)]) != z:
             raise LayoutError(f"{profile.name}: fixed zone of {m} is not the mirror of its twin's")
     free = [z for z in profile.machine_zones(CYAN) if z not in fixed.values()]
+    loose = [m for m in cyan if m not in fixed]
+    zones: dict[str, int] = {}
+
+    def begin() -> None:              # each try draws the zones first, then the poses
+        zones.clear()
+        zones.update(fixed)
+        zones.update(zip(loose, rng.sample(free, len(loose))))
 
     def draw(machine: str, placed: list[MachinePlacement]) -> MachinePlacement:
-        used = {pl.zone for pl in placed}
-        zone = fixed.get(machine) or rng.choice([z for z in free if z not in used])
         rot = _random_rotation(profile, rng)
-        x, y = _pose_in_zone_2016(profile, zone, rot, rng, margin)
-        return _placement(machine, zone, rot, x, y)
+        x, y = _pose_in_zone_2016(profile, zones[machine], rot, rng, margin)
+        return _placement(machine, zones[machine], rot, x, y)
 
-    return _generate(profile, rng, seed, draw, keep_xy=True)
+    return _generate(profile, rng, seed, draw, keep_xy=True, tries=50, begin=begin)
 
 
-def _generate(profile: Profile, rng: random.Random, seed: int | None, draw, keep_xy: bool) -> FieldLayout:
+def _generate(profile: Profile, rng: random.Random, seed: int | None, draw, keep_xy: bool,
+              tries: int, begin=None) -> FieldLayout:
     """Place the cyan stations one by one with ``draw(machine, placed)`` (a
-    candidate, or None to give the layout up), each with its magenta twin,
-    keeping everything reachable; then swap.  Starts over when stuck."""
+    candidate, or None to give the layout up; at most ``tries`` per station),
+    each with its magenta twin, keeping everything reachable; then swap.
+    Starts over (calling ``begin()`` first) when stuck."""
     for _ in range(MAX_TRIES):
+        if begin:
+            begin()
         placed: list[MachinePlacement] = []
-        if all(_place_pair(profile, m, placed, draw, keep_xy) for m in profile.machines(CYAN)):
+        if all(_place_pair(profile, m, placed, draw, keep_xy, tries) for m in profile.machines(CYAN)):
             machines = {pl.machine: pl for pl in placed}
             return FieldLayout(profile.name, machines, seed, _swap(profile, machines, rng))
     raise LayoutError(f"{profile.name}: no reachable layout found in {MAX_TRIES} tries")
 
 
-def _place_pair(profile: Profile, machine: str, placed: list[MachinePlacement], draw, keep_xy: bool) -> bool:
-    for _ in range(TRIES_PER_MACHINE):
+def _place_pair(profile: Profile, machine: str, placed: list[MachinePlacement], draw, keep_xy: bool,
+                tries: int) -> bool:
+    for _ in range(tries):
         pl = draw(machine, placed)
         if pl is None:
             return False
@@ -253,7 +262,7 @@ def placement_2025(profile: Profile, rng: random.Random, *, seed: int | None = N
         x, y = profile.zone_centre(zone)
         return _placement(machine, zone, _random_rotation(profile, rng), x, y)
 
-    return _generate(profile, rng, seed, draw, keep_xy=False)
+    return _generate(profile, rng, seed, draw, keep_xy=False, tries=30)
 
 
 def generate_layout(profile: Profile | str | None = None, seed: int = 0) -> FieldLayout:
