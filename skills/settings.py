@@ -16,6 +16,7 @@ class ManipulationSettings:
     ``coarse_distance`` and covers the rest by laser (``final_distance``).
     """
     coarse_distance: float = 0.62
+    tag_min_distance: float = 0.57   # closer, the camera no longer sees the whole tag
     final_distance: float = 0.27      # 4.5 cm between the robot and the face
     slot_inset: float = 0.03          # a slot's centre lies this far inside the face
     align_tolerance: float = 0.008    # m, lateral and along the tag normal
@@ -44,6 +45,7 @@ class SkillSettings:
     heading_tolerance: float = 0.05   # rad
     safety_margin: float = 0.08       # m, kept free around the robot by the laser check
     blind_speed: float = 0.2          # m/s, top speed toward where the laser cannot see
+    closing_speed: float = 0.5        # m/s an unmapped obstacle (another robot) may approach at
     plan_padding: float = 0.05        # m, added to the robot radius in the costmap
     costmap_resolution: float = 0.05  # m
     obstacle_ttl: float = 4.0         # s, laser obstacles stay in the costmap

@@ -1,8 +1,10 @@
 """Station handling: approach a place, grab from it, put onto it.
 
 - :class:`ApproachStation`: navigate to ``coarse_distance`` in front of the
-  place (from the machine map), line up on the tag (when a tag source
-  works), dock by laser to ``final_distance``.
+  place (from the machine map; closer where a wall or station leaves less
+  room), line up on the tag (when a tag source works and the camera can
+  see the tag from there, else on the map pose), dock by laser to
+  ``final_distance``.
 - :class:`GrabFrom`: approach, open, reach in, close, pull back, check the
   gripper holds a workpiece (``GRAB_FAILED`` when it does not), back off.
 - :class:`PutOnto`: approach, reach in, open, pull back, check the gripper
@@ -14,9 +16,12 @@ already docked, e.g. on a retry after a failed grab).
 """
 from __future__ import annotations
 
+import numpy as np
+
 from ..activity import Sequence
 from ..errors import SkillError
 from ..navigation import Navigate, StationSideGoal
+from ..navigation.goals import approach_pose, feasible_distance, target_lateral
 from ..navigation.motions import MoveRelative
 from .align import AlignToTag, Dock
 from .gripper import GripperSequence
@@ -35,16 +40,24 @@ class ApproachStation(Sequence):
         self.use_tag = use_tag
         m = ctx.settings.manipulation
 
+        self.coarse = m.coarse_distance
+
         def navigate():
             check_place(place, ctx.profile)
+            pose = ctx.machines.get(place.machine)
+            if pose is not None:      # less room in front of the station: stop closer
+                d = feasible_distance(ctx, pose, place.side, m.coarse_distance, ctx.profile.mps.belt_offset_y)
+                self.coarse = m.coarse_distance if d is None else d
             # in front of the tag (it is centred under the belt), so the camera sees it
-            goal = StationSideGoal(place.machine, place.side, m.coarse_distance, "conveyor")
+            goal = StationSideGoal(place.machine, place.side, self.coarse, "conveyor")
             return Navigate(ctx, goal, position_tolerance=0.03, heading_tolerance=0.04)
 
         def align():
             use = tags_available(ctx) if self.use_tag is None else self.use_tag
+            if use and self.use_tag is None and self.coarse < m.tag_min_distance:
+                use = False           # too close for the camera to see the tag whole
             if use:
-                return AlignToTag(ctx, place, m.coarse_distance)
+                return AlignToTag(ctx, place, self.coarse)
             # without tags: the navigation pose from the machine map is the alignment
             return MoveRelative(ctx, 0.0, -lateral_offset(place, ctx.profile))
 
@@ -64,8 +77,35 @@ def _handling(ctx, place: Place, steps_fn, approach: bool, use_tag, timeout, nam
         return GripperSequence(ctx, steps_fn(x, y, z), home_z=z, name=name)
 
     factories.append(gripper)
-    factories.append(lambda: MoveRelative(ctx, -m.back_off, speed=0.2))
+
+    def back_off():
+        machine = ctx.machines.get(place.machine)
+        docked = None
+        if machine is not None:       # docked: the station and the laser know where we are
+            docked = approach_pose(machine, place.side, m.final_distance,
+                                   target_lateral(place.spot, ctx.profile.mps), ctx.profile.mps)
+        return MoveRelative(ctx, -back_off_distance(ctx, m.back_off, docked), speed=0.2)
+
+    factories.append(back_off)
     return factories
+
+
+def back_off_distance(ctx, wanted: float, pose=None, step: float = 0.01) -> float:
+    """How far the robot can back straight off from ``pose`` (default: the
+    localised pose), at most ``wanted``, at least 5 cm: the laser does not
+    see behind, so the known map decides; the robot keeps its radius plus
+    5 cm from walls and stations all the way."""
+    pose = pose or ctx.pose()
+    dist = ctx.map.distance(ctx.settings.costmap_resolution)
+    ds = np.arange(step, wanted + 1e-9, step)
+    xs = pose.x - np.cos(pose.theta) * ds
+    ys = pose.y - np.sin(pose.theta) * ds
+    clear = dist.lookup(xs, ys)
+    start = float(dist.lookup(np.array([pose.x]), np.array([pose.y]))[0])
+    need = min(ctx.robot.radius + 0.05, start)       # docked: the face in front is close
+    bad = np.nonzero(clear < need)[0]
+    far = ds[bad[0] - 1] if len(bad) and bad[0] > 0 else (0.0 if len(bad) else wanted)
+    return float(max(far, 0.05))
 
 
 class GrabFrom(Sequence):

@@ -134,6 +134,11 @@ class PathFollower:
         i = int(np.argmin(dist))
         self.progress = max(self.progress, float(s[i]))
 
+    def next_vertex(self) -> np.ndarray:
+        """The first path vertex at least 5 cm beyond the current progress."""
+        i = int(np.searchsorted(self.cum, self.progress + 0.05, side="left"))
+        return self.path[min(i, len(self.path) - 1)].copy()
+
     def point_at(self, s: float) -> np.ndarray:
         s = min(max(s, 0.0), self.length)
         i = int(np.searchsorted(self.cum, s, side="right")) - 1
@@ -166,6 +171,16 @@ class PathFollower:
         self.capped = False
         if speed_cap is not None and n > 1e-9 and d_goal > self.position_tolerance:
             cap = speed_cap(direction[0] / n, direction[1] / n)
+            if cap < 0.05 and target is not self.goal:
+                # the carrot cuts a corner the robot is hugging: head for the
+                # next waypoint instead, if that way is clearer
+                vertex = self.next_vertex()
+                alt = vertex - p
+                m = float(np.hypot(*alt))
+                if m > 1e-3:
+                    alt_cap = speed_cap(alt[0] / m, alt[1] / m)
+                    if alt_cap > cap:
+                        target, direction, n, cap = vertex, alt, m, alt_cap
             if cap < speed:
                 speed, self.capped = max(cap, 0.0), True
         self.last_speed_wanted = speed

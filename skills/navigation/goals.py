@@ -52,6 +52,29 @@ def approach_pose(machine: Pose2D, side: str, distance: float, lateral: float | 
     return machine.compose(local)
 
 
+def standing_clearance(ctx) -> float:
+    """Clearance (m) the robot needs at a goal: what the planner's costmap
+    keeps free (radius plus padding), so goal and path agree."""
+    return ctx.robot.radius + ctx.settings.plan_padding + 0.01
+
+
+def feasible_distance(ctx, machine_pose: Pose2D, side: str, distance: float, lateral: float,
+                      minimum: float = 0.40) -> float | None:
+    """The largest distance from the face, at most ``distance`` and at least
+    ``minimum``, where the robot fits in front of the station (walls and
+    other stations of the map leave room); None when none does."""
+    mps = ctx.profile.mps
+    dist = ctx.map.distance(ctx.settings.costmap_resolution)
+    need = standing_clearance(ctx)
+    ds = np.arange(distance, minimum - 1e-9, -0.02)
+    if len(ds) == 0:
+        return None
+    poses = [approach_pose(machine_pose, side, float(d), lateral, mps) for d in ds]
+    clear = dist.lookup(np.array([p.x for p in poses]), np.array([p.y for p in poses]))
+    ok = np.nonzero(clear >= need)[0]
+    return float(ds[ok[0]]) if len(ok) else None
+
+
 @dataclass(frozen=True)
 class PoseGoal:
     pose: Pose2D
@@ -102,7 +125,8 @@ class ZoneGoal:
 @dataclass(frozen=True)
 class StationSideGoal:
     """In front of ``side`` of ``machine``, facing it, ``distance`` metres
-    from the face, aligned with ``place`` (conveyor, slide, shelfN)."""
+    from the face (less where a wall or another station leaves less room,
+    down to 0.4 m), aligned with ``place`` (conveyor, slide, shelfN)."""
     machine: str
     side: str
     distance: float = 0.6
@@ -115,9 +139,14 @@ class StationSideGoal:
         mps = ctx.profile.mps
         try:
             lateral = target_lateral(self.place, mps)
-            return approach_pose(pose, self.side, self.distance, lateral, mps), True
+            side_sign(self.side)
         except ValueError as exc:
             raise SkillFailure(SkillError.INVALID_TASK, str(exc)) from None
+        d = feasible_distance(ctx, pose, self.side, self.distance, lateral)
+        if d is None:
+            raise SkillFailure(SkillError.NAVIGATION_FAILED,
+                               f"no room for the robot in front of {self.describe()}")
+        return approach_pose(pose, self.side, d, lateral, mps), True
 
     def describe(self) -> str:
         return f"{self.machine} {self.side.lower()} ({self.place})"

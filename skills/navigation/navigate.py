@@ -8,7 +8,8 @@ unexplained laser points near the robot (not walls or known stations:
 other robots, unknown stations) go into the costmap for
 ``obstacle_ttl`` seconds and the path is replanned; while no path exists
 the robot waits, and after ``max_blocked`` seconds it fails with
-``NAVIGATION_FAILED``.  Losing localisation fails with
+``NAVIGATION_FAILED``.  A robot that does not move (by odometry) although
+commanded counts as blocked too (something the laser does not see).  Losing localisation fails with
 ``LOCALISATION_LOST``; the time limit with ``TIMEOUT``.
 """
 from __future__ import annotations
@@ -23,7 +24,8 @@ from ..activity import Activity, Status
 from ..errors import SkillError, SkillFailure
 from .controller import Limits, PathFollower
 from .planner import GridPlanner, NoPath
-from .safety import scan_points, speed_limit, to_field
+from .goals import standing_clearance
+from .safety import clear_distance, scan_points, speed_limit, to_field
 
 
 class Navigate(Activity):
@@ -40,10 +42,12 @@ class Navigate(Activity):
         self.limits = Limits.from_settings(s, max_speed)
         self.max_blocked = max_blocked
         self.use_laser = use_laser
+        self.stall_time = 2.0
         self.target: Pose2D | None = None
         self.path: np.ndarray | None = None
         self.follower: PathFollower | None = None
         self.replans = 0
+        self.adjusted = 0.0              # metres the goal was moved to where the robot fits
         self.blocked_time = 0.0
         self._blocked_since: float | None = None
         self._last_poll: float | None = None
@@ -61,7 +65,7 @@ class Navigate(Activity):
     # -- activity ---------------------------------------------------------
     def _on_start(self) -> None:
         self.ctx.update()
-        self.target, heading = self.goal.resolve(self.ctx)
+        self.target, heading = self._feasible(*self.goal.resolve(self.ctx))
         self._goal_heading = self.target.theta if heading else None
         start = self.ctx.pose()
         if self._user_timeout is None:
@@ -69,6 +73,8 @@ class Navigate(Activity):
             self.timeout = 3.0 * straight / self.limits.max_speed + 20.0
         self.replans = 0
         self.blocked_time = 0.0
+        self.stalled_time = 0.0
+        self._stall_ref = None
         self._blocked_since = None
         self._last_poll = None
         try:
@@ -100,10 +106,21 @@ class Navigate(Activity):
         if points is not None:
             s = ctx.settings
             half_fov = ctx.robot.laser_fov / 2.0
+            d_goal = math.hypot(self.target.x - pose.x, self.target.y - pose.y)
+            static = ctx.map.distance(ctx.costmap.resolution).lookup(points[:, 0] + pose.x,
+                                                                     points[:, 1] + pose.y) <= 0.1
+            fixed, moving = points[static], points[~static]
+            decel = self.limits.max_decel * 0.8
 
             def cap(ux: float, uy: float) -> float:
-                limit = speed_limit(points, ux, uy, ctx.robot.radius, s.safety_margin, 0.02,
-                                    self.limits.max_decel * 0.8, s.control_period)
+                if d_goal < 0.5 and clear_distance(points, ux, uy, ctx.robot.radius, 0.02) >= d_goal + 0.02:
+                    limit = math.inf      # the goal comes before the obstacle: no need to stop short
+                else:
+                    # mapped walls and stations; unmapped points may be robots coming closer
+                    limit = min(speed_limit(fixed, ux, uy, ctx.robot.radius, s.safety_margin, 0.02, decel,
+                                            s.control_period),
+                                speed_limit(moving, ux, uy, ctx.robot.radius, s.safety_margin + 0.07, 0.08,
+                                            decel, s.control_period + 0.1, s.closing_speed))
                 # the laser does not see behind: creep where it is blind
                 if abs(wrap_angle(math.atan2(uy, ux) - pose.theta)) > half_fov - 0.4:
                     limit = min(limit, s.blind_speed)
@@ -113,6 +130,13 @@ class Navigate(Activity):
             self.message = f"reached {self.goal.describe()}" if hasattr(self.goal, "describe") else "reached"
             return Status.SUCCESS
         blocked = self.follower.capped and self.follower.last_speed_wanted < 0.02
+        stalled = self._stalled(now, vx, vy)
+        if stalled:
+            self.stalled_time += dt
+            if self.stalled_time > self.max_blocked:
+                raise SkillFailure(SkillError.NAVIGATION_FAILED,
+                                   f"the robot does not move although commanded for {self.stalled_time:.0f} s")
+            blocked = True
         if blocked:
             if self._blocked_since is None:
                 self._blocked_since = now
@@ -131,6 +155,39 @@ class Navigate(Activity):
         return Status.RUNNING
 
     # -- helpers ----------------------------------------------------------
+    def _feasible(self, target: Pose2D, heading: bool) -> tuple[Pose2D, bool]:
+        """A goal inside a wall or station fails; one merely too close to
+        one moves to the nearest spot where the robot fits (within 0.5 m)."""
+        ctx = self.ctx
+        dist = ctx.map.distance(ctx.settings.costmap_resolution)
+        clear = float(dist.lookup(np.array([target.x]), np.array([target.y]))[0])
+        inside = not bool(ctx.map.in_arena(np.array([target.x]), np.array([target.y]))[0])
+        if clear <= 0.0 or inside:
+            raise SkillFailure(SkillError.NAVIGATION_FAILED,
+                               f"the goal ({target.x:.2f}, {target.y:.2f}) is blocked: inside a wall or station")
+        need = standing_clearance(ctx)
+        if clear >= need:
+            return target, heading
+        xs, ys = dist.spec.centres()
+        ok = (dist.distance >= need + 0.01) & ctx.map.arena_mask(ctx.settings.costmap_resolution)
+        d = np.where(ok, np.hypot(xs - target.x, ys - target.y), np.inf)
+        r, c = np.unravel_index(int(np.argmin(d)), d.shape)
+        if not np.isfinite(d[r, c]) or d[r, c] > 0.5:
+            raise SkillFailure(SkillError.NAVIGATION_FAILED,
+                               f"the goal ({target.x:.2f}, {target.y:.2f}) is blocked: no room for the robot")
+        self.adjusted = float(d[r, c])
+        return Pose2D(float(xs[r, c]), float(ys[r, c]), target.theta), heading
+
+    def _stalled(self, now: float, vx: float, vy: float) -> bool:
+        """Commanded to drive for ``stall_time`` seconds without the odometry
+        moving 2 cm: something the laser does not see holds the robot."""
+        odom = self.ctx.backend.odometry().pose
+        if math.hypot(vx, vy) < 0.05 or self._stall_ref is None or \
+                odom.distance_to(self._stall_ref[1]) > 0.02:
+            self._stall_ref = (now, odom)
+            return False
+        return now - self._stall_ref[0] > self.stall_time
+
     def _points(self, pose: Pose2D) -> np.ndarray | None:
         """Laser points relative to the robot, in field-frame axes."""
         try:

@@ -3,7 +3,9 @@
 The check looks along the commanded direction of travel: a laser point
 ahead (within the robot's width plus ``lateral_margin``) limits the speed
 to what still stops ``margin`` metres before it with ``decel``; closer
-than that the robot is *blocked*.
+than that the robot is *blocked*.  Points the map does not explain may be
+other robots: for them the margins are larger and the stopping distance
+allows for their own approach (``closing``).
 """
 from __future__ import annotations
 
@@ -50,14 +52,18 @@ def clear_distance(points: np.ndarray, vx: float, vy: float, radius: float,
 
 
 def speed_limit(points: np.ndarray, vx: float, vy: float, radius: float, margin: float,
-                lateral_margin: float, decel: float, latency: float = 0.0) -> float:
-    """Highest speed (m/s) along (vx, vy) that still stops ``margin``
-    before the nearest point ahead, given ``latency`` seconds before braking
-    starts (the control period): v * latency + v^2 / (2 decel) <= free.
+                lateral_margin: float, decel: float, latency: float = 0.0, closing: float = 0.0) -> float:
+    """Highest speed v (m/s) along (vx, vy) that still stops ``margin``
+    before the nearest point ahead, braking at ``decel`` after ``latency``
+    seconds, while the point itself may come closer at ``closing`` m/s
+    until the robot stands (another robot braking too):
+    v * latency + v^2 / (2 decel) + closing * (latency + v / decel) <= free.
     0 means blocked."""
     free = clear_distance(points, vx, vy, radius, lateral_margin) - margin
     if math.isinf(free):
         return math.inf
-    if free <= 0.0:
+    b = latency + closing / decel
+    c = closing * latency - free
+    if c >= 0.0:
         return 0.0
-    return decel * (-latency + math.sqrt(latency * latency + 2.0 * free / decel))
+    return decel * (-b + math.sqrt(b * b - 2.0 * c / decel))

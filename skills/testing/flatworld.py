@@ -170,10 +170,8 @@ class FlatWorld:
 
     def penetration(self, pose: Pose2D, ignore: int) -> float:
         """How deep (m) a robot at ``pose`` would overlap a wall, station or
-        another robot; 0 when free, inf outside the field."""
+        another robot; 0 when free (the walls keep robots in the field)."""
         r = self.geometry.radius
-        if not bool(self.map.in_arena(np.array([pose.x]), np.array([pose.y]))[0]):
-            return math.inf
         seg = self._segments
         p = np.array([pose.x, pose.y])
         a, b = seg[:, :2], seg[:, 2:]

@@ -3,8 +3,9 @@ the paper's chain.  One tanh hidden layer, softmax over the eight light
 states (green 1, yellow 2, red 4), cross-entropy with weight decay, trained
 with scaled conjugate gradient on a flat parameter vector.
 
-Input: a crop resized to ``size`` (w, h) in BGR, as floats in [0, 1]
-minus 0.5, flattened.
+Input: the tower's crop resized to ``size`` (w, h; 8 x 32 pixels by
+default, the tower's shape) in BGR, as floats in [0, 1] minus 0.5,
+flattened.
 """
 from __future__ import annotations
 
@@ -18,10 +19,14 @@ from .scg import scg
 N_STATES = 8
 
 
-def crop_features(crop: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+DEFAULT_SIZE = (8, 32)
+
+
+def crop_features(crop: np.ndarray, size: tuple[int, int] = DEFAULT_SIZE) -> np.ndarray:
     """A BGR crop to the network's input vector."""
-    small = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
-    return small.astype(np.float32).ravel() / 255.0 - 0.5
+    if crop.shape[1] != size[0] or crop.shape[0] != size[1]:
+        crop = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
+    return crop.astype(np.float32).ravel() / 255.0 - 0.5
 
 
 @dataclass
@@ -30,10 +35,10 @@ class Mlp:
     b1: np.ndarray
     w2: np.ndarray      # (n_hidden, 8)
     b2: np.ndarray
-    size: tuple[int, int] = (8, 24)
+    size: tuple[int, int] = DEFAULT_SIZE
 
     @classmethod
-    def create(cls, n_in: int, n_hidden: int, size=(8, 24), seed: int = 0) -> "Mlp":
+    def create(cls, n_in: int, n_hidden: int, size=DEFAULT_SIZE, seed: int = 0) -> "Mlp":
         rng = np.random.default_rng(seed)
         return cls(rng.normal(0, 1 / np.sqrt(n_in), (n_in, n_hidden)), np.zeros(n_hidden),
                    rng.normal(0, 1 / np.sqrt(n_hidden), (n_hidden, N_STATES)), np.zeros(N_STATES),

@@ -1,0 +1,216 @@
+"""``rll-bt vision train-light|light|tags``: the perception tools.
+
+- ``train-light --out DIR``: render a labelled data set from the PyBullet
+  world, train the tower detector and the light network, report held-out
+  accuracy and write the model files (see :mod:`.light.training`).
+- ``light IMAGE...``: signal towers and their light states.  With
+  ``--json`` one object per image and line: ``{"image": PATH, "ms": float,
+  "detections": [{"box": [x, y, w, h], "score": float, "state": 0..7,
+  "lights": {"red": "on"|"off", "yellow": ..., "green": ...},
+  "probabilities": [8 floats]}]}``, best detection first.
+- ``tags IMAGE... --camera FILE``: ArUco tags with their poses in the
+  camera frame, and the machine and side each belongs to in the profile.
+  The camera file format is documented in :mod:`.camera_file`.
+
+Exit codes: 0 ok, 1 work failed, 2 bad usage or an unreadable input.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
+
+
+def _int_at_least(lo: int):
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+        if v < lo:
+            raise argparse.ArgumentTypeError(f"must be at least {lo}, not {v}")
+        return v
+    return parse
+
+
+def _region(text: str) -> tuple[int, int, int, int]:
+    parts = text.split(",")
+    try:
+        x, y, w, h = (int(float(v)) for v in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected x,y,w,h in pixels, got {text!r}") from None
+    if w <= 0 or h <= 0:
+        raise argparse.ArgumentTypeError(f"region width and height must be positive, got {text!r}")
+    return (x, y, w, h)
+
+
+def register(cli) -> None:
+    sub = cli.group("vision")
+    t = sub.add_parser(
+        "train-light", help="render a data set from the PyBullet world and train the light models",
+        description="Render labelled frames from the PyBullet world (random stations, distances "
+                    "0.5-2.5 m, angles, camera heights, lighting; all 8 light states), add "
+                    "photometric augmentation and towers pasted onto procedural backgrounds, train "
+                    "the HOG tower detector with hard-negative mining and the light network with "
+                    "scaled conjugate gradient, report held-out accuracy and write the model files.")
+    t.add_argument("--out", required=True, metavar="DIR", help="directory for the model files and report")
+    t.add_argument("--samples", type=_int_at_least(10), default=None, metavar="N",
+                   help="rendered training frames (default 1400; --quick: 60)")
+    t.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
+    t.add_argument("--quick", action="store_true", help="a tiny run (for tests and trying things out)")
+    t.add_argument("--workers", type=_int_at_least(1), default=min(2, os.cpu_count() or 1), metavar="W",
+                   help="worker processes (default: 2 or the number of cores if fewer)")
+    t.set_defaults(func=cmd_train_light)
+
+    li = sub.add_parser(
+        "light", help="find signal towers in images and read their lights",
+        description="Find signal towers with the HOG detector and read their light state with the "
+                    "network (state: green 1 + yellow 2 + red 4).")
+    li.add_argument("images", nargs="+", metavar="IMAGE")
+    li.add_argument("--json", action="store_true", help="one JSON object per image and line")
+    li.add_argument("--models", metavar="DIR", help="model directory (default: the shipped models)")
+    li.add_argument("--region", type=_region, metavar="X,Y,W,H",
+                    help="search only this image region (pixels), e.g. where a tag says the tower is")
+    li.set_defaults(func=cmd_light)
+
+    tg = sub.add_parser(
+        "tags", help="find ArUco station tags in images and estimate their poses",
+        description="Find DICT_ARUCO_ORIGINAL markers, estimate each one's pose in the camera "
+                    "optical frame (x right, y down, z forward; metres) with the profile's tag size, "
+                    "and name the machine and side it belongs to.  The camera file is YAML or JSON "
+                    "with width, height, fx, fy, cx, cy and optional distortion (OpenCV order).")
+    tg.add_argument("images", nargs="+", metavar="IMAGE")
+    tg.add_argument("--camera", required=True, metavar="FILE", help="camera intrinsics (YAML or JSON)")
+    tg.add_argument("--profile", default=None, metavar="P", help="rules profile (default rcll2016)")
+    tg.add_argument("--json", action="store_true", help="one JSON object per image and line")
+    tg.add_argument("--all-ids", action="store_true",
+                    help="also report markers whose id belongs to no station of the profile")
+    tg.set_defaults(func=cmd_tags)
+
+
+# -- train-light -------------------------------------------------------------
+def cmd_train_light(args) -> int:
+    from .light.evaluation import confusion_table
+    from .light.training import TrainOptions, train_light
+    samples = args.samples if args.samples is not None else (60 if args.quick else 1400)
+    opts = TrainOptions(out=args.out, samples=samples, seed=args.seed, quick=args.quick, workers=args.workers)
+    report = train_light(opts, progress=lambda s: print(s, file=sys.stderr, flush=True))
+    h = report["heldout"]
+    d = report["detector"]
+    print(f"models written to {args.out} ({sum(report['files'].values()) / 1024:.0f} KiB) "
+          f"in {report['seconds']:.0f} s")
+    print(f"held-out: {h['frames']} frames, {h['required_towers']} towers, {h['tower_free_frames']} tower-free")
+    print(f"  detector recall        {h['recall']:.4f}")
+    print(f"  state accuracy         {h['state_accuracy']:.4f} (of detected towers)")
+    print(f"  end to end             {h['end_to_end']:.4f}")
+    print(f"  false per 1000 free    {h['false_per_1000']:.1f} "
+          f"({h['false_detections_free']} on {h['tower_free_frames']} tower-free frames)")
+    print(f"  false per 1000 frames  {h['false_per_1000_all']:.1f} (any frame)")
+    print(f"  ms per frame           {h['ms_median']:.1f} median, {h['ms_p95']:.1f} p95")
+    print(f"  threshold {d['threshold']:.3f}, min support {d['min_support']}")
+    print("confusion (rows: true state, columns: read state):")
+    print(confusion_table(h["confusion"]))
+    return EXIT_OK
+
+
+# -- light -------------------------------------------------------------------
+def _read_image(path: str):
+    import cv2
+    if not os.path.isfile(path):
+        return None, "no such file"
+    img = cv2.imread(path, cv2.IMREAD_COLOR)
+    if img is None:
+        return None, "not an image OpenCV can read"
+    return img, None
+
+
+def light_json(path: str, ms: float, detections) -> dict:
+    """The ``vision light --json`` object of one image."""
+    return {"image": path, "ms": round(ms, 3), "detections": [
+        {"box": [int(v) for v in d.box], "score": round(float(d.score), 4), "state": int(d.state),
+         "lights": {name: "on" if on else "off" for name, on in
+                    (("red", d.lights["red"]), ("yellow", d.lights["yellow"]), ("green", d.lights["green"]))},
+         "probabilities": [round(float(p), 5) for p in d.probabilities]}
+        for d in detections]}
+
+
+def cmd_light(args) -> int:
+    from rll_bt.clock import WallClock
+    from .light.reader import LightReader
+    reader = LightReader.load(args.models)
+    clock = WallClock()
+    failed = 0
+    for path in args.images:
+        img, why = _read_image(path)
+        if img is None:
+            print(f"rll-bt: error: {path}: {why}", file=sys.stderr)
+            failed += 1
+            continue
+        t0 = clock.now()
+        dets = reader.read(img, region=args.region)
+        ms = (clock.now() - t0) * 1000.0
+        if args.json:
+            print(json.dumps(light_json(path, ms, dets)), flush=True)
+        elif not dets:
+            print(f"{path}: no signal tower ({ms:.1f} ms)")
+        else:
+            for d in dets:
+                on = "+".join(n for n in ("red", "yellow", "green") if d.lights[n]) or "all off"
+                print(f"{path}: tower at {list(d.box)} score {d.score:.2f}: state {d.state} ({on}), "
+                      f"p={max(d.probabilities):.3f} ({ms:.1f} ms)")
+    return EXIT_USAGE if failed else EXIT_OK
+
+
+# -- tags --------------------------------------------------------------------
+def cmd_tags(args) -> int:
+    import cv2
+    import numpy as np
+    from rll_bt import rules
+    from rll_bt.clock import WallClock
+    from rll_bt.errors import UserError
+    from .camera_file import load_camera, scaled
+    from .tags import TagDetector
+    try:
+        profile = rules.profile(args.profile)
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
+    camera = load_camera(args.camera)
+    detector = TagDetector(profile.tag_size, valid_ids=None if args.all_ids else set(profile.all_tag_ids))
+    clock = WallClock()
+    failed = 0
+    for path in args.images:
+        img, why = _read_image(path)
+        if img is None:
+            print(f"rll-bt: error: {path}: {why}", file=sys.stderr)
+            failed += 1
+            continue
+        intr = scaled(camera, img.shape[1], img.shape[0])
+        t0 = clock.now()
+        dets = detector.detect(img, intr)
+        ms = (clock.now() - t0) * 1000.0
+        tags = []
+        for d in dets:
+            owner = profile.machine_for_tag(d.tag_id)
+            r, _ = cv2.Rodrigues(np.asarray(d.rvec))
+            normal = r[:, 2]
+            tags.append({
+                "id": d.tag_id, "machine": owner[0] if owner else None, "side": owner[1] if owner else None,
+                "tvec": [round(v, 4) for v in d.tvec], "rvec": [round(v, 4) for v in d.rvec],
+                "distance": round(float(np.linalg.norm(d.tvec)), 4),
+                # yaw of the tag face seen from the camera: 0 when it faces the camera squarely
+                "yaw_deg": round(math.degrees(math.atan2(-normal[0], -normal[2])), 2),
+                "corners": [[round(x, 2), round(y, 2)] for x, y in d.corners]})
+        if args.json:
+            print(json.dumps({"image": path, "ms": round(ms, 3), "tags": tags}), flush=True)
+        elif not tags:
+            print(f"{path}: no tag ({ms:.1f} ms)")
+        else:
+            for t in tags:
+                name = f"{t['machine']} {t['side']}" if t["machine"] else "unknown station"
+                print(f"{path}: tag {t['id']} ({name}) at {t['distance']:.3f} m, "
+                      f"t={t['tvec']}, yaw {t['yaw_deg']:.1f} deg")
+    return EXIT_USAGE if failed else EXIT_OK

@@ -1,0 +1,233 @@
+"""Training and test material for the light models, made in worker processes.
+
+A *chunk* is one world (a layout of a profile, seeded) from which a worker
+renders frames showing towers and tower-free frames, replaces the empty
+sky of some by procedural backgrounds, and composes further frames by
+pasting rendered and drawn towers onto procedural backgrounds.  Every
+frame gets photometric augmentation, then the worker cuts out
+
+- detector positives (HOG of the window around each fully visible tower,
+  slightly jittered, mirrored at random) and random negative windows,
+- classifier crops of each fully visible tower (jittered like a detector's
+  box) with its state,
+
+and keeps the frames themselves (JPEG-packed, with their labels) for
+hard-negative mining and evaluation.  Labels: tower boxes (x, y, w, h)
+pixels; states 0..7 (green 1, yellow 2, red 4).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from .augment import photometric
+from .backgrounds import procedural_background
+from .hog import crop_window, make_hog, random_negatives, window_features, window_for_tower
+from .mlp import DEFAULT_SIZE
+from .synth import draw_tower, paste
+
+#: a tower a detector must find: fully visible and at least this tall (pixels)
+MIN_REQUIRED_HEIGHT = 28
+#: classifier crops and detector positives are cut from towers at least this tall
+MIN_TRAIN_HEIGHT = 20
+
+
+@dataclass
+class Truth:
+    box: tuple[int, int, int, int]
+    state: int
+    clean: bool                     # fully visible, inside the frame
+
+    @property
+    def required(self) -> bool:
+        return self.clean and self.box[3] >= MIN_REQUIRED_HEIGHT
+
+
+@dataclass
+class PackedFrame:
+    """A frame stored as JPEG bytes with its towers; ``source`` says where
+    it came from ("render", "render+bg", "paste", "free-render", "free-paste")."""
+    data: bytes
+    truths: list[Truth]
+    source: str
+    distance: float | None = None   # of the tower the view was aimed at, metres
+
+    @property
+    def image(self) -> np.ndarray:
+        return cv2.imdecode(np.frombuffer(self.data, np.uint8), cv2.IMREAD_COLOR)
+
+    @property
+    def tower_free(self) -> bool:
+        return not self.truths
+
+    @staticmethod
+    def pack(image: np.ndarray, truths, source: str, distance=None) -> "PackedFrame":
+        ok, buf = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 95])
+        if not ok:
+            raise RuntimeError("cannot encode a frame")
+        return PackedFrame(buf.tobytes(), list(truths), source, distance)
+
+
+@dataclass
+class ChunkSpec:
+    profile: str
+    seed: int
+    towers: int                     # rendered frames showing a tower
+    free: int                       # rendered tower-free frames
+    pasted: int                     # frames composed on procedural backgrounds
+    strength: tuple[float, float] = (0.3, 1.2)   # photometric augmentation strength
+    extract: bool = True            # cut training samples (False: frames only, for tests)
+    keep: float = 1.0               # fraction of frames kept packed
+    size: tuple[int, int] = (640, 480)
+
+
+@dataclass
+class ChunkResult:
+    pos: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))
+    neg: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.float32))
+    crops: np.ndarray = field(default_factory=lambda: np.zeros((0, DEFAULT_SIZE[1], DEFAULT_SIZE[0], 3), np.uint8))
+    states: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    frames: list[PackedFrame] = field(default_factory=list)
+    seconds: float = 0.0
+
+
+def jitter_box(box, rng: np.random.Generator, shift: tuple[float, float], scale: float):
+    """A box moved by up to ``shift`` (fractions of w, h) and scaled by up to ``scale``."""
+    x, y, w, h = (float(v) for v in box)
+    k = math.exp(rng.uniform(-scale, scale))
+    cx = x + w / 2 + rng.uniform(-shift[0], shift[0]) * w
+    cy = y + h / 2 + rng.uniform(-shift[1], shift[1]) * h
+    return (cx - w * k / 2, cy - h * k / 2, w * k, h * k)
+
+
+def classifier_crops(image: np.ndarray, box, rng: np.random.Generator, count: int) -> list[np.ndarray]:
+    """Crops of a tower box as a detector would cut it (position and scale off a little)."""
+    out = [crop_window(image, box, DEFAULT_SIZE)]
+    for _ in range(count - 1):
+        out.append(crop_window(image, jitter_box(box, rng, (0.18, 0.06), 0.1), DEFAULT_SIZE))
+    return out
+
+
+def detector_positives(image: np.ndarray, box, rng: np.random.Generator, count: int) -> list[np.ndarray]:
+    out = []
+    for k in range(count):
+        win = window_for_tower(jitter_box(box, rng, (0.04, 0.02), 0.04) if k else box)
+        crop = crop_window(image, win)
+        out.append(crop[:, ::-1] if rng.random() < 0.5 else crop)
+    return out
+
+
+def _sky_swap(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    bg = procedural_background(rng, image.shape[0], image.shape[1])
+    out = image.copy()
+    out[sky] = bg[sky]
+    return out
+
+
+def _compose(rng: np.random.Generator, size, sprites: list[tuple[np.ndarray, np.ndarray, int]],
+             n_towers: int) -> tuple[np.ndarray, list[Truth]]:
+    """A procedural background with ``n_towers`` towers pasted (rendered sprites
+    or drawn ones), some standing on a box."""
+    w, h = size
+    img = procedural_background(rng, h, w)
+    truths: list[Truth] = []
+    for _ in range(n_towers):
+        state = int(rng.integers(0, 8))
+        use_sprite = sprites and rng.random() < 0.4
+        if use_sprite:
+            crop, mask, state = sprites[int(rng.integers(len(sprites)))]
+            k = math.exp(rng.uniform(-0.5, 0.4))
+            tw, th = max(3, int(crop.shape[1] * k)), max(8, int(crop.shape[0] * k))
+            timg = cv2.resize(crop, (tw, th), interpolation=cv2.INTER_AREA).astype(np.float32)
+            alpha = cv2.resize(mask.astype(np.float32), (tw, th), interpolation=cv2.INTER_AREA)
+            glow = None
+        else:
+            tw = int(math.exp(rng.uniform(math.log(5), math.log(42))))
+            timg, alpha, glow = draw_tower(rng, tw, state)
+            th = timg.shape[0]
+        for _ in range(20):
+            x, y = int(rng.integers(-tw // 3, w - tw + tw // 3)), int(rng.integers(0, max(1, h - th)))
+            box = (x, y, tw, th)
+            if all(_overlap(box, t.box) == 0 for t in truths):
+                break
+        else:
+            continue
+        if rng.random() < 0.6:                          # mount: a box under the tower
+            mw = int(tw * rng.uniform(1.0, 4.0))
+            col = tuple(int(c) for c in rng.integers(0, 140, 3))
+            cv2.rectangle(img, (x + tw // 2 - mw // 2, y + th), (x + tw // 2 + mw // 2, y + th + int(mw * rng.uniform(0.5, 2))),
+                          col, -1)
+        pasted = paste(img, timg, alpha, x, y, glow)
+        clean = pasted == box
+        truths.append(Truth(pasted, state, clean))
+    return img, truths
+
+
+def _overlap(a, b) -> float:
+    ix = max(0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
+    iy = max(0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
+    return ix * iy
+
+
+def make_chunk(spec: ChunkSpec, world_class) -> ChunkResult:
+    """Render and cut one chunk (runs in a worker process)."""
+    import time
+    from .scenes import SceneRenderer, ViewRange
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(spec.seed)
+    world = world_class(spec.profile, seed=spec.seed)
+    try:
+        renderer = SceneRenderer(world, rng, ViewRange(size=spec.size))
+        rendered = []
+        for i in range(spec.towers + spec.free):
+            frame = renderer.sample(tower=i < spec.towers)
+            if frame is not None:
+                rendered.append(frame)
+    finally:
+        world.close()
+    res = ChunkResult()
+    hog = make_hog()
+    pos, neg_imgs, neg_avoid, crops, states = [], [], [], [], []
+    sprites = []
+    for f in rendered:
+        for t in f.towers:
+            if t.clean and t.box[3] >= 24:
+                x, y, w, h = t.box
+                sprites.append((f.image[y:y + h, x:x + w].copy(), t.mask, t.state))
+    frames: list[tuple[np.ndarray, list[Truth], str, float | None]] = []
+    for f in rendered:
+        img, source = f.image, ("render" if f.towers else "free-render")
+        if f.sky is not None and rng.random() < 0.5:
+            img, source = _sky_swap(img, f.sky, rng), source + "+bg"
+        truths = [Truth(t.box, t.state, t.clean) for t in f.towers]
+        dist = min((t.distance for t in f.towers), default=None)
+        frames.append((img, truths, source, dist))
+    for i in range(spec.pasted):
+        n = int(rng.integers(0, 4)) if i % 4 else 0
+        img, truths = _compose(rng, spec.size, sprites, n)
+        frames.append((img, truths, "paste" if truths else "free-paste", None))
+    for img, truths, source, dist in frames:
+        img = photometric(img, rng, float(rng.uniform(*spec.strength)))
+        if spec.extract:
+            for t in truths:
+                if t.clean and t.box[3] >= MIN_TRAIN_HEIGHT:
+                    pos.extend(detector_positives(img, t.box, rng, 2))
+                    for c in classifier_crops(img, t.box, rng, 3):
+                        crops.append(c)
+                        states.append(t.state)
+            neg_imgs.append(img)
+            neg_avoid.append([t.box for t in truths])
+        if rng.random() < spec.keep:
+            res.frames.append(PackedFrame.pack(img, truths, source, dist))
+    if spec.extract:
+        negs = random_negatives(neg_imgs, 12 * len(neg_imgs), rng, neg_avoid) if neg_imgs else []
+        res.pos = window_features(hog, pos)
+        res.neg = window_features(hog, negs)
+        if crops:
+            res.crops = np.stack(crops)
+            res.states = np.asarray(states, np.int64)
+    res.seconds = time.perf_counter() - t0
+    return res

@@ -1,0 +1,77 @@
+"""The paper's chain: HOG detector -> crop -> network -> light state.
+
+    reader = LightReader.load()                  # the models shipped in the package
+    for det in reader.read(image):               # best first
+        det.state, det.lights, det.probabilities
+
+``read`` may be restricted to a region (x, y, w, h) of the image and an
+expected tower height in pixels, e.g. where the tag pose says the tower must
+be (:func:`skills.perception.light.region.tower_region`), which is both
+faster and safer.  Boxes are the tower's outline in image pixels.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from rll_bt.backend import LightDetection
+from rll_bt.errors import UserError
+
+from .hog import TowerDetector, crop_window
+from .mlp import Mlp, crop_features
+
+MODEL_DIR = Path(__file__).with_name("models")
+DETECTOR_FILE = "tower_hog_svm.npz"
+CLASSIFIER_FILE = "light_mlp.npz"
+REPORT_FILE = "training_report.json"
+
+
+class LightReader:
+    def __init__(self, detector: TowerDetector, classifier: Mlp, max_detections: int = 3):
+        self.detector = detector
+        self.classifier = classifier
+        self.max_detections = max_detections
+
+    @classmethod
+    def load(cls, directory: str | Path | None = None, **detector_options) -> "LightReader":
+        """The models in ``directory`` (default: the ones shipped in the package).
+        ``detector_options`` override the saved detector settings."""
+        d = Path(directory) if directory is not None else MODEL_DIR
+        det_path, net_path = d / DETECTOR_FILE, d / CLASSIFIER_FILE
+        for p in (det_path, net_path):
+            if not p.is_file():
+                raise UserError(f"model file missing: {p}",
+                                hint="train models with 'rll-bt vision train-light --out DIR'")
+        try:
+            with np.load(det_path) as f:
+                vector = f["detector"]
+                settings = json.loads(str(f["settings"])) if "settings" in f else {}
+            classifier = Mlp.load(net_path)
+        except (OSError, ValueError, KeyError) as exc:
+            raise UserError(f"cannot read the light models in {d}: {exc}") from None
+        settings.update(detector_options)
+        return cls(TowerDetector(vector, **settings), classifier)
+
+    def classify(self, image: np.ndarray, boxes) -> np.ndarray:
+        """Probabilities over the eight states for each tower box (x, y, w, h) of ``image``."""
+        if len(boxes) == 0:
+            return np.zeros((0, 8))
+        x = np.stack([crop_features(crop_window(image, b, self.classifier.size), self.classifier.size)
+                      for b in boxes]).astype(np.float64)
+        return self.classifier.probabilities(x)
+
+    def read(self, image: np.ndarray, region: tuple[int, int, int, int] | None = None,
+             tower_height: float | None = None, camera: str = "front") -> list[LightDetection]:
+        """Signal towers in a BGR image with their light states, best first."""
+        boxes = self.detector.detect(image, region=region, tower_height=tower_height)[: self.max_detections]
+        probs = self.classify(image, [b.xywh for b in boxes])
+        return [LightDetection(box=b.xywh, state=int(p.argmax()), score=b.score,
+                               probabilities=tuple(float(v) for v in p), camera=camera)
+                for b, p in zip(boxes, probs)]
+
+
+def save_detector(path: str | Path, vector: np.ndarray, **settings) -> None:
+    """Write a detector vector and its :class:`TowerDetector` settings."""
+    np.savez_compressed(path, detector=np.asarray(vector, np.float32), settings=np.array(json.dumps(settings)))
