@@ -1,0 +1,116 @@
+"""``rll-bt sim``: play a whole simulated game and report it.
+
+    rll-bt sim --seed 3                       # lockstep, headless, 2016 rules
+    rll-bt sim --profile rcll2025 --out game/ # + messages.jsonl, report.json, PNGs
+    rll-bt sim --processes                    # refbox/world, team server, agents as processes
+
+By default everything runs in one process on one simulated clock (refbox,
+world, team server and agents; messages cross an in-process bus as encoded
+frames).  ``--processes`` runs the team server and every agent as its own
+process talking over loopback UDP and TCP on the wall clock, the world
+serving the agents' backends over TCP.  The SETUP phase is shortened to
+``--setup`` seconds (default 10): nothing happens in it in simulation.
+
+Exit codes: 0 the game finished, 1 it did not, 2 bad arguments, 3 no display
+for ``--gui``.  ``rll-bt sim world`` (the world's own command) draws layouts.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..errors import Unavailable, UserError
+
+
+def _seconds(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not v >= 0:
+        raise argparse.ArgumentTypeError(f"seconds must be >= 0, not {text}")
+    return v
+
+
+def _positive(text: str) -> float:
+    v = _seconds(text)
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, not {text}")
+    return v
+
+
+def register(cli) -> None:
+    from .. import rules
+    from ..game.options import PERCEPTION, STRATEGIES, UNTIL
+    cli.group("sim")
+    gp = cli.group_parser("sim")
+    gp.description = __doc__.split("\n\n")[2].replace("\n", " ")
+    gp.epilog = "exit codes: 0 game finished, 1 it did not, 2 bad arguments, 3 no display for --gui"
+    g = gp.add_argument_group("game")
+    g.add_argument("--profile", default=rules.DEFAULT, choices=rules.PROFILES,
+                   help="rules profile (default %(default)s)")
+    g.add_argument("--robots", type=int, default=3, choices=(1, 2, 3), help="robots in our team (default 3)")
+    g.add_argument("--seed", type=int, default=1, help="seed of layout, lights, orders and noise (default 1)")
+    g.add_argument("--perception", default="oracle", choices=PERCEPTION,
+                   help="oracle: the simulator reports tags and lights; rendered: detectors on camera images")
+    g.add_argument("--strategy", default="algorithm1", choices=STRATEGIES,
+                   help="exploration strategy of the team server (default %(default)s)")
+    g.add_argument("--baseline", action="store_true",
+                   help="greedy one-order-at-a-time production instead of the HTN planner")
+    g.add_argument("--until", default="end", choices=UNTIL, help="stop after exploration or play to the end")
+    g.add_argument("--setup", type=_seconds, default=10.0, metavar="S",
+                   help="SETUP phase length in game seconds (default 10; the rules' 300 s change nothing here)")
+    g.add_argument("--exploration", type=_seconds, metavar="S", help="exploration length (default: the rules')")
+    g.add_argument("--production", type=_seconds, metavar="S", help="PRODUCTION length (default: the rules')")
+    g = gp.add_argument_group("running")
+    g.add_argument("--gui", action="store_true", help="open PyBullet's window (needs a display)")
+    g.add_argument("--out", type=Path, metavar="DIR",
+                   help="write messages.jsonl, report.json, field.png, timeline.png, score.png here")
+    g.add_argument("--processes", action="store_true",
+                   help="refbox+world, team server and each agent as its own process over loopback "
+                        "UDP/TCP on the wall clock (a whole game takes the game's real length)")
+    g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    g = gp.add_argument_group("speed knobs")
+    g.add_argument("--dt", type=_positive, default=0.05, metavar="S", help="lockstep step (default 0.05 s)")
+    g.add_argument("--hz", type=_positive, default=10.0, help="tree tick rate of the agents (default 10)")
+    g.add_argument("--laser-rate", type=_positive, default=10.0, metavar="HZ",
+                   help="simulated laser scans per second (default 10)")
+    g.add_argument("--localisation", default="cheap", choices=("cheap", "standard"),
+                   help="localiser preset (default cheap)")
+    gp.set_defaults(func=run)
+
+
+def options_from(args):
+    from ..game.options import GameOptions
+    if args.out is not None:
+        try:
+            args.out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise UserError(f"cannot create the directory: {exc}", where=f"--out {args.out}") from None
+    try:
+        return GameOptions(profile=args.profile, robots=args.robots, seed=args.seed,
+                           perception=args.perception, strategy=args.strategy, until=args.until,
+                           gui=args.gui, out=args.out, processes=args.processes, setup=args.setup,
+                           exploration=args.exploration, production=args.production, dt=args.dt,
+                           hz=args.hz, laser_rate=args.laser_rate, localisation=args.localisation,
+                           baseline=args.baseline)
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
+
+
+def run(args) -> int:
+    from ..backend import BackendUnavailable
+    from ..clock import WallClock
+    from ..game import play
+    options = options_from(args)
+    wall = WallClock()
+    try:
+        summary = play(options, progress=not args.quiet, clock=wall)
+    except BackendUnavailable as exc:
+        raise Unavailable(str(exc), where="--gui" if options.gui else None,
+                          hint="run without --gui (headless) or set DISPLAY") from None
+    print(summary["table"])
+    if options.out is not None:
+        print(f"\nwrote {', '.join(summary['files'])} to {options.out}", file=sys.stderr)
+    return 0 if summary["finished"] else 1

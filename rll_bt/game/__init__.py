@@ -1,0 +1,70 @@
+"""Whole simulated games: refbox, world, team server and agents together.
+
+    from rll_bt.game import GameOptions, LockstepGame, play
+    summary = play(GameOptions(seed=3, out=Path("game")))   # what ``rll-bt sim`` does
+    summary["points"]["total"], summary["table"]
+
+    with LockstepGame(GameOptions(seed=3, production=120)) as game:
+        game.run_for(200.0)                 # simulated seconds
+        game.kill_agent(2); game.run_for(30.0); game.start_agent(2)
+        game.restart_teamserver(); game.station_down("C-CS1", 60.0)
+        result = game.run()
+
+The simulator and the team server are plug-ins (:mod:`.interfaces`, entry
+point groups ``rll_bt.simulators`` and ``rll_bt.teamservers``).
+:mod:`.lockstep` runs one process on one simulated clock; :mod:`.processes`
+runs each part as its own process on loopback sockets.  :mod:`.report`,
+:mod:`.plots` and :mod:`.msglog` make what ``--out`` holds.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .interfaces import (Award, Delivery, GameStatus, Simulation, StationTruth, TeamServerHandle,
+                         TeamServerOptions, load_simulator, load_teamserver)
+from .lockstep import GameResult, LockstepGame
+from .options import GameOptions, max_exploration_points
+
+__all__ = ["Award", "Delivery", "GameStatus", "Simulation", "StationTruth", "TeamServerHandle",
+           "TeamServerOptions", "load_simulator", "load_teamserver", "GameResult", "LockstepGame",
+           "GameOptions", "max_exploration_points", "play", "finish"]
+
+
+def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
+    """Play one game as ``rll-bt sim`` does; returns the report summary with
+    ``table`` (text) and ``files`` (names written to ``options.out``)."""
+    from ..clock import WallClock
+    from .progress import ProgressBar
+    clock = clock or WallClock()
+    t0 = clock.now()
+    bar = ProgressBar(options.expected_duration(), clock=clock) if progress else None
+    if options.processes:
+        from .processes import ProcessGame
+        game = ProcessGame(options, progress=bar, clock=clock)
+    else:
+        game = LockstepGame(options, progress=bar)
+    try:
+        result = game.run()
+        if bar is not None:
+            bar.done(result.sim_time, result.status)
+    finally:
+        game.close()
+    return finish(result, options, clock.now() - t0)
+
+
+def finish(result: GameResult, options: GameOptions, wall_time: float | None = None) -> dict:
+    """The summary of a played game; with ``options.out`` also report.json and the PNGs."""
+    from . import report
+    summary = report.summarise(result, options, wall_time=wall_time)
+    files: list[str] = []
+    if options.out is not None:
+        from .plots import draw_all
+        out = Path(options.out)
+        report.write_json(summary, out / "report.json")
+        files.append("report.json")
+        files += [p.name for p in draw_all(options.rules, result, out)]
+        if (out / "messages.jsonl").exists():
+            files.insert(0, "messages.jsonl")
+    summary["table"] = report.table(summary)
+    summary["files"] = files
+    return summary

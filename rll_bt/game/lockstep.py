@@ -1,0 +1,244 @@
+"""A whole game in one process on one simulated clock.
+
+    game = LockstepGame(GameOptions(seed=3))
+    result = game.run()                  # GameResult: finished, status, recording, ...
+
+Every round: each agent steps (polls its links, ticks its tree when due,
+sends what is due), the world advances ``dt``, the refbox receives, ticks
+and sends, the team server ticks, the recorder samples.  All messages pass
+the in-process :class:`~rll_bt.comm.Bus` as encoded frames (the team
+channel and the team-server link encrypted with the team key), so the same
+bytes as in a real game; a seeded game is deterministic.
+
+The simulator and the team server come from the ``rll_bt.simulators`` and
+``rll_bt.teamservers`` entry points (:mod:`.interfaces`).  Faults for tests
+and demonstrations: :meth:`kill_agent`, :meth:`start_agent`,
+:meth:`restart_teamserver`, :meth:`station_down`.
+"""
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from .. import msgs
+from ..agent import AgentConfig, RobotAgent
+from ..comm import Bus, MessageRegistry
+from .interfaces import GameStatus, TeamServerOptions, load_simulator, load_teamserver
+from .msglog import MessageLog
+from .options import GameOptions
+from .recorder import Recorder, Recording
+
+TEAM = "CYAN"
+
+
+@dataclass
+class GameResult:
+    finished: bool               # the game reached its end (or the end of exploration with until=exploration)
+    status: GameStatus
+    recording: Recording
+    awards: list
+    deliveries: list
+    snapshot: dict
+    stations: dict
+    orders: list
+    collisions: int
+    sim_time: float
+    wall_time: float = 0.0
+    messages: int = 0
+
+
+class LockstepGame:
+    """See the module doc.  ``progress``: called with (sim time, status) after
+    each sample; ``hooks``: callables ``hook(game)`` run after every round."""
+
+    def __init__(self, options: GameOptions, *, progress: Callable | None = None):
+        self.options = o = options
+        sim_factory = load_simulator(o.simulator)
+        ts_factory = load_teamserver(o.teamserver)
+        self.sim = sim_factory(profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key,
+                               perception=o.perception, gui=o.gui, phases=o.phases(),
+                               world_step=o.world_step, robot_options={"laser_rate": o.laser_rate})
+        self.clock = self.sim.clock
+        self.bus = Bus(self.clock)
+        self.ref_reg = self.sim.refbox_registry()
+        self.team_reg = MessageRegistry.from_message_set(msgs.message_set("team"))
+        self.log: MessageLog | None = None
+        if o.out is not None:
+            o.out.mkdir(parents=True, exist_ok=True)
+            self.log = MessageLog(o.out / "messages.jsonl", self.clock,
+                                  {"teamserver": self.team_reg}, self.ref_reg, key=o.key)
+            self.bus.tap(self.log.tap)
+        self.sim.attach_bus(self.bus)
+        self._tmp = None
+        state = o.state
+        if state is None:
+            if o.out is not None:
+                state = o.out / "teamserver.sqlite"
+                if state.exists():
+                    state.unlink()
+            else:
+                self._tmp = tempfile.TemporaryDirectory(prefix="rll-bt-sim-")
+                state = Path(self._tmp.name) / "teamserver.sqlite"
+        truth = ({n: s.zone for n, s in self.sim.stations().items()}
+                 if o.strategy == "oracle" else None)
+        bus, reg, key = self.bus, self.ref_reg, o.key
+        self.teamserver = ts_factory(
+            profile=o.profile, team_name=o.team_name, key=key, clock=self.clock,
+            refbox_public=lambda: bus.peer("public", registry=reg, name="teamserver"),
+            refbox_team=lambda color: bus.peer(color.lower(), registry=reg, name="teamserver"),
+            agents=lambda: bus.stream_server("teamserver", registry=self.team_reg, key=key),
+            state=str(state), strategy=o.strategy, seed=o.seed, oracle=truth,
+            options=TeamServerOptions(baseline=o.baseline, map_period=o.map_period, extra=o.extra))
+        self.agents: dict[int, RobotAgent] = {}
+        self.robot_numbers = list(range(1, o.robots + 1))
+        for n in self.robot_numbers:
+            self.start_agent(n, restarted=False)
+        self.recorder = Recorder(self.sim, TEAM, self.robot_numbers, o.sample_period,
+                                 snapshot=self.teamserver.snapshot)
+        self.progress = progress
+        self.hooks: list[Callable] = []
+        self.rounds = 0
+        self._started = False
+
+    # -- parts -------------------------------------------------------------------------
+    def start_agent(self, number: int, restarted: bool = True) -> RobotAgent:
+        """A new agent process for robot ``number`` (its robot stays where it is)."""
+        o, bus, reg = self.options, self.bus, self.ref_reg
+        name = f"R{number}"
+        cfg = AgentConfig(robot_id=number, team_name=o.team_name, profile=o.profile, hz=o.hz)
+        agent = RobotAgent(
+            cfg, clock=self.clock, backend=self.sim.backend(TEAM, number),
+            link=bus.stream_client("teamserver", registry=self.team_reg, key=o.key, name=name),
+            public=bus.peer("public", registry=reg, name=name),
+            team=lambda color: bus.peer(color.lower(), registry=reg, key=o.key, name=name),
+            services={"localisation": o.localisation},
+            start_pose=self.sim.robot_pose(TEAM, number), restarted=restarted)
+        self.agents[number] = agent
+        if restarted:
+            self._note("agent started", robot=number)
+        return agent
+
+    def kill_agent(self, number: int) -> None:
+        """The agent dies without a goodbye: its links drop, its robot stops
+        once the last drive command times out."""
+        agent = self.agents.pop(number)
+        self.recorder.task(number, None, outcome="agent killed")
+        agent.link.close()
+        agent.refbox.close()
+        self._note("agent killed", robot=number)
+
+    def restart_teamserver(self) -> None:
+        self.teamserver.restart()
+        self._note("team server restarted")
+
+    def station_down(self, machine: str, seconds: float) -> None:
+        self.sim.station_down(machine, seconds)
+        self._note("station down", machine=machine, seconds=seconds)
+
+    def _note(self, what: str, **data) -> None:
+        if hasattr(self, "recorder"):
+            self.recorder.note(what, **data)
+
+    # -- running -------------------------------------------------------------------------
+    def start(self) -> None:
+        if not self._started:
+            self._started = True
+            self.sim.start()
+            self.recorder.sample(force=True)
+
+    def round(self) -> None:
+        """One lockstep round of ``dt`` seconds."""
+        for n in sorted(self.agents):
+            agent = self.agents[n]
+            agent.step()
+            run = agent.run
+            if run is not None and not run.done:
+                self.recorder.task(n, run.kind, run.task_id)
+            else:
+                self.recorder.task(n, None, outcome=run.outcome.status if run is not None else None)
+        self.sim.step(self.options.dt)
+        self.sim.refbox_step()
+        self.teamserver.tick()
+        self.rounds += 1
+        before = len(self.recorder.rec.samples)
+        self.recorder.sample()
+        if self.progress is not None and len(self.recorder.rec.samples) != before:
+            self.progress(self.clock.now(), self.sim.status())
+        for hook in list(self.hooks):
+            hook(self)
+
+    def finished(self) -> bool:
+        st = self.sim.status()
+        if st.phase == "POST_GAME":
+            return True
+        if self.options.until == "exploration":
+            return self.exploration_over(st)
+        return False
+
+    def exploration_over(self, st: GameStatus | None = None) -> bool:
+        st = st or self.sim.status()
+        if self.options.rules.phases.exploration_in_production > 0:
+            return st.phase == "PRODUCTION" and st.game_time >= self.options.exploration_window()
+        return st.phase in ("PRODUCTION", "POST_GAME")
+
+    def run_for(self, seconds: float) -> None:
+        self.start()
+        end = self.clock.now() + seconds
+        while self.clock.now() < end - 1e-9:
+            self.round()
+
+    def run_until(self, predicate: Callable[["LockstepGame"], bool], limit: float) -> bool:
+        """Run until ``predicate(game)`` or ``limit`` more simulated seconds; whether it held."""
+        self.start()
+        end = self.clock.now() + limit
+        while self.clock.now() < end:
+            if predicate(self):
+                return True
+            self.round()
+        return predicate(self)
+
+    def run(self, limit: float | None = None, stop: Callable[["LockstepGame"], bool] | None = None) -> GameResult:
+        """Play until the game is over (or ``stop(game)``), at most ``limit``
+        simulated seconds (default: the expected length plus overtime and a margin)."""
+        self.start()
+        if limit is None:
+            limit = self.options.expected_duration() + self.options.rules.phases.overtime + 60.0
+        end = self.clock.now() + limit
+        done = False
+        while self.clock.now() < end:
+            if self.finished() or (stop is not None and stop(self)):
+                done = True
+                break
+            self.round()
+        done = done or self.finished()
+        self.recorder.sample(force=True)
+        self.recorder.close_tasks()
+        return self.result(done)
+
+    def result(self, finished: bool) -> GameResult:
+        return GameResult(finished=finished, status=self.sim.status(), recording=self.recorder.rec,
+                          awards=self.sim.awards(), deliveries=self.sim.deliveries(),
+                          snapshot=self.teamserver.snapshot(), stations=self.sim.stations(),
+                          orders=self.sim.orders(), collisions=self.sim.collisions(),
+                          sim_time=self.clock.now(), messages=self.bus.frames)
+
+    def close(self) -> None:
+        for agent in self.agents.values():
+            try:
+                agent.shutdown()
+            except Exception:  # noqa: BLE001 - closing must not hide the result
+                pass
+        self.teamserver.close()
+        if self.log is not None:
+            self.log.close()
+        self.sim.close()
+        if self._tmp is not None:
+            self._tmp.cleanup()
+
+    def __enter__(self) -> "LockstepGame":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

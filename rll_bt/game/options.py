@@ -1,0 +1,119 @@
+"""What one simulated game is: rules, seed, team, and the speed knobs.
+
+Speed knobs (what ``make sim`` is tuned with): ``dt`` is the lockstep step
+(s of simulated time per round of agents, world, refbox and team server);
+``hz`` the agents' tree tick rate; ``laser_rate`` the simulated laser's
+scans per second; ``localisation`` the localiser preset ("cheap" for whole
+games, "standard" for accuracy); ``world_step`` the world's longest physics
+sub-step (s).  Phase lengths are game seconds; ``None`` keeps the rules'.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .. import rules
+
+STRATEGIES = ("algorithm1", "random", "nearest", "oracle")
+PERCEPTION = ("oracle", "rendered")
+UNTIL = ("exploration", "end")
+TEAM_NAME = "GRIPS"
+TEAM_KEY = "rll-bt-sim-key"
+
+
+@dataclass
+class GameOptions:
+    profile: str = rules.DEFAULT
+    robots: int = 3
+    seed: int = 1
+    perception: str = "oracle"
+    strategy: str = "algorithm1"
+    until: str = "end"
+    gui: bool = False
+    out: Path | None = None
+    processes: bool = False
+    # phase lengths (game seconds); None: the rules' own
+    setup: float | None = 10.0
+    exploration: float | None = None
+    production: float | None = None
+    # speed knobs
+    dt: float = 0.05
+    hz: float = 10.0
+    laser_rate: float = 10.0
+    localisation: str = "cheap"
+    world_step: float = 0.05
+    # parts
+    simulator: str = "pybullet"
+    teamserver: str = "htn"
+    baseline: bool = False
+    map_period: float = 5.0
+    team_name: str = TEAM_NAME
+    key: str = TEAM_KEY
+    state: Path | None = None          # team server database (default: in ``out`` or a temp dir)
+    sample_period: float = 1.0         # s between recorder samples
+    extra: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.profile not in rules.PROFILES:
+            raise ValueError(f"unknown profile {self.profile!r} (known: {', '.join(rules.PROFILES)})")
+        if not 1 <= int(self.robots) <= 3:
+            raise ValueError(f"robots must be 1, 2 or 3, not {self.robots}")
+        self.robots = int(self.robots)
+        for name, allowed in (("perception", PERCEPTION), ("strategy", STRATEGIES), ("until", UNTIL)):
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"{name} must be one of {', '.join(allowed)}, not {getattr(self, name)!r}")
+        for name in ("dt", "hz", "laser_rate", "world_step", "sample_period"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be positive, not {getattr(self, name)}")
+        for name in ("setup", "exploration", "production"):
+            v = getattr(self, name)
+            if v is not None and v < 0:
+                raise ValueError(f"{name} must be >= 0 seconds, not {v}")
+        if self.out is not None:
+            self.out = Path(self.out)
+
+    @property
+    def rules(self):
+        return rules.profile(self.profile)
+
+    def phases(self) -> dict[str, float]:
+        """The phase-length overrides for the simulator (game seconds)."""
+        return {k: float(v) for k in ("setup", "exploration", "production")
+                if (v := getattr(self, k)) is not None}
+
+    def phase_lengths(self) -> dict[str, float]:
+        """Every phase's length as played (overrides applied)."""
+        p = self.rules.phases
+        out = {"SETUP": p.setup, "EXPLORATION": p.exploration, "PRODUCTION": p.production}
+        for k, v in self.phases().items():
+            if k == "exploration" and p.exploration_in_production > 0:
+                continue
+            out[k.upper()] = v
+        return out
+
+    def exploration_window(self) -> float:
+        """Game seconds of exploration (its own phase, or the start of PRODUCTION)."""
+        p = self.rules.phases
+        if p.exploration_in_production > 0:
+            return float(self.exploration if self.exploration is not None else p.exploration_in_production)
+        return float(self.exploration if self.exploration is not None else p.exploration)
+
+    def expected_duration(self) -> float:
+        """Simulated seconds of the whole game (or until exploration ends), no overtime."""
+        lengths = self.phase_lengths()
+        if self.until == "exploration":
+            if self.rules.phases.exploration_in_production > 0:
+                return lengths["SETUP"] + self.exploration_window()
+            return lengths["SETUP"] + lengths["EXPLORATION"]
+        return sum(lengths.values())
+
+
+def max_exploration_points(profile) -> int:
+    """Points for reporting every own station right (type, zone, rotation as the rules ask)."""
+    s, reports = profile.scoring, profile.exploration_reports
+    per = s.explore_zone_ok
+    if "type" in reports:
+        per += s.explore_type_ok
+    if "rotation" in reports:
+        per += s.explore_rotation_ok
+    return per * len(profile.machine_types)

@@ -1,0 +1,107 @@
+"""The result of a game as data (``report.json``) and as a table.
+
+:func:`summarise` turns a :class:`~rll_bt.game.lockstep.GameResult` into a
+plain dict: points by phase, exploration (points, the maximum, game seconds
+until every own station was correctly known), orders delivered, and per
+robot the busy time (s a task tree was running), tasks, failures and
+distance driven (m, ground truth).  :func:`table` renders it for a person.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict
+from pathlib import Path
+
+from .options import GameOptions, max_exploration_points
+
+SCORED = ("in-time", "late")
+
+
+def _distance(path) -> float:
+    return sum(math.hypot(b[1] - a[1], b[2] - a[2]) for a, b in zip(path, path[1:]))
+
+
+def _exploration(award) -> bool:
+    """An exploration award: in its own phase, or a report judged inside PRODUCTION (2025)."""
+    if award.phase == "EXPLORATION":
+        return True
+    return award.order is None and any(w in award.reason for w in (" zone ", " type ", " rotation "))
+
+
+def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float | None = None) -> dict:
+    rec = result.recording
+    prof = options.rules
+    by_phase: dict[str, int] = {}
+    for a in result.awards:
+        if a.team == team:
+            by_phase[a.phase] = by_phase.get(a.phase, 0) + a.points
+    explore_pts = sum(a.points for a in result.awards if a.team == team and _exploration(a))
+    production_pts = sum(a.points for a in result.awards if a.team == team and a.phase == "PRODUCTION"
+                         and not _exploration(a))
+    ours = [d for d in result.deliveries if d.team == team]
+    robots = {}
+    end = result.sim_time
+    for n in sorted(set(rec.paths) | set(rec.tasks)):
+        runs = rec.tasks.get(n, [])
+        busy = sum((r["end"] if r["end"] is not None else end) - r["start"] for r in runs)
+        failed = sum(1 for r in runs if r.get("outcome") == "FAILED")
+        robots[str(n)] = {"busy_time": round(busy, 1),
+                          "busy_share": round(busy / end, 3) if end > 0 else 0.0,
+                          "tasks": len(runs), "failed": failed,
+                          "distance": round(_distance(rec.paths.get(n, [])), 1)}
+    lengths = options.phase_lengths()
+    rules_setup = prof.phases.setup
+    return {
+        "profile": options.profile, "seed": options.seed, "strategy": options.strategy,
+        "perception": options.perception, "robots": options.robots, "team": team,
+        "baseline": options.baseline,
+        "finished": bool(result.finished), "phase": result.status.phase,
+        "sim_time": round(result.sim_time, 2),
+        "wall_time": round(wall_time, 2) if wall_time is not None else None,
+        "phase_lengths": lengths,
+        "setup_shortened": lengths["SETUP"] < rules_setup,
+        "points": {"total": result.status.points.get(team, 0), "by_phase": by_phase,
+                   "exploration": explore_pts, "production": production_pts},
+        "exploration": {"points": explore_pts, "max_points": max_exploration_points(prof),
+                        "known_all_after": (round(rec.known_all_game_time, 2)
+                                            if rec.known_all_game_time is not None else None)},
+        "orders_delivered": sum(1 for d in ours if d.how in SCORED),
+        "deliveries": [asdict(d) for d in ours],
+        "robot_stats": robots,
+        "collisions": result.collisions,
+        "messages": result.messages,
+        "team_server_restarts": result.snapshot.get("restarts", 0),
+        "awards": [asdict(a) for a in result.awards if a.team == team],
+        "events": rec.events,
+    }
+
+
+def table(summary: dict) -> str:
+    s = summary
+    ex = s["exploration"]
+    known = (f"every own station correctly known after {ex['known_all_after']:.0f} s"
+             if ex["known_all_after"] is not None else "not every own station was known")
+    lines = [
+        f"{s['profile']} seed {s['seed']}, {s['robots']} robots, strategy {s['strategy']}, "
+        f"perception {s['perception']}" + (" (baseline production)" if s.get("baseline") else ""),
+        f"game {'finished' if s['finished'] else 'NOT finished'} in phase {s['phase']} after "
+        f"{s['sim_time']:.0f} s simulated" + (f", {s['wall_time']:.0f} s wall" if s.get("wall_time") else "")
+        + (f" (SETUP shortened to {s['phase_lengths']['SETUP']:.0f} s)" if s["setup_shortened"] else ""),
+        "",
+        f"{'exploration points':22} {ex['points']:5d} / {ex['max_points']}   ({known})",
+        f"{'production points':22} {s['points']['production']:5d}",
+        f"{'total score':22} {s['points']['total']:5d}",
+        f"{'orders delivered':22} {s['orders_delivered']:5d}",
+        f"{'collisions':22} {s['collisions']:5d}",
+        "",
+        f"{'robot':6} {'busy s':>8} {'busy %':>7} {'tasks':>6} {'failed':>7} {'driven m':>9}",
+    ]
+    for n, r in s["robot_stats"].items():
+        lines.append(f"R{n:<5} {r['busy_time']:8.0f} {100 * r['busy_share']:6.0f}% {r['tasks']:6d} "
+                     f"{r['failed']:7d} {r['distance']:9.1f}")
+    return "\n".join(lines)
+
+
+def write_json(summary: dict, path: str | Path) -> None:
+    Path(path).write_text(json.dumps(summary, indent=2, default=str) + "\n", encoding="utf-8")

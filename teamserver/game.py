@@ -1,0 +1,125 @@
+"""The team server as one part of a simulated game (``rll-bt sim``).
+
+Entry point ``rll_bt.teamservers: htn`` -> :func:`open_teamserver`, which
+returns an :class:`InProcessTeamServer` implementing
+:class:`rll_bt.game.interfaces.TeamServerHandle`: a :class:`TeamServer` on
+the transports the game hands it, that can be killed and restarted from its
+state database mid-game, and that reports its view for the game report.
+
+``options.baseline`` replaces the HTN production choice by the greedy
+baseline of the benchmarks: one order at a time, the one with the earliest
+deadline that can be planned, no look-ahead (:class:`GreedyPlanner`).
+"""
+from __future__ import annotations
+
+from rll_bt.game.interfaces import TeamServerHandle, TeamServerOptions
+
+from . import model as M
+from .exploration.symmetry import consistent_set
+from .links import RefboxLink
+from .planning.planner import Choice, ProductionPlanner
+from .server import ServerConfig, TeamServer
+
+
+class GreedyPlanner(ProductionPlanner):
+    """One product at a time: the plannable order with the earliest deadline."""
+
+    def choose(self, world) -> Choice:
+        if sum(world.in_progress.values()) > 0:
+            return Choice([], 0, 0, 0, 0)
+        cands = self.candidates(world)
+        return Choice(cands[:1], 0, 0, 0, len(cands))
+
+
+class InProcessTeamServer(TeamServerHandle):
+    """See the module doc.  ``refbox_public()`` and ``agents()`` make new
+    transports (called again on :meth:`restart`); ``refbox_team(color)`` the
+    team channel once our colour is known."""
+
+    def __init__(self, *, profile, team_name: str, key: str, clock, refbox_public, refbox_team,
+                 agents, state: str, strategy: str = "algorithm1", seed: int = 0,
+                 oracle: dict | None = None, options: TeamServerOptions | None = None):
+        self.options = options or TeamServerOptions()
+        self._args = dict(profile=profile, team_name=team_name, key=key, clock=clock)
+        self._public, self._team, self._agents = refbox_public, refbox_team, agents
+        self.state = state
+        cfg = ServerConfig(strategy=strategy, seed=seed, map_period=self.options.map_period)
+        if self.options.baseline:
+            cfg.max_products = 1
+        for k, v in self.options.extra.items():
+            setattr(cfg, k, v)
+        self.config = cfg
+        self.oracle = oracle
+        self.restarts = 0
+        self.server = self._make()
+
+    def _make(self) -> TeamServer:
+        a = self._args
+        link = RefboxLink(self._public(), self._team)
+        srv = TeamServer(a["profile"], a["team_name"], clock=a["clock"], refbox=link,
+                         agents=self._agents(), key=a["key"], state=self.state,
+                         config=self.config, oracle=self.oracle)
+        if self.options.baseline:
+            greedy = GreedyPlanner(srv.profile, srv.planner.prefix, durations=self.config.durations,
+                                   clock=a["clock"])
+            srv.planner = greedy
+            if srv.production is not None:
+                srv.production.planner = greedy
+            srv._colour_known = _with_planner(srv, greedy)
+        return srv
+
+    def tick(self) -> None:
+        self.server.tick()
+
+    def restart(self) -> None:
+        old = self.server
+        old.agents.close()
+        if old.refbox_link is not None:
+            old.refbox_link.close()
+        old.close()
+        self.restarts += 1
+        self.server = self._make()
+
+    def snapshot(self) -> dict:
+        kb = self.server.kb
+        robots = {}
+        for r in kb.robots.values():
+            t = kb.tasks.get(r.task_id) if r.task_id is not None else None
+            robots[r.number] = {"task": t.kind if t is not None and t.state == M.ASSIGNED else None,
+                                "task_id": r.task_id, "status": r.status}
+        tasks = [{"id": t.id, "kind": t.kind, "state": t.state, "robot": t.robot,
+                  "machine": t.machine, "product": t.product, "assigned_at": t.assigned_at,
+                  "finished_at": t.finished_at, "error": t.error} for t in kb.tasks.values()]
+        color = self.server.color
+        known = {}
+        if color is not None:
+            cs = consistent_set(self.server.profile, kb.machines)
+            for name, guess in (cs.machines.items() if cs else ()):
+                if guess.zone is not None and guess.zone_confidence >= self.config.explore_thresh:
+                    known[name] = int(guess.zone)
+        delivered = sum(1 for p in kb.products.values() if p.state == "DELIVERED")
+        return {"robots": robots, "tasks": tasks, "known": known, "delivered": delivered,
+                "color": color, "restarts": self.restarts}
+
+    def close(self) -> None:
+        srv = self.server
+        srv.agents.close()
+        if srv.refbox_link is not None:
+            srv.refbox_link.close()
+        srv.close()
+
+
+def _with_planner(srv: TeamServer, planner: ProductionPlanner):
+    """``srv._colour_known`` that keeps ``planner`` in the production manager it makes."""
+    original = srv._colour_known
+
+    def colour_known(color: str) -> None:
+        original(color)
+        planner.prefix = srv.planner.prefix
+        srv.production.planner = planner
+    return colour_known
+
+
+def open_teamserver(**options) -> InProcessTeamServer:
+    """Entry point ``rll_bt.teamservers: htn`` (options of :class:`InProcessTeamServer`)."""
+    return InProcessTeamServer(**options)
