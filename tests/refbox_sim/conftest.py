@@ -9,14 +9,19 @@ from rll_bt.rules import profile
 
 
 class Harness:
-    """A 2016 game between "Caro" (cyan) and "Grips" (magenta) on a SimClock."""
+    """A game between "Caro" (cyan) and "Grips" (magenta) on a SimClock; 2016 rules
+    unless ``rules="rcll2025"`` (then ``exploration`` is the reporting time in PRODUCTION,
+    180 s by default, and production 1200 s)."""
 
     def __init__(self, seed: int = 1, teams=("Caro", "Grips"), config=None, speed: float = 1.0,
-                 **phases):
-        lengths = {"setup": 5.0, "exploration": 30.0, "production": 900.0, **phases}
+                 rules: str = "rcll2016", **phases):
+        if rules == "rcll2016":
+            lengths = {"setup": 5.0, "exploration": 30.0, "production": 900.0, **phases}
+        else:
+            lengths = {"setup": 5.0, **phases}
         self.clock = SimClock()
-        self.timing = Timing.from_profile(profile("rcll2016"), speed=speed, **lengths)
-        self.game = RefboxGame("rcll2016", self.clock, seed=seed, team_cyan=teams[0],
+        self.timing = Timing.from_profile(profile(rules), speed=speed, **lengths)
+        self.game = RefboxGame(rules, self.clock, seed=seed, team_cyan=teams[0],
                                team_magenta=teams[1], timing=self.timing, config=config)
         self.world = self.game.world
 
@@ -57,3 +62,9 @@ class Harness:
 def harness():
     """Factory: ``harness(seed=..., production=..., config=...)`` -> :class:`Harness`."""
     return Harness
+
+
+@pytest.fixture
+def harness25():
+    """Factory of 2025 games: ``harness25(seed=..., exploration=..., production=...)``."""
+    return lambda **kw: Harness(rules="rcll2025", **kw)

@@ -123,7 +123,7 @@ def test_sigterm_ends_cleanly():
 
 @pytest.mark.parametrize("args,where", [
     (["--team-cyan", "A", "--key-cyan", "k", "--phase-lengths", "setup=x"], "--phase-lengths"),
-    (["--team-cyan", "A", "--key-cyan", "k", "--profile", "rcll2025"], "--profile"),
+    (["--team-cyan", "A", "--key-cyan", "k", "--profile", "rcll1999"], "--profile"),
     (["--team-cyan", "A", "--key-cyan", "k", "--team-magenta", "B"], "--team-magenta"),
     (["--team-cyan", "A", "--key-cyan", "k", "--speed", "0"], "--speed"),
     (["--team-cyan", "A", "--key-cyan", "k", "--key", "nokey"], "--key"),

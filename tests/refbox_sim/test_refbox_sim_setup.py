@@ -222,7 +222,9 @@ def test_parse_phase_lengths_rejects(text):
 
 
 def test_unsupported_profile_is_a_clear_error():
+    from dataclasses import replace
+
     from backends.sim.refbox import RefboxGame
     from rll_bt.clock import SimClock
-    with pytest.raises(ValueError, match="does not play 'rcll2025'"):
-        RefboxGame("rcll2025", SimClock())
+    with pytest.raises(ValueError, match="does not play 'rcll1999'"):
+        RefboxGame(replace(profile("rcll2016"), name="rcll1999"), SimClock())

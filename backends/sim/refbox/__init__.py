@@ -1,9 +1,14 @@
-"""The simulated referee box: the 2016 rules (``rcll2016``) on the real wire protocol.
+"""The simulated referee box: the 2016 rules (``rcll2016``) and today's (``rcll2025``)
+on the real wire protocol.
 
 Layers (each usable alone):
 
 - :class:`RefboxGame` (:mod:`.game`): the pure game core.  No threads, no
   sockets; it takes a clock and moves only in :meth:`RefboxGame.tick`.
+  What differs between rule sets is ``game.rules`` (:mod:`.ruleset`:
+  2016; :mod:`.ruleset2025`: no EXPLORATION phase, zone + rotation reports
+  in the first 180 s of PRODUCTION (:mod:`.exploration2025`), orders by id
+  (:mod:`.orders2025`), the storage station (:mod:`.storage`)).
 - :class:`RefboxNode` (:mod:`.node`): the game behind the refbox's channels
   (public plain, cyan/magenta AES-128-CBC, TCP control stream) over UDP or the
   in-process bus.
@@ -51,22 +56,33 @@ machine, lights, robot, order, report, delivery, workpiece),
 ``game.stations[name]`` (``state``, ``lights``, ``slide_loaded``,
 ``cap_buffer``), ``game.orders`` / ``game.active_orders()``,
 ``game.ring_costs``, ``game.rs_colors(machine)``, ``game.layout``,
-``game.exploration`` (light codes, type strings, reports),
+``game.exploration`` (2016: light codes, type strings, reports; 2025: name
+and type reports, ``released``), ``game.exploring`` (reports taken now),
+``game.pending_deliveries`` (unconfirmed), ``game.order(id)``,
 ``game.robots``.  Plain-value inputs (what the node calls):
 ``game.beacon(...)``, ``game.machine_report(team, [ReportEntry], channel_team)``,
-``game.prepare(team, machine, instruction, channel_team)`` -> "prepared" |
-"broken" | "ignored: ...", ``game.set_team``, ``game.set_state``,
-``game.set_phase``, ``game.advance(game_seconds)``.
+``game.prepare(team, machine, instruction, channel_team, sent_at=None)`` ->
+"prepared" | "broken" | "done" | "ignored: ...",
+``game.reset_machine(team, machine, channel_team)`` -> "broken" | "ignored: ...",
+``game.set_team``, ``game.set_state``, ``game.set_phase``,
+``game.advance(game_seconds)``.  Instructions: :class:`BSInstruction`,
+:class:`RSInstruction`, :class:`CSInstruction`, :class:`DSInstruction`
+(``gate`` in 2016, ``order_id`` in 2025, 0 = consume only),
+:class:`SSInstruction` (2025).
 """
 from .events import Event
 from .exploration2016 import ReportEntry
-from .game import RefboxGame
+from .game import PendingDelivery, RefboxGame
 from .node import RefboxNode
+from .ruleset import Rules2016, rules_for
+from .ruleset2025 import Rules2025
 from .stations import (BSInstruction, CSInstruction, DSInstruction, RSInstruction,
                        StationConfig)
+from .storage import SSInstruction
 from .timing import Timing, parse_phase_lengths
 from .world import RefboxWorld, SlotEvent, TableWorld, Workpiece
 
 __all__ = ["RefboxGame", "RefboxNode", "Event", "ReportEntry", "BSInstruction", "CSInstruction",
-           "DSInstruction", "RSInstruction", "StationConfig", "Timing", "parse_phase_lengths",
-           "RefboxWorld", "SlotEvent", "TableWorld", "Workpiece"]
+           "DSInstruction", "RSInstruction", "SSInstruction", "StationConfig", "Timing",
+           "parse_phase_lengths", "RefboxWorld", "SlotEvent", "TableWorld", "Workpiece",
+           "PendingDelivery", "Rules2016", "Rules2025", "rules_for"]

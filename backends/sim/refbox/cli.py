@@ -1,6 +1,8 @@
 """``rll-bt refbox sim``: the simulated refbox as a standalone process on UDP.
 
-It plays the 2016 rules with its own headless PyBullet world (or the
+It plays the 2016 rules (``--profile rcll2016``, the default) or today's
+(``--profile rcll2025``: no EXPLORATION phase, reports by zone and rotation
+in the first 180 s of PRODUCTION) with its own headless PyBullet world (or the
 in-memory table world), speaks the real wire protocol on the public, cyan and
 magenta channels and its plain TCP control stream, prints one line per phase
 change with the score, and ends cleanly on SIGINT/SIGTERM (or after the game
@@ -20,14 +22,17 @@ LOOP_PERIOD = 0.02        # wall seconds between two steps of the refbox
 def register(cli) -> None:
     sub = cli.group("refbox")
     p = sub.add_parser(
-        "sim", help="run a simulated refbox (2016 rules) on UDP that any team can play against",
+        "sim", help="run a simulated refbox (2016 or 2025 rules) on UDP that any team can play "
+                    "against",
         description="Run the simulated referee box as a standalone process: random mirrored "
-                    "field, exploration light codes, orders, stations, scoring, on the real "
+                    "field, exploration (2016: light codes; 2025: zone and rotation reports in "
+                    "the first minutes of production), orders, stations, scoring, on the real "
                     "wire protocol (public channel plain, team channels AES-128-CBC with each "
                     "team's key, TCP control stream plain). Prints a line per phase change "
                     "with the score; stop it with Ctrl-C.",
         epilog="exit codes: 0 ok, 2 bad arguments, 3 a port or PyBullet could not be opened")
-    p.add_argument("--profile", default="rcll2016", help="rules profile (default rcll2016)")
+    p.add_argument("--profile", default="rcll2016",
+                   help="rules profile: rcll2016 (default) or rcll2025")
     p.add_argument("--team-cyan", required=True, metavar="NAME", help="team playing cyan")
     p.add_argument("--key-cyan", required=True, metavar="KEY", help="crypto key of the cyan team")
     p.add_argument("--team-magenta", metavar="NAME", help="team playing magenta (optional)")
@@ -51,7 +56,8 @@ def register(cli) -> None:
     p.add_argument("--speed", type=float, default=1.0, metavar="X",
                    help="game seconds per wall second (default 1)")
     p.add_argument("--phase-lengths", default="", metavar="SPEC",
-                   help="e.g. setup=10,exploration=60,production=300,overtime=60 (seconds)")
+                   help="e.g. setup=10,exploration=60,production=300,overtime=60 (seconds); "
+                        "with rcll2025, exploration is the reporting time inside production")
     p.add_argument("--world", choices=("bullet", "table"), default="bullet",
                    help="bullet: a headless PyBullet world (default); table: in memory only")
     p.add_argument("--quit-after-game", action="store_true",
@@ -171,6 +177,9 @@ def cmd_sim(args) -> int:
                     print(f"[{clock.now() - start:7.1f} s] {ev.text.replace('phase ', '')}"
                           f"{' (overtime)' if ev.data.get('overtime') else ''}  {_score(game)}",
                           file=out, flush=True)
+                elif ev.kind == "report" and ev.data.get("what") == "ground-truth":
+                    print(f"[{clock.now() - start:7.1f} s] {ev.text}  {_score(game)}", file=out,
+                          flush=True)
             seen = len(game.events)
             if args.quit_after_game and game.phase == "POST_GAME":
                 break

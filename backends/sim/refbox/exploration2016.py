@@ -25,6 +25,7 @@ from rll_bt.rules import CYAN, MAGENTA, machine_team
 
 from .world import BLINK, OFF, ON, lights
 
+STATE_NAMES = {None: "NO_REPORT", True: "CORRECT_REPORT", False: "WRONG_REPORT"}
 TYPE_STRING_CHARS = string.ascii_uppercase + string.digits
 TYPE_STRING_LEN = 8
 INVALID_REPORT_POINTS = -6
@@ -35,7 +36,7 @@ class ReportEntry:
     """One MachineReportEntry: machine ``name``, the ``type`` string, the ``zone`` number
     (and ``rotation``); None for a field the report left out."""
 
-    name: str
+    name: str | None
     type: str | None = None
     zone: int | None = None
     rotation: int | None = None      # degrees (2017+ reports; unused by the 2016 rules)
@@ -70,6 +71,16 @@ class Judgement:
     feedback: str | None = None
     type_ok: bool | None = None
     zone_ok: bool | None = None
+    team: str = ""
+
+    @property
+    def text(self) -> str:
+        return (f"{self.team} reported {self.machine}: type {ok_word(self.type_ok)}, "
+                f"zone {ok_word(self.zone_ok)}")
+
+    @property
+    def data(self) -> dict:
+        return {"type_ok": self.type_ok, "zone_ok": self.zone_ok, "feedback": self.feedback}
 
 
 @dataclass
@@ -152,6 +163,24 @@ class Exploration2016:
     def state(self, team: str, machine: str) -> MachineReports | None:
         return self.reports[team].get(machine)
 
+    def correctly_reported(self, team: str, machine: str) -> bool:
+        rep = self.reports[team].get(machine)
+        return rep is not None and rep.fully_correct
+
+    def report_fields(self, team: str, machine: str) -> dict:
+        """MachineInfo fields about ``machine``'s report (field -> value, enums by name):
+        the zone once reported right, the report states."""
+        rep = self.reports[team].get(machine)
+        if rep is None:
+            return {"exploration_type_state": STATE_NAMES[None],
+                    "exploration_zone_state": STATE_NAMES[None]}
+        out = {"correctly_reported": rep.fully_correct,
+               "exploration_type_state": STATE_NAMES[rep.type_ok],
+               "exploration_zone_state": STATE_NAMES[rep.zone_ok]}
+        if rep.zone_ok:
+            out["zone"] = self.zones[machine]
+        return out
+
     def judge(self, team: str, entry: ReportEntry) -> Judgement | None:
         """Score one entry of ``team``'s MachineReport; None when it changes nothing."""
         if entry.name not in self.zones:
@@ -163,7 +192,8 @@ class Exploration2016:
                 return None
             self.reports[team][entry.name] = MachineReports(invalid=True)
             return Judgement(entry.name, ((INVALID_REPORT_POINTS,
-                                           f"report for {entry.name} of the other team"),))
+                                           f"report for {entry.name} of the other team"),),
+                             team=team)
         rep = known if known is not None else MachineReports()
         self.reports[team][entry.name] = rep
         awards: list[tuple[int, str]] = []
@@ -181,14 +211,24 @@ class Exploration2016:
         if not awards:
             return None
         feedback = "wrong" if rep.wrong else ("correct" if rep.fully_correct else None)
-        return Judgement(entry.name, tuple(awards), feedback, rep.type_ok, rep.zone_ok)
+        return Judgement(entry.name, tuple(awards), feedback, rep.type_ok, rep.zone_ok, team)
 
     @property
     def scoring(self):
         return self.profile.scoring
 
     def _zone_name(self, zone: int) -> str:
-        try:
-            return self.profile.zone_name(zone)
-        except ValueError:
-            return f"zone {zone}"
+        return zone_label(self.profile, zone)
+
+
+def ok_word(v) -> str:
+    """None/True/False as "-", "right", "wrong" (report texts)."""
+    return "-" if v is None else ("right" if v else "wrong")
+
+
+def zone_label(profile, zone: int) -> str:
+    """``zone``'s name in ``profile`` ("Z4", "C_Z23"), or "zone N" for a number it lacks."""
+    try:
+        return profile.zone_name(zone)
+    except ValueError:
+        return f"zone {zone}"

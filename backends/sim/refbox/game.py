@@ -1,6 +1,6 @@
 """The simulated refbox's game core: pure, clock-driven, no threads, no sockets.
 
-    game = RefboxGame("rcll2016", clock, seed=7, team_cyan="Carologistics")
+    game = RefboxGame("rcll2016", clock, seed=7, team_cyan="Carologistics")   # or "rcll2025"
     game.start()                  # PRE_GAME -> SETUP, RUNNING
     clock.advance(1.0); game.tick()
     game.points("CYAN"), game.phase, game.pop_events()
@@ -8,8 +8,10 @@
 :meth:`RefboxGame.tick` moves game time by the clock time passed since the
 last tick times ``timing.speed`` (nothing while not RUNNING), switching
 phases, firing station timers at their exact times, activating orders.
-Robots' beacons, reports and prepare requests come in as plain values
-(:meth:`beacon`, :meth:`machine_report`, :meth:`prepare`); the network node
+Robots' beacons, reports, prepare and reset requests come in as plain values
+(:meth:`beacon`, :meth:`machine_report`, :meth:`prepare`, :meth:`reset_machine`);
+everything that differs between rule sets is asked of ``game.rules``
+(:mod:`.ruleset`, :mod:`.ruleset2025`); the network node
 (:mod:`.node`) turns wire messages into these calls and the game state back
 into messages.  ``game_time`` is game seconds since the current phase began.
 """
@@ -23,6 +25,8 @@ from rll_bt import rules as R
 from rll_bt.rules import CYAN, MAGENTA, TEAMS, machine_team
 
 from . import events as E
+from dataclasses import dataclass
+
 from .exploration2016 import ReportEntry
 from .ledger import Ledger, PointsEntry
 from .robots import RobotRegistry
@@ -37,6 +41,23 @@ log = logging.getLogger("backends.sim.refbox")
 REFBOX_TEAM = "LLSF"
 
 
+@dataclass(frozen=True)
+class PendingDelivery:
+    """A delivery the referee has not confirmed yet (OrderInfo ``unconfirmed_deliveries``):
+    delivery ``id``, ``team``, the DS ``machine``, the ``order`` it was prepared for, the
+    workpiece, the production ``game_time`` it was delivered at and the game time the
+    referee confirms it (``confirm_at``)."""
+
+    id: int
+    team: str
+    machine: str
+    order: int | None
+    workpiece: Workpiece
+    gate: int
+    game_time: float
+    confirm_at: float
+
+
 class RefboxGame:
     """One game of the simulated refbox.
 
@@ -46,7 +67,8 @@ class RefboxGame:
     :class:`TableWorld` with a layout generated from the seed).  ``seed``
     fixes placement, light codes, type strings, ring costs, orders and down
     periods.  ``timing``: phase lengths and speed (default: the profile's).
-    ``config``: station durations and rules.
+    ``config``: station durations and rules.  ``rules``: the rule set of the
+    profile (:func:`~.ruleset.rules_for`).
     """
 
     def __init__(self, profile, clock, world=None, *, seed: int = 0,
@@ -74,11 +96,12 @@ class RefboxGame:
         self.robots = RobotRegistry()
         rs, self.ring_costs = self.profile.ring_setup(self.rng("rings"))
         self._rs_colors = {kind: tuple(colors) for kind, colors in rs.items()}
-        zones = {m: p.zone for m, p in self.layout.machines.items()}
-        self.exploration = self.rules.make_exploration(self.profile, zones, self.rng("exploration"),
-                                                       feedback_time)
-        self._feedback: dict[str, float] = {}     # machine -> exploration time the feedback ends
+        self.exploration = self.rules.make_exploration(self.profile, self.layout,
+                                                       self.rng("exploration"), feedback_time)
+        self.feedback_until: dict[str, float] = {}  # 2016: machine -> time its feedback ends
         self.orders = self.rules.make_orders(self.profile, self.rng("orders"), self.timing)
+        self.pending_deliveries: list[PendingDelivery] = []
+        self._delivery_ids = 0
         self.stations: dict[str, Station] = {
             m: make_station(m, machine_team(m), self) for m in self.profile.machines()}
         for m, period in self.rules.down_periods(self.profile, self.rng("down"),
@@ -134,6 +157,8 @@ class RefboxGame:
         """SetGamePhase: switch to ``phase`` now (its game time restarts at 0)."""
         if phase not in PHASES:
             raise ValueError(f"unknown game phase {phase!r}")
+        if not self.rules.has_phase(phase):
+            raise ValueError(f"{self.profile.name} has no {phase} phase")
         self.tick()
         if phase != self.phase:
             self._enter(phase)
@@ -164,8 +189,7 @@ class RefboxGame:
             self._attention(channel_team, f"Invalid report for team {team_color} of team "
                                           f"{channel_team}")
             return 0
-        if team_color not in TEAMS or not self.rules.accepts_report(
-                self.phase, self.game_time, self.timing):
+        if team_color not in TEAMS or not self.exploring:
             return 0
         earned = 0
         for entry in entries:
@@ -175,38 +199,59 @@ class RefboxGame:
             for pts, reason in j.awards:
                 self.award(team_color, pts, reason, machine=j.machine)
                 earned += pts
-            self.emit(E.REPORT, f"{team_color} reported {entry.name}: type "
-                      f"{_ok(j.type_ok)}, zone {_ok(j.zone_ok)}", team=team_color,
-                      machine=j.machine, type_ok=j.type_ok, zone_ok=j.zone_ok,
-                      feedback=j.feedback)
-            if j.feedback and j.machine in self.stations:
-                self._feedback[j.machine] = self.game_time + self.exploration.feedback_time
-                self._exploration_lights(j.machine)
+            self.emit(E.REPORT, j.text, team=team_color, machine=j.machine, **j.data)
+            self.rules.on_report(self, j)
         return earned
 
     def prepare(self, team_color: str, machine: str, instruction,
-                channel_team: str | None = None) -> str:
-        """A PrepareMachine.  Returns what became of it: "prepared", "broken" or
-        "ignored: <why>" (with an attention message where the refbox sends one)."""
+                channel_team: str | None = None, *, sent_at: float | None = None) -> str:
+        """A PrepareMachine (``sent_at``: its Unix time, 2025).  Returns what became of it:
+        "prepared", "broken", "done" (an SS CHANGE_INFO) or "ignored: <why>" (with an
+        attention message where the refbox sends one)."""
+        st = self._team_machine("prepare", team_color, machine, channel_team)
+        if isinstance(st, str):
+            return st
+        why = self.rules.stale_prepare(self, sent_at)
+        if why:
+            return f"ignored: {why}"
+        why = self.rules.refuse_prepare(self, st)
+        if why:
+            self._attention(team_color, f"Prepare refused: {why}")
+            return f"ignored: {why}"
+        if st.state != "IDLE":
+            return self.rules.prepare_busy(self, st)
+        if instruction is None and not self.rules.missing_instruction_breaks:
+            return f"ignored: prepare for {machine} without instruction"
+        st.prepare(instruction)
+        if st.state == "BROKEN":
+            return "broken"
+        return "done" if st.state == "IDLE" else "prepared"
+
+    def reset_machine(self, team_color: str, machine: str,
+                      channel_team: str | None = None) -> str:
+        """A ResetMachine: the team's station goes BROKEN (the usual broken time, then
+        IDLE with its slots cleared).  Returns "broken" or "ignored: <why>"."""
+        st = self._team_machine("reset", team_color, machine, channel_team)
+        if isinstance(st, str):
+            return st
+        st.reset(f"Machine {machine} resetted by the team {team_color}")
+        return "broken"
+
+    def _team_machine(self, what: str, team_color: str, machine: str, channel_team):
+        """The station ``machine`` of ``team_color`` for a team request, or why it is
+        ignored ("ignored: ..."; with the refbox's attention messages)."""
         if self.phase != PRODUCTION or self.state != RUNNING:
             return f"ignored: not in PRODUCTION/RUNNING ({self.phase}/{self.state})"
         if channel_team is not None and channel_team != team_color:
-            self._attention(channel_team, f"Invalid prepare for team {team_color} of team "
+            self._attention(channel_team, f"Invalid {what} for team {team_color} of team "
                                           f"{channel_team}")
             return "ignored: wrong channel"
         st = self.stations.get(machine)
         if st is None or st.team != team_color:
             self._attention(team_color if team_color in TEAMS else None,
-                            f"Prepare received for invalid machine {machine}")
+                            f"{what.capitalize()} received for invalid machine {machine}")
             return "ignored: not a machine of that team"
-        if st.state != "IDLE":
-            return f"ignored: {machine} is {st.state}"
-        why = self.rules.refuse_prepare(self, st)
-        if why:
-            self._attention(team_color, f"Prepare refused: {why}")
-            return f"ignored: {why}"
-        st.prepare(instruction)
-        return "broken" if st.state == "BROKEN" else "prepared"
+        return st
 
     # -- time ---------------------------------------------------------------------
     def tick(self) -> None:
@@ -226,7 +271,8 @@ class RefboxGame:
             self.advance(dt)
 
     def advance(self, dt: float) -> None:
-        """Move game time ``dt`` game seconds on (while RUNNING), crossing phase ends."""
+        """Move game time ``dt`` game seconds on (while RUNNING), crossing phase ends and
+        stopping at the rule set's checkpoints (e.g. the end of exploration)."""
         while self.state == RUNNING:
             end = self.phase_end()
             if end is not None and self.game_time >= end:
@@ -234,9 +280,13 @@ class RefboxGame:
                 continue
             if dt <= 0:
                 break
-            if end is not None and dt >= end - self.game_time:
-                dt -= end - self.game_time
-                self.game_time = end
+            stops = [t for t in self.rules.checkpoints(self) if t > self.game_time]
+            if end is not None:
+                stops.append(end)
+            stop = min(stops) if stops else None
+            if stop is not None and dt >= stop - self.game_time:
+                dt -= stop - self.game_time
+                self.game_time = stop
             else:
                 self.game_time += dt
                 dt = 0.0
@@ -274,6 +324,16 @@ class RefboxGame:
     def active_orders(self):
         return [o for o in self.orders if o.active]
 
+    def order(self, order_id: int):
+        """The order with ``order_id`` (active or not), None when there is none."""
+        return next((o for o in self.orders if o.id == order_id), None)
+
+    @property
+    def exploring(self) -> bool:
+        """Whether machine reports are taken now (2016: EXPLORATION; 2025: the first
+        exploration-time seconds of PRODUCTION)."""
+        return self.rules.exploring(self)
+
     def pop_events(self) -> list[E.Event]:
         """Events since the last call."""
         out = self.events[self._read:]
@@ -299,18 +359,51 @@ class RefboxGame:
         self.events.append(ev)
         log.debug("%s", ev)
 
+    def station_lights(self, station: Station) -> dict:
+        """The tower ``station`` shows now (the rule set's choice)."""
+        return self.rules.station_lights(self, station)
+
+    def refresh_lights(self, machine: str | None = None) -> None:
+        """Show the rule set's lights on ``machine`` (every station for None) in PRODUCTION."""
+        if self.phase != PRODUCTION:
+            return
+        for name in ([machine] if machine else sorted(self.stations)):
+            st = self.stations[name]
+            st.set_lights(self.station_lights(st))
+
     def deliver(self, station: Station, wp: Workpiece, gate: int, game_time: float) -> None:
-        order_id = getattr(station.instruction, "order_id", None)
-        res = self.rules.judge_delivery(self.profile, self.orders, station.team, wp, gate,
-                                        game_time, self.ring_costs, order_id)
+        """The DS ``station`` consumed ``wp``: judge it now, or list it as unconfirmed for
+        ``config.delivery_confirm`` game seconds first."""
+        self._delivery_ids += 1
+        d = PendingDelivery(self._delivery_ids, station.team, station.name,
+                            getattr(station.instruction, "order_id", None), wp, gate, game_time,
+                            game_time + self.config.delivery_confirm)
+        if self.config.delivery_confirm > 0:
+            self.pending_deliveries.append(d)
+            self.emit(E.DELIVERY, f"{d.team} delivered {wp} (delivery {d.id}, unconfirmed)",
+                      team=d.team, machine=d.machine, game_time=game_time, order=d.order,
+                      how="unconfirmed", workpiece=wp, delivery=d.id)
+            return
+        self._judge_delivery(d)
+
+    def _judge_delivery(self, d: PendingDelivery) -> None:
+        res = self.rules.judge_delivery(self.profile, self.orders, d.team, d.workpiece, d.gate,
+                                        d.game_time, self.ring_costs, d.order)
         for pts, reason in res.awards:
-            self.award(station.team, pts, reason, machine=station.name, game_time=game_time,
+            self.award(d.team, pts, reason, machine=d.machine, game_time=d.game_time,
                        order=res.order)
-        self.emit(E.DELIVERY, f"{station.team} delivered {wp} at gate {gate}: {res.how}",
-                  team=station.team, machine=station.name, game_time=game_time,
-                  points=res.points, order=res.order, how=res.how, workpiece=wp)
+        self.emit(E.DELIVERY, f"{d.team} delivered {d.workpiece} at gate {d.gate}: {res.how}",
+                  team=d.team, machine=d.machine, game_time=d.game_time,
+                  points=res.points, order=res.order, how=res.how, workpiece=d.workpiece,
+                  delivery=d.id)
         if res.attention:
-            self._attention(station.team, res.attention)
+            self._attention(d.team, res.attention)
+
+    def _confirm_deliveries(self) -> None:
+        due = [d for d in self.pending_deliveries if d.confirm_at <= self.game_time]
+        for d in due:
+            self.pending_deliveries.remove(d)
+            self._judge_delivery(d)
 
     # -- internals ---------------------------------------------------------------------
     def _attention(self, team: str | None, text: str, time_to_show: float = 10.0) -> None:
@@ -325,10 +418,11 @@ class RefboxGame:
         self.emit(E.PHASE, f"phase {prev} -> {phase}", previous=prev)
         if phase == EXPLORATION:
             for m in self.stations:
-                self._exploration_lights(m)
+                self.show_exploration_lights(m)
         elif phase == PRODUCTION:
             for st in self.stations.values():
                 st.start_production(0.0)
+            self.rules.update(self)
             self._activate_orders()
         else:
             for st in self.stations.values():
@@ -361,14 +455,16 @@ class RefboxGame:
     def _update(self) -> None:
         """Everything that follows game time within the phase."""
         if self.phase == EXPLORATION:
-            for m, until in list(self._feedback.items()):
+            for m, until in list(self.feedback_until.items()):
                 if self.game_time >= until:
-                    del self._feedback[m]
-                    self._exploration_lights(m)
+                    del self.feedback_until[m]
+                    self.show_exploration_lights(m)
         elif self.phase == PRODUCTION:
+            self.rules.update(self)
             self._activate_orders()
             for name in sorted(self.stations):
                 self.stations[name].update(self.game_time)
+            self._confirm_deliveries()
 
     def _activate_orders(self) -> None:
         for o in self.orders:
@@ -380,12 +476,13 @@ class RefboxGame:
                 self._attention(None, f"Order {o.id}: {o.quantity} x C{o.complexity} from "
                                       f"{o.begin} to {o.end}")
 
-    def _exploration_lights(self, machine: str) -> None:
+    def show_exploration_lights(self, machine: str) -> None:
+        """2016 EXPLORATION: ``machine``'s light code, or its report feedback while it lasts."""
         st = self.stations[machine]
         if self.phase != EXPLORATION or self.state != RUNNING:
             st.set_lights(ALL_OFF)
             return
-        if machine in self._feedback:
+        if machine in self.feedback_until:
             rep = self.exploration.state(st.team, machine)
             st.set_lights(self.exploration.feedback_lights(
                 "correct" if rep is not None and rep.fully_correct else "wrong"))
@@ -396,11 +493,12 @@ class RefboxGame:
         running = self.state == RUNNING
         if self.phase == EXPLORATION:
             for m in self.stations:
-                self._exploration_lights(m)
+                self.show_exploration_lights(m)
         for st in self.stations.values():
             st.active = running and self.phase == PRODUCTION
             if st.active:
                 st.now = self.game_time
+        self.refresh_lights()
 
     def _drain_slot_events(self) -> None:
         while self._slot_events:
@@ -417,9 +515,6 @@ class RefboxGame:
                 log.exception("slot event %s failed", ev)
 
 
-def _ok(v) -> str:
-    return "-" if v is None else ("right" if v else "wrong")
 
-
-__all__ = ["RefboxGame", "REFBOX_TEAM", "INIT", "WAIT_START", "RUNNING", "PAUSED", "PRE_GAME",
+__all__ = ["RefboxGame", "PendingDelivery", "REFBOX_TEAM", "INIT", "WAIT_START", "RUNNING", "PAUSED", "PRE_GAME",
            "SETUP", "EXPLORATION", "PRODUCTION", "POST_GAME"]

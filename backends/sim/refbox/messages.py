@@ -13,13 +13,16 @@ import random
 
 from rll_bt import __version__
 from rll_bt import msgs as M
-from rll_bt.rules import CYAN, MAGENTA, TEAMS
+from rll_bt.rules import CYAN, MAGENTA, TEAMS, machine_team
 
 from .exploration2016 import ReportEntry
 from .stations import BSInstruction, CSInstruction, DSInstruction, RSInstruction
+from .storage import SSInstruction
 
 REFBOX_TEAM, REFBOX_PEER, REFBOX_NUMBER = "LLSF", "RefBox", 0
-_STATE_OF_REPORT = {None: "NO_REPORT", True: "CORRECT_REPORT", False: "WRONG_REPORT"}
+#: largest protobuf that fits a 1024-byte AES-128-CBC datagram (8 header + 16 IV +
+#: PKCS#7-padded 4-byte message header and protobuf)
+MAX_ENCRYPTED_PROTOBUF = 987
 
 
 def set_enum(msg, field: str, name: str) -> bool:
@@ -126,6 +129,13 @@ class Messages:
         set_enum(mri, "team_color", team)
         for m in game.exploration.reported(team):
             mri.reported_machines.append(m)
+        if has_field(mri, "reported_types"):
+            for r in game.exploration.type_feedback(team):
+                f = mri.reported_types.add()
+                f.type, f.zone = r.type, r.zone
+                if r.machine:
+                    f.name = r.machine
+                    set_enum(f, "team_color", machine_team(r.machine))
         return mri
 
     def order_info(self, game):
@@ -146,6 +156,13 @@ class Messages:
                 om.delivery_gate = o.gate
             if has_field(om, "competitive"):
                 om.competitive = o.competitive
+            if has_field(om, "unconfirmed_deliveries"):
+                for d in game.pending_deliveries:
+                    if d.order == o.id:
+                        u = om.unconfirmed_deliveries.add()
+                        u.id = d.id
+                        set_enum(u, "team", d.team)
+                        set_time(u.delivery_time, d.game_time)
         return oi
 
     def ring_info(self, game):
@@ -163,27 +180,35 @@ class Messages:
             set_enum(mi, "team_color", team)
         for name in game.profile.machines(team):
             self._machine(mi.machines.add(), game, name)
+        if team is not None:
+            _fit_storage_notes(mi)
         return mi
 
     def _machine(self, m, game, name: str) -> None:
         st = game.stations[name]
         m.name, m.type, m.state = name, name[2:4], st.state
         set_enum(m, "team_color", st.team)
+        if has_field(m, "input_tag"):
+            m.input_tag, m.output_tag = game.profile.tag_ids(name)
         self._lights(m.lights, st.lights)
-        rep = game.exploration.state(st.team, name)
-        type_ok = rep.type_ok if rep else None
-        zone_ok = rep.zone_ok if rep else None
-        if zone_ok:
-            m.zone = game.layout[name].zone          # Zone enum values are the zone numbers
-        if rep is not None and has_field(m, "correctly_reported"):
-            m.correctly_reported = bool(rep.fully_correct)
-        for f, ok in (("exploration_type_state", type_ok), ("exploration_zone_state", zone_ok)):
-            if has_field(m, f):
-                set_enum(m, f, _STATE_OF_REPORT[ok])
+        # zone (Zone enum values are the zone numbers), rotation and report states
+        for f, value in game.exploration.report_fields(st.team, name).items():
+            if not has_field(m, f):
+                continue
+            if isinstance(value, str):
+                set_enum(m, f, value)
+            else:
+                setattr(m, f, value)
         if name[2:4] == "RS":
             for c in game.rs_colors(name):
                 set_enum(m, "ring_colors", c)
             m.loaded_with = max(0, st.slide_loaded)
+        if name[2:4] == "SS" and has_field(m, "status_ss"):
+            for place in st.status():            # all 48 places, as the refbox
+                si = m.status_ss.add()
+                si.shelf, si.slot, si.is_filled = place.shelf, place.slot, place.filled
+                if place.description:
+                    si.description = place.description
 
     @staticmethod
     def _lights(repeated, lights: dict) -> None:
@@ -207,10 +232,11 @@ class Messages:
         team = enum_name(msg, "team_color")
         entries = []
         for e in msg.machines:
+            name = e.name if e.HasField("name") and e.name else None
             etype = e.type if e.HasField("type") and e.type else None
             zone = e.zone if e.HasField("zone") else None
             rot = e.rotation if has_field(e, "rotation") and e.HasField("rotation") else None
-            entries.append(ReportEntry(e.name, etype, zone, rot))
+            entries.append(ReportEntry(name, etype, zone, rot))
         return team, entries
 
     @staticmethod
@@ -218,7 +244,7 @@ class Messages:
         """The instruction of a PrepareMachine for a ``machine_kind`` ("BS", ...) station,
         None when the message carries none for that kind (the station breaks)."""
         field = {"BS": "instruction_bs", "RS": "instruction_rs", "CS": "instruction_cs",
-                 "DS": "instruction_ds"}.get(machine_kind)
+                 "DS": "instruction_ds", "SS": "instruction_ss"}.get(machine_kind)
         if field is None or not has_field(msg, field) or not msg.HasField(field):
             return None
         i = getattr(msg, field)
@@ -228,6 +254,23 @@ class Messages:
             return RSInstruction(enum_name(i, "ring_color") or "?")
         if machine_kind == "CS":
             return CSInstruction(enum_name(i, "operation") or "?")
+        if machine_kind == "SS":
+            desc = i.wp_description if i.HasField("wp_description") else None
+            return SSInstruction(enum_name(i, "operation") or "?", i.shelf, i.slot, desc)
         gate = i.gate if has_field(i, "gate") and i.HasField("gate") else 0
         order = i.order_id if has_field(i, "order_id") and i.HasField("order_id") else None
         return DSInstruction(gate, order)
+
+
+def sent_at(msg) -> float | None:
+    """A PrepareMachine's ``sent_at`` (Unix seconds), None when absent (or the set lacks it)."""
+    return float(msg.sent_at) if has_field(msg, "sent_at") and msg.HasField("sent_at") else None
+
+
+def _fit_storage_notes(mi) -> None:
+    """Drop storage descriptions (last first) until ``mi`` fits one encrypted datagram; a
+    full shelf of 48 places with long notes would not."""
+    notes = [si for m in mi.machines for si in m.status_ss if si.HasField("description")] \
+        if mi.machines and has_field(mi.machines[0], "status_ss") else []
+    while notes and mi.ByteSize() > MAX_ENCRYPTED_PROTOBUF:
+        notes.pop().ClearField("description")

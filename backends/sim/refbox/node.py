@@ -18,19 +18,22 @@ BeaconSignal        public             1 s (team "LLSF", peer "RefBox", number 0
 GameState           public + stream    1 s
 VersionInfo         public             0.5 s x10 at start and after a new peer
 RobotInfo           public / stream    2.5 s / 0.25 s
-ExplorationInfo     public             1 s in EXPLORATION
-MachineReportInfo   cyan, magenta      1 s in EXPLORATION
+ExplorationInfo     public             1 s in EXPLORATION (2016 only)
+MachineReportInfo   cyan, magenta      1 s while reports are taken (2016: EXPLORATION;
+                                       2025: PRODUCTION before the exploration time)
 OrderInfo           public + stream    PRODUCTION: 0.5 s x10, then 2 s; the burst
                                        restarts on a new order and on a delivery
 MachineInfo         cyan, magenta      PRODUCTION: 0.5 s x30, then 2 s, and at once
-                                       when a machine of that team changes state
+                                       when a machine of that team changes state or
+                                       (2025) a report or the ground truth reveals one
 MachineInfo (all)   stream             0.25 s
 RingInfo            cyan + magenta     PRODUCTION: 2 s
 AttentionMessage    team's channel     when the game raises one (always on stream)
 ==================  =================  ===========================================
 
-Accepted: BeaconSignal (any channel), MachineReport and PrepareMachine on a
-team channel (the team colour must match the channel) or the stream,
+Accepted: BeaconSignal (any channel), MachineReport, PrepareMachine and
+ResetMachine (2025) on a team channel (the team colour must match the
+channel) or the stream,
 SetGameState, SetGamePhase and SetTeamName on the stream (and on public with
 ``control_via_public``, the refbox's ``control-via-broadcast``).  Anything
 else is counted in :attr:`ignored` and dropped; a message that makes the
@@ -46,7 +49,7 @@ from rll_bt.comm import MessageRegistry
 from rll_bt.rules import CYAN, MAGENTA, TEAMS
 
 from . import events as E
-from .messages import Messages, enum_name
+from .messages import Messages, enum_name, sent_at
 
 log = logging.getLogger("backends.sim.refbox.node")
 
@@ -236,7 +239,14 @@ class RefboxNode:
             return False
         machine = msg.machine
         instr = Messages.prepare(msg, machine[2:4] if len(machine) >= 4 else "")
-        self.game.prepare(enum_name(msg, "team_color"), machine, instr, channel_team=team)
+        self.game.prepare(enum_name(msg, "team_color"), machine, instr, channel_team=team,
+                          sent_at=sent_at(msg))
+        return True
+
+    def _on_ResetMachine(self, msg, rec, label, team) -> bool:
+        if label == PUBLIC:
+            return False
+        self.game.reset_machine(enum_name(msg, "team_color"), msg.machine, channel_team=team)
         return True
 
     def _control_allowed(self, label: str) -> bool:
@@ -304,8 +314,8 @@ class RefboxNode:
                 self.machine_info.restart()
             elif ev.kind in (E.ORDER, E.DELIVERY):
                 self.order_info.restart()
-            elif ev.kind == E.MACHINE and ev.phase == "PRODUCTION" and ev.team in TEAMS:
-                changed.add(ev.team)
+            elif ev.kind in (E.MACHINE, E.REPORT) and ev.phase == "PRODUCTION":
+                changed.update([ev.team] if ev.team in TEAMS else TEAMS)
             elif ev.kind == E.ROBOT and ev.data.get("what") == "new":
                 self.version.restart()
         if self.game.phase == "PRODUCTION":
@@ -327,8 +337,8 @@ class RefboxNode:
         streaming = ch.stream is not None and bool(ch.stream.clients())
         if streaming and self.robot_info_stream.due(now):
             self._send(ch.stream, m.robot_info(g))
-        if g.phase == "EXPLORATION":
-            if self.exploration_info.due(now):
+        if g.exploring:
+            if g.rules.sends_exploration_info and self.exploration_info.due(now):
                 self._send(ch.public, m.exploration_info(g, self._rng))
             if self.report_info.due(now):
                 for color in TEAMS:

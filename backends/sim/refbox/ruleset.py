@@ -1,11 +1,12 @@
 """What differs between rule sets inside the game core, behind one object.
 
 :func:`rules_for` picks the rule set of a profile.  The game core asks it
-for the phase sequence, the exploration model, the order schedule, the
-delivery judgement and the down periods, and nothing else in the core names a
-year.  ``rcll2016`` is implemented; a 2025 rule set (issue 10) adds a class
-here with the same methods (exploration inside PRODUCTION, zone + rotation
-reports, 2025 orders and points) and an entry in :data:`RULESETS`.
+for the phase sequence, the exploration model and when reports are taken,
+the signal-tower lights of a station, the order schedule, PrepareMachine
+checks, the delivery judgement and the down periods, and nothing else in the
+core names a year.  :class:`Rules2016` is the 2016 refbox (tag 2016-1);
+:class:`~.ruleset2025.Rules2025` today's (HEAD) refbox, a subclass that
+overrides what changed.
 """
 from __future__ import annotations
 
@@ -22,6 +23,14 @@ class Rules2016:
     """The 2016 rules (refbox tag 2016-1)."""
 
     name = "rcll2016"
+    sends_exploration_info = True       # ExplorationInfo (light codes, zones) on public
+    missing_instruction_breaks = True   # a PrepareMachine without instruction breaks the station
+    prepare_timeout: float | None = None   # PrepareMachine.sent_at older than this is ignored
+
+    # -- phases ------------------------------------------------------------------
+    def has_phase(self, phase: str) -> bool:
+        """Whether the operator may switch to ``phase``."""
+        return True
 
     def phase_sequence(self, timing) -> tuple[str, ...]:
         """Phases after PRE_GAME, in order, before POST_GAME."""
@@ -31,21 +40,61 @@ class Rules2016:
         """The phase a game without team names starts in (a training game)."""
         return EXPLORATION if timing.exploration > 0 else PRODUCTION
 
-    def accepts_report(self, phase: str, game_time: float, timing) -> bool:
-        return phase == EXPLORATION
+    def checkpoints(self, game) -> list[float]:
+        """Game times in the current phase at which :meth:`update` must run exactly."""
+        return []
 
-    def make_exploration(self, profile, zones: dict[str, int], rng: random.Random,
+    def update(self, game) -> None:
+        """What follows game time in PRODUCTION beyond stations and orders."""
+
+    # -- exploration ---------------------------------------------------------------
+    def exploring(self, game) -> bool:
+        """Whether MachineReports are taken (and MachineReportInfo is sent) now."""
+        return game.phase == EXPLORATION
+
+    def make_exploration(self, profile, layout, rng: random.Random,
                          feedback_time: float = 5.0) -> Exploration2016:
+        zones = {m: p.zone for m, p in layout.machines.items()}
         return Exploration2016(profile, zones, rng, feedback_time)
 
+    def on_report(self, game, judgement) -> None:
+        """A report entry was judged: blink its machine green/red for the feedback time."""
+        if judgement.feedback and judgement.machine in game.stations:
+            game.feedback_until[judgement.machine] = (game.game_time
+                                                      + game.exploration.feedback_time)
+            game.show_exploration_lights(judgement.machine)
+
+    def station_lights(self, game, station) -> dict:
+        """The tower ``station`` shows in PRODUCTION: its state's lights."""
+        return station.state_lights()
+
+    # -- production ----------------------------------------------------------------
     def refuse_prepare(self, game, station) -> str | None:
-        """Why a PrepareMachine for an IDLE ``station`` of the sender is refused, or None.
-        Profiles with ``prepare_requires_report`` (2025) refuse stations not yet
-        correctly reported."""
-        if game.profile.prepare_requires_report:
-            rep = game.exploration.state(station.team, station.name)
-            if rep is None or not rep.fully_correct:
-                return f"{station.name} is not yet correctly reported"
+        """Why a PrepareMachine for ``station`` of the sender is refused (with an attention
+        message), or None.  Profiles with ``prepare_requires_report`` (2025) refuse
+        stations not yet correctly reported."""
+        if game.profile.prepare_requires_report and \
+                not game.exploration.correctly_reported(station.team, station.name):
+            return f"{station.name} is not yet correctly reported"
+        return None
+
+    def stale_prepare(self, game, sent_at: float | None) -> str | None:
+        """Why a PrepareMachine sent at ``sent_at`` (Unix s) is too old, or None."""
+        if self.prepare_timeout is None or sent_at is None:
+            return None
+        age = game.clock.epoch() - float(sent_at)
+        if age > self.prepare_timeout:
+            return f"sent {age:.0f} s ago (more than {self.prepare_timeout:.0f} s)"
+        return None
+
+    def prepare_busy(self, game, station) -> str:
+        """A PrepareMachine for a station that is not IDLE: ignored."""
+        return f"ignored: {station.name} is {station.state}"
+
+    def validate_ds(self, game, instr) -> str | None:
+        """Why a DS instruction breaks the station, or None: 2016 takes a gate 0-3."""
+        if not 0 <= int(instr.gate) <= 3:
+            return f"invalid delivery gate {instr.gate}"
         return None
 
     def make_orders(self, profile, rng: random.Random, timing):
@@ -58,8 +107,10 @@ class Rules2016:
         """One random RS and one random CS per team go down for a while; the magenta
         twin of the chosen cyan machine goes down at the same time (mirrored).
         Length from the profile's ``down_period`` range, start uniform in
-        [0.1 P, 0.9 P - length]; both scaled with the production length."""
+        [``earliest``, 0.9 P - length] with ``earliest`` 0.1 P (2016); lengths
+        scaled with the production length."""
         P, scale = float(timing.production), timing.production_scale
+        earliest = self.down_earliest(timing)
         lo, hi = profile.down_period
         out = {}
         for kind in ("RS", "CS"):
@@ -68,18 +119,24 @@ class Rules2016:
                 continue
             m = rng.choice(names)
             length = rng.uniform(lo, hi) * scale
-            start = rng.uniform(0.1 * P, max(0.1 * P, 0.9 * P - length))
+            start = rng.uniform(earliest, max(earliest, 0.9 * P - length))
             out[m] = out[mirror_machine_name(m)] = (start, start + length)
         return out
 
+    def down_earliest(self, timing) -> float:
+        return 0.1 * float(timing.production)
 
-RULESETS = {"rcll2016": Rules2016}
+
+def _rulesets() -> dict:
+    from .ruleset2025 import Rules2025      # a subclass of Rules2016
+    return {"rcll2016": Rules2016, "rcll2025": Rules2025}
 
 
 def rules_for(profile) -> Rules2016:
     """The rule set playing ``profile``; ValueError for a profile without one."""
+    sets = _rulesets()
     try:
-        return RULESETS[profile.name]()
+        return sets[profile.name]()
     except KeyError:
-        raise ValueError(f"the simulated refbox does not play {profile.name!r} yet "
-                         f"(it plays: {', '.join(RULESETS)})") from None
+        raise ValueError(f"the simulated refbox does not play {profile.name!r} "
+                         f"(it plays: {', '.join(sets)})") from None

@@ -4,16 +4,21 @@ States and signal-tower lights (refbox code; where the 2016 rulebook's
 wording differs, e.g. "yellow busy", the code wins):
 
 ================  =============================  =================================
-state             lights                         leaves when
+state             lights 2016 (2017+ if other)   leaves when
 ================  =============================  =================================
 IDLE              green                          a valid PrepareMachine arrives
 PREPARED          green blinking for 3 s, green  a workpiece lies on the input
+                  (green blinking)
 PROCESSING        green + yellow                 the processing time has passed
-READY-AT-OUTPUT   yellow                         a robot takes the product
-WAIT-IDLE         yellow blinking                5 s later -> IDLE
+READY-AT-OUTPUT   yellow (yellow + green blink)  a robot takes the product
+WAIT-IDLE         yellow blinking (yellow and    5 s later -> IDLE
+                  green blinking)
 BROKEN            red + yellow blinking          30 s later -> IDLE (slots cleared)
 DOWN              red                            the down period ends
 ================  =============================  =================================
+
+Which table a station shows is the rule set's choice (``host.station_lights``):
+2017+ stations show their state only once correctly reported.
 
 A wrong or missing instruction breaks the station: an RS ring colour the RS
 does not have, RETRIEVE_CAP while a cap is buffered, MOUNT_CAP without one,
@@ -56,6 +61,16 @@ STATE_LIGHTS = {
     DOWN: lights(red=ON),
 }
 PREPARED_BLINK = lights(green=BLINK)
+#: machine-lights.clp (2019+)
+STATE_LIGHTS_2025 = {
+    IDLE: lights(green=ON),
+    PREPARED: lights(green=BLINK),
+    PROCESSING: lights(yellow=ON, green=ON),
+    READY_AT_OUTPUT: lights(yellow=ON, green=BLINK),
+    WAIT_IDLE: lights(yellow=BLINK, green=BLINK),
+    BROKEN: lights(red=BLINK, yellow=BLINK),
+    DOWN: lights(red=ON),
+}
 
 
 @dataclass(frozen=True)
@@ -70,6 +85,7 @@ class StationConfig:
     rs_mount: float = 15.0
     cs_process: float = 12.0
     ds_deliver: float = 8.0
+    ss_process: float = 10.0               # storage station store / retrieve
     prepared_blink: float = 3.0            # PREPARED-BLINK-TIME
     wait_idle: float = 5.0                 # RETRIEVE-WAIT-IDLE-TIME
     broken: float = 30.0                   # BROKEN-DOWN-TIME
@@ -78,6 +94,7 @@ class StationConfig:
     cs_caps: tuple[tuple[str, str], ...] = (("CS1", "CAP_GREY"), ("CS2", "CAP_BLACK"))
     carrier_base: str = "BASE_RED"         # base under the caps on a CS shelf
     refill_shelf: bool = True              # a taken cap carrier is replaced at once
+    delivery_confirm: float = 0.0          # 2017+: game s until the referee confirms a delivery
 
     def cap_of(self, kind: str) -> str:
         return dict(self.cs_caps)[kind]
@@ -111,7 +128,9 @@ class StationHost(Protocol):
     world: object
     config: StationConfig
     profile: object
+    rules: object
 
+    def station_lights(self, station: "Station") -> dict: ...
     def ring_cost(self, color: str) -> int: ...
     def rs_colors(self, machine: str) -> tuple[str, ...]: ...
     def award(self, team: str, points: int, reason: str, machine: str | None = None,
@@ -339,9 +358,29 @@ class Station:
                        machine=self.name, state=state, previous=prev, reason=why)
 
     def _show_lights(self) -> None:
-        want = PREPARED_BLINK if (self.state == PREPARED and self.blink_until is not None) \
-            else STATE_LIGHTS[self.state]
-        self.set_lights(want)
+        self.set_lights(self.host.station_lights(self))
+
+    def state_lights(self, table: dict | None = None) -> dict:
+        """The tower for the current state from ``table`` (state -> lights); by default
+        2016's, which blinks green only for the first seconds of PREPARED."""
+        if table is None:
+            if self.state == PREPARED and self.blink_until is not None:
+                return PREPARED_BLINK
+            table = STATE_LIGHTS
+        return table[self.state]
+
+    def reset(self, reason: str) -> None:
+        """A team's ResetMachine: BROKEN now (or, while DOWN, once the down period ends)."""
+        if self.state == DOWN:
+            self.broken_reason = f"{self.name}: {reason}"
+            self.instruction, self.inside = None, None
+            self._clear_slots()
+            self.prev_state = BROKEN
+            self.deadline = self.down[1] + self.host.config.broken
+            self.host.emit(E.ATTENTION, self.broken_reason, team=self.team, machine=self.name,
+                           time_to_show=10.0)
+            return
+        self.break_(reason)
 
     def set_lights(self, want: dict) -> None:
         if want != self.lights:
@@ -463,6 +502,9 @@ class CapStation(Station):
         wp = self.inside
         if self.instruction.operation == "RETRIEVE_CAP":
             self.cap_buffer = wp.cap
+            pts = self.host.profile.scoring.cap_retrieved
+            if pts:
+                self.host.award(self.team, pts, f"retrieved cap at {self.name}", machine=self.name)
             self._ready(wp.with_cap(None))
         else:
             cap, self.cap_buffer = self.cap_buffer, None
@@ -475,9 +517,7 @@ class DeliveryStation(Station):
     def validate(self, instr) -> str | None:
         if not isinstance(instr, DSInstruction):
             return "prepare without delivery station instruction"
-        if not 0 <= int(instr.gate) <= 3:
-            return f"invalid delivery gate {instr.gate}"
-        return None
+        return self.host.rules.validate_ds(self.host, instr)
 
     def finish(self) -> None:
         wp, self.inside = self.inside, None
@@ -489,8 +529,12 @@ KINDS = {"BS": BaseStation, "RS": RingStation, "CS": CapStation, "DS": DeliveryS
 
 
 def make_station(name: str, team: str, host: StationHost) -> Station:
+    kind = name[2:4]
+    if kind == "SS":
+        from .storage import StorageStation     # built on Station: imported here, not above
+        return StorageStation(name=name, team=team, host=host)
     try:
-        cls = KINDS[name[2:4]]
+        cls = KINDS[kind]
     except KeyError:
         raise ValueError(f"no station model for {name!r}") from None
     return cls(name=name, team=team, host=host)
