@@ -158,7 +158,10 @@ class RobotAgent:
         for rec in self.link.receive():
             self.last_server_rx = self.clock.now()
             self.server_silent = False
-            self._on_server_message(rec.msg)
+            try:
+                self._on_server_message(rec.msg)
+            except Exception:       # a message the agent chokes on must not stop the robot's loop
+                log.exception("robot %d: handling %s failed", self.config.robot_id, rec.type_name)
 
     def _hello(self) -> None:
         c = self.config
@@ -220,11 +223,12 @@ class RobotAgent:
                 raise InvalidTask("no trees directory (give --trees)")
             tree = load_task_tree(self.trees_dir, kind, params, backend=self.backend, clock=self.clock,
                                   services=self.services, registry=self.registry)
-        except InvalidTask as exc:
+        except (InvalidTask, ValueError) as exc:
             log.warning("robot %d: task %d rejected: %s", me, tid, exc)
             self._record(tid, self._result(tid, "FAILED", "INVALID_TASK", str(exc)), ok=False)
             return
-        self._services_changed()
+        if len(self.services) != self._n_services:      # the tree's services were made just now
+            self._services_changed()
         self.run = TaskRun(task, params, tree, self.clock, max_gap=max(0.5, 5 * self.config.tick_period))
         log.info("robot %d: task %d %s %s", me, tid, kind,
                  {k: v for k, v in params.items() if k not in ("task_id", "robot_id", "kind")})
@@ -233,7 +237,11 @@ class RobotAgent:
 
     def _report_machines(self, task, params) -> None:
         tid = int(task.task_id)
-        if self.refbox.machine_report(params["entries"]):
+        try:
+            sent = self.refbox.machine_report(params["entries"])
+        except ValueError as exc:           # e.g. a zone the refbox's Zone enum does not have
+            raise InvalidTask(f"cannot build the MachineReport: {exc}") from None
+        if sent:
             result = self._result(tid, "SUCCEEDED")
         else:
             result = self._result(tid, "FAILED", "INTERNAL", "no refbox team channel (colour unknown?)")

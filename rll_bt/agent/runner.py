@@ -27,9 +27,15 @@ log = logging.getLogger("rll_bt.agent")
 
 
 def default_trees_dir() -> Path | None:
-    """The ``trees/`` directory installed with rll-bt (found, not imported)."""
+    """The ``trees/`` package installed with rll-bt (found, not imported):
+    beside the ``rll_bt`` package, else wherever the import system finds a
+    regular ``trees`` package (a stray ``trees/`` folder in the working
+    directory does not count)."""
+    beside = Path(__file__).resolve().parents[2] / "trees"
+    if (beside / "__init__.py").is_file():
+        return beside
     spec = importlib.util.find_spec("trees")
-    if spec is None or not spec.submodule_search_locations:
+    if spec is None or spec.origin is None or not spec.submodule_search_locations:
         return None
     return Path(list(spec.submodule_search_locations)[0])
 

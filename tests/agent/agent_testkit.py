@@ -72,6 +72,21 @@ REGISTRY.register(TestCrash, "test_crash")
 
 # -- the scripted team server -----------------------------------------------------------------
 
+def make_task(kind: str, task_id: int = 1, robot: int = 1, color: int = 0, timeout: float | None = None, **fields):
+    """A team-protocol Task of ``kind`` with the given body fields."""
+    t = TM.Task(team_color=color, task_id=task_id, robot_id=robot)
+    body = getattr(t, kind)
+    body.SetInParent()
+    for k, v in fields.items():
+        if isinstance(v, list):
+            getattr(body, k).extend(v)
+        else:
+            setattr(body, k, v)
+    if timeout is not None:
+        t.timeout = timeout
+    return t
+
+
 class ScriptedServer:
     """Records what agents send; answers a RobotHello with GamePhase and MachineMap."""
 
@@ -132,17 +147,7 @@ class ScriptedServer:
         self.send(mm)
 
     def task(self, task_id: int, kind: str, robot: int = 1, timeout: float | None = None, **fields) -> None:
-        t = TM.Task(team_color=self.color, task_id=task_id, robot_id=robot)
-        body = getattr(t, kind)
-        body.SetInParent()
-        for k, v in fields.items():
-            if isinstance(v, list):
-                getattr(body, k).extend(v)
-            else:
-                setattr(body, k, v)
-        if timeout is not None:
-            t.timeout = timeout
-        assert self.send(t)
+        assert self.send(make_task(kind, task_id, robot, self.color, timeout, **fields))
 
     def cancel(self, task_id: int, robot: int = 1) -> None:
         assert self.send(TM.CancelTask(task_id=task_id, robot_id=robot, reason="test"))
@@ -195,6 +200,12 @@ class Rig:
             if self.clock.now() >= end and time.monotonic() >= wall_end:
                 raise AssertionError(f"{what} not reached within {seconds} s of sim time")
             self.round()
+
+    def start_task(self, task_id: int, kind: str, **fields) -> None:
+        """Once the game runs, send a task and round until the robot says RUNNING."""
+        self.until(lambda: self.agent.gate.moving_allowed, what="game running")
+        self.server.task(task_id, kind, **fields)
+        self.until(lambda: self.server.results(task_id, "RUNNING"), what=f"task {task_id} RUNNING")
 
     def drives(self) -> list[tuple]:
         """(t, method) of the base commands, in order."""

@@ -7,6 +7,7 @@ import math
 import pytest
 
 from agent_testkit import TM
+from agent_testkit import make_task as build_task
 from rll_bt import msgs, rules
 from rll_bt.agent import (AgentConfig, GameGate, InvalidTask, KnownMachines, ObservationFeed, check_team_key,
                           distribute, error_code, task_params)
@@ -19,15 +20,7 @@ SIDE = TM.MachineSide.Value
 
 
 def make_task(kind, **fields):
-    t = TM.Task(team_color=1, task_id=3, robot_id=2, timeout=60.0)
-    body = getattr(t, kind)
-    body.SetInParent()
-    for k, v in fields.items():
-        if isinstance(v, list):
-            getattr(body, k).extend(v)
-        else:
-            setattr(body, k, v)
-    return t
+    return build_task(kind, task_id=3, robot=2, color=1, timeout=60.0, **fields)
 
 
 # -- task parameters ---------------------------------------------------------------------------

@@ -186,3 +186,15 @@ def test_report_machines_task_sends_a_machine_report(bus_rig):
     rep = refbox.of("MachineReport")
     assert len(rep) == 1 and rep[0].team_color == refbox.ms.Team.Value("CYAN")
     assert [(m.name, m.type, m.zone) for m in rep[0].machines] == [("C-CS1", "ABCDEFGH", 6), ("C-RS1", "QWERTYUI", 10)]
+
+
+def test_a_report_the_refbox_cannot_take_is_refused(bus_rig):
+    rig, refbox, srv = bus_rig()
+    rig.run(1.5)
+    t = TM.Task(team_color=0, task_id=52, robot_id=1)
+    t.report_machines.entries.add(name="C-CS1", zone=99)          # no such rcll2016 zone
+    srv.send(t)
+    rig.until(lambda: srv.results(52, "FAILED"), what="refused")
+    assert TM.ErrorCode.Name(srv.results(52, "FAILED")[0].error) == "INVALID_TASK"
+    rig.run(0.5)
+    assert refbox.of("MachineReport") == []

@@ -73,8 +73,7 @@ def test_an_agent_with_the_wrong_key_cannot_register(tcp):
 def test_cancel_stops_the_robot(tcp):
     server_t, srv, clock, make_rig = tcp
     rig = make_rig()
-    rig.until(lambda: rig.agent.gate.moving_allowed, what="running")
-    srv.task(9, "mount_cap", machine="C-CS1")
+    rig.start_task(9, "mount_cap", machine="C-CS1")
     rig.until(lambda: rig.drives() and rig.drives()[-1][1] == "drive", what="driving")
     rig.run(1.0)
     t_cancel = clock.now()
@@ -95,9 +94,7 @@ def test_cancel_stops_the_robot(tcp):
 def test_disconnect_and_reconnect_keeps_the_task(tcp):
     server_t, srv, clock, make_rig = tcp
     rig = make_rig()
-    rig.until(lambda: rig.agent.gate.moving_allowed, what="running")
-    srv.task(11, "get_workpiece", machine="C-BS")
-    rig.until(lambda: srv.results(11, "RUNNING"), what="RUNNING")
+    rig.start_task(11, "get_workpiece", machine="C-BS")
     # the server drops the connection: the agent reconnects and says hello again, not restarted
     server_t.disconnect(srv.client)
     rig.until(lambda: len(srv.of("RobotHello")) == 2, what="second hello")
@@ -117,9 +114,7 @@ def test_disconnect_and_reconnect_keeps_the_task(tcp):
 def test_restarted_agent_registers_again_and_gets_the_machine_map(tcp):
     server_t, srv, clock, make_rig = tcp
     first = make_rig()
-    first.until(lambda: first.agent.gate.moving_allowed, what="running")
-    srv.task(21, "mount_cap", machine="C-CS1")
-    first.until(lambda: srv.results(21, "RUNNING"), what="RUNNING")
+    first.start_task(21, "mount_cap", machine="C-CS1")
     first.agent.link.close()                              # the agent process dies: no goodbye
     first.run(0.5)
     assert srv.client is None and not srv.results(21, "FAILED")

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from agent_testkit import make_task
 from rll_bt import msgs, rules
 from rll_bt.agent import TREE_KINDS, default_trees_dir, task_params
 from rll_bt.cli import main
@@ -30,11 +31,7 @@ SAMPLES = {
 
 
 def sample_params(kind: str) -> dict:
-    t = TM.Task(team_color=0, task_id=1, robot_id=1)
-    getattr(t, kind).SetInParent()
-    for k, v in SAMPLES[kind].items():
-        setattr(getattr(t, kind), k, v)
-    return task_params(t, rules.profile("rcll2016"))
+    return task_params(make_task(kind, **SAMPLES[kind]), rules.profile("rcll2016"))
 
 
 def test_the_agent_finds_these_trees():

@@ -11,11 +11,11 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "agent"))
 
-from agent_testkit import KEY, TEAM_REG, TM, Rig, ScriptedServer  # noqa: E402
-from backends.scripted import ScriptedBackend  # noqa: E402
-from rll_bt.clock import SimClock  # noqa: E402
-from rll_bt.comm import Bus  # noqa: E402
-from trees_doubles import CALLS, REGISTRY, Hands, calls  # noqa: E402
+from agent_testkit import KEY, TEAM_REG, TM, Rig, ScriptedServer
+from backends.scripted import ScriptedBackend
+from rll_bt.clock import SimClock
+from rll_bt.comm import Bus
+from trees_doubles import CALLS, REGISTRY, Hands, calls
 
 TREES = Path(__file__).resolve().parents[2] / "trees"
 SIDE = TM.MachineSide.Value

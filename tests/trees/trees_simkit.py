@@ -10,19 +10,16 @@ lockstep: agent step, world step of ``dt`` seconds.
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "agent"))
+from agent_testkit import KEY, TEAM, TEAM_REG, TM, ScriptedServer
 
-from agent_testkit import KEY, TEAM, TEAM_REG, TM, ScriptedServer  # noqa: E402
-
-from backends.sim import FieldLayout, World  # noqa: E402
-from backends.sim.layout import MachinePlacement  # noqa: E402
-from rll_bt import rules  # noqa: E402
-from rll_bt.agent import AgentConfig, RobotAgent  # noqa: E402
-from rll_bt.backend import Pose2D, open_backend  # noqa: E402
-from rll_bt.comm import Bus  # noqa: E402
+from backends.sim import FieldLayout, World
+from backends.sim.layout import MachinePlacement
+from rll_bt import rules
+from rll_bt.agent import AgentConfig, RobotAgent
+from rll_bt.backend import Pose2D, open_backend
+from rll_bt.comm import Bus
 
 TREES = Path(__file__).resolve().parents[2] / "trees"
 SIDE = TM.MachineSide.Value
