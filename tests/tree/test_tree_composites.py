@@ -1,5 +1,5 @@
 """Sequences and selectors with and without memory, and parallel policies."""
-from conftest import tick_n
+from tree_testkit import tick_n, check, clock, make, registry  # noqa: F401  (pytest fixtures)
 
 from rll_bt.tree import Status
 

@@ -1,7 +1,7 @@
 """Retry (delay, backoff, attempt hook, on_retry), timeout, repeat,
 inverter, force_*, one_shot and guard, on a simulated clock."""
 import pytest
-from conftest import tick_n
+from tree_testkit import tick_n, check, clock, make, registry  # noqa: F401  (pytest fixtures)
 
 from rll_bt.tree import Status
 

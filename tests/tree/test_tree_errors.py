@@ -1,4 +1,5 @@
 """Malformed trees give file:line:col messages with hints."""
+from tree_testkit import check, registry  # noqa: F401  (pytest fixtures)
 import re
 
 

@@ -1,5 +1,6 @@
 """Halting: a preempted branch is halted before the new one starts, and an
 interrupted parent terminates its running children."""
+from tree_testkit import clock, make, registry  # noqa: F401  (pytest fixtures)
 from rll_bt.tree import Status
 
 

@@ -1,4 +1,5 @@
 """The recovery block: escalation order, retries per level, final error code."""
+from tree_testkit import check, clock, make, registry  # noqa: F401  (pytest fixtures)
 from rll_bt.tree import Status
 
 TREE = """

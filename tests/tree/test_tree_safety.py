@@ -1,5 +1,6 @@
 """Tree files never evaluate code: unsafe YAML tags and expression tricks
 are refused; the loader and the expression parser only ever fail cleanly."""
+from tree_testkit import check, registry  # noqa: F401  (pytest fixtures)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 

@@ -1,4 +1,5 @@
 """Subtrees by file: parameters, scoped blackboards, remapping, cycles."""
+from tree_testkit import check, clock, make, registry  # noqa: F401  (pytest fixtures)
 import re
 
 from rll_bt.tree import Status

@@ -1,4 +1,5 @@
 """$task and $param values: filled, type-checked, required, converted from text."""
+from tree_testkit import check, clock, make, registry  # noqa: F401  (pytest fixtures)
 import pytest
 
 from rll_bt.tree import CliText, Status, TreeLoadError

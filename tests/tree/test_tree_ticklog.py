@@ -1,4 +1,5 @@
 """The JSON-lines tick log records visited nodes, halts and blackboard changes."""
+from tree_testkit import clock, make, registry  # noqa: F401  (pytest fixtures)
 import io
 import json
 
