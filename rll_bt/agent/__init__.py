@@ -39,7 +39,7 @@ from .config import AgentConfig, check_team_key, normalise_color
 from .core import RobotAgent
 from .errorcodes import error_code
 from .gamestate import GameGate
-from .machinemap import KnownMachine, KnownMachines, distribute
+from .machinemap import KnownMachine, KnownMachines, changed_names, distribute
 from .network import RefboxAddress, refbox_channels, team_server_link
 from .observations import ObservationFeed
 from .runner import Outcome, TaskRun, default_trees_dir, load_task_tree
@@ -47,7 +47,7 @@ from .tasks import TASK_KINDS, TREE_KINDS, InvalidTask, agent_task, task_kind, t
 
 __all__ = [
     "AgentConfig", "check_team_key", "normalise_color", "RobotAgent", "error_code", "GameGate", "KnownMachine",
-    "KnownMachines", "distribute", "RefboxAddress", "refbox_channels", "team_server_link", "ObservationFeed",
+    "KnownMachines", "changed_names", "distribute", "RefboxAddress", "refbox_channels", "team_server_link", "ObservationFeed",
     "Outcome", "TaskRun", "default_trees_dir", "load_task_tree", "TASK_KINDS", "TREE_KINDS", "InvalidTask",
     "agent_task", "task_kind", "task_params",
 ]

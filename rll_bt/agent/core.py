@@ -25,7 +25,7 @@ from ..comm import CONNECTED, DISCONNECTED
 from .config import AgentConfig
 from .errorcodes import error_code
 from .gamestate import GameGate
-from .machinemap import KnownMachines, distribute
+from .machinemap import KnownMachines, changed_names, distribute
 from .observations import ObservationFeed
 from .pose import PoseReader
 from .refbox import RefboxLink
@@ -261,10 +261,10 @@ class RobotAgent:
             self._send(self._result(tid, "CANCELLED", "CANCELLED", "no such task on this robot"))
 
     def _on_machine_map(self, m) -> None:
-        self.machines = KnownMachines.from_message(m, self.clock.now())
+        old, self.machines = self.machines, KnownMachines.from_message(m, self.clock.now())
         self.map_updates += 1
         self.machines.updates = self.map_updates
-        took = distribute(self.services, self.machines)
+        took = distribute(self.services, self.machines, changed_names(old, self.machines))
         log.info("robot %d: machine map with %d stations (%d services took it)", self.config.robot_id,
                  len(self.machines), took)
 

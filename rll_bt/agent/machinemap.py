@@ -15,7 +15,7 @@ import logging
 from dataclasses import dataclass
 from typing import Any, Iterator, Mapping
 
-from ..backend import Pose2D
+from ..backend import Pose2D, wrap_angle
 
 log = logging.getLogger("rll_bt.agent")
 
@@ -88,9 +88,24 @@ def _pose_setter(service: Any):
     return None
 
 
-def distribute(services: dict[str, Any], known: KnownMachines) -> int:
+def changed_names(old: KnownMachines | None, new: KnownMachines, tolerance: float = 0.01) -> set[str]:
+    """Stations whose pose is new or moved by more than ``tolerance`` (m or rad)."""
+    out = set()
+    for name, m in new.items():
+        before = old.get(name) if old is not None else None
+        if m.pose is None:
+            continue
+        p = before.pose if before is not None else None
+        if p is None or p.distance_to(m.pose) > tolerance or abs(wrap_angle(p.theta - m.pose.theta)) > tolerance:
+            out.add(name)
+    return out
+
+
+def distribute(services: dict[str, Any], known: KnownMachines, names: set[str] | None = None) -> int:
     """Store ``known`` as ``services["machine_map"]`` and pass it on to every
-    service that takes it; returns how many services took it."""
+    service that takes it (station poses: only those in ``names`` when
+    given, so unchanged stations do not make the skills rebuild their
+    maps); returns how many services took it."""
     services[SERVICE] = known
     took = 0
     for name, svc in list(services.items()):
@@ -106,7 +121,7 @@ def distribute(services: dict[str, Any], known: KnownMachines) -> int:
             if setter is None:
                 continue
             for m in known.values():
-                if m.pose is not None:
+                if m.pose is not None and (names is None or m.name in names):
                     setter(m.name, m.pose)
             took += 1
         except Exception:   # a service that chokes on the map must not stop the agent

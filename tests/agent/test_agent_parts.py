@@ -10,7 +10,8 @@ from agent_testkit import TM
 from agent_testkit import make_task as build_task
 from rll_bt import msgs, rules
 from rll_bt.agent import (AgentConfig, GameGate, InvalidTask, KnownMachines, ObservationFeed, check_team_key,
-                          distribute, error_code, task_params)
+                          changed_names, distribute, error_code, task_params)
+
 from rll_bt.backend import Pose2D
 from rll_bt.clock import SimClock
 
@@ -274,3 +275,16 @@ def test_the_map_reaches_every_service_that_takes_it():
     assert distribute(services, km) == 3
     assert services["machine_map"] is km and got["whole"] is km
     assert set(got["store"]) == {"C-CS1"}                # only stations with a pose
+
+
+def test_only_moved_stations_are_passed_on_again():
+    old = KnownMachines.from_message(_map_msg())
+    msg = _map_msg()
+    k = msg.machines.add(name="C-BS", zone=9)
+    k.pose.x, k.pose.y, k.pose.theta = 4.5, 1.0, 0.0
+    assert changed_names(old, KnownMachines.from_message(msg)) == {"C-BS"}
+    msg.machines[0].pose.x += 0.005                      # C-CS1 within a centimetre: not moved
+    assert changed_names(old, KnownMachines.from_message(msg)) == {"C-BS"}
+    msg.machines[0].pose.theta += 0.1
+    assert changed_names(old, KnownMachines.from_message(msg)) == {"C-BS", "C-CS1"}
+    assert changed_names(None, old) == {"C-CS1"}
