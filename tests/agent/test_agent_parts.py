@@ -11,7 +11,6 @@ from agent_testkit import make_task as build_task
 from rll_bt import msgs, rules
 from rll_bt.agent import (AgentConfig, GameGate, InvalidTask, KnownMachines, ObservationFeed, check_team_key,
                           changed_names, distribute, error_code, task_params)
-
 from rll_bt.backend import Pose2D
 from rll_bt.clock import SimClock
 
