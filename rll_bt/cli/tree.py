@@ -242,7 +242,18 @@ def _run(args) -> int:
             print(f"tick {t.count}  t={clock.now() - start:.1f}s  {t.status.name}"
                   + (f"  at {tip.name}" if tip is not None else ""), file=sys.stderr)
         start = clock.now()
-        status = tree.run(hz=args.hz, max_ticks=args.max_ticks, timeout=args.timeout, on_tick=progress)
+        try:
+            status = tree.run(hz=args.hz, max_ticks=args.max_ticks, timeout=args.timeout, on_tick=progress)
+        except (UserError, KeyboardInterrupt):
+            raise
+        except Exception as exc:    # a node's bug: say which node, keep the traceback for -v
+            import logging
+            logging.getLogger(__name__).debug("tree raised", exc_info=True)
+            tip = tree.tip()
+            print(f"rll-bt: error: the tree stopped: {type(exc).__name__}: {exc}"
+                  + (f" (in or below {tip.name!r})" if tip is not None else "") + "; run with -vv for the traceback",
+                  file=sys.stderr)
+            return EXIT_FAILURE
     finally:
         if logger is not None:
             logger.close()

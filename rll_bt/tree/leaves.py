@@ -22,9 +22,13 @@ class Wait(Node):
     preempts = True
 
     def initialise(self) -> None:
-        self._until = self.ctx.clock.now() + max(0.0, float(self.seconds))
+        s = self.seconds
+        self._until = None if s is None else self.ctx.clock.now() + max(0.0, float(s))
 
     def update(self) -> Status:
+        if self._until is None:
+            self.feedback_message = f"no value for seconds ({self.bound.key('seconds')} is not set)"
+            return Status.FAILURE
         return Status.SUCCESS if self.ctx.clock.now() >= self._until else Status.RUNNING
 
 
