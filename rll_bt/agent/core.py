@@ -404,8 +404,11 @@ class RobotAgent:
             if self.connected and self.last_server_rx is not None and \
                     now - self.last_server_rx > c.server_timeout and not self.server_silent:
                 self.server_silent = True
-                log.warning("robot %d: nothing from the team server for %.1f s", c.robot_id,
-                            now - self.last_server_rx)
+                log.warning("robot %d: nothing from the team server for %.1f s; reconnecting",
+                            c.robot_id, now - self.last_server_rx)
+                reconnect = getattr(self.link, "reconnect", None)
+                if reconnect is not None:
+                    reconnect()
         if now >= self._next_status:
             self._send_status(force=True)
             self._next_status = max(self._next_status, now + c.status_period)

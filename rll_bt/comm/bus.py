@@ -266,6 +266,13 @@ class BusStreamClient(_BusEnd):
             self._server = self._cid = None
             self._event(DISCONNECTED, self.address)
 
+    def reconnect(self) -> None:
+        """Drop the connection and connect again on the spot (like the TCP client)."""
+        if self._server is not None:
+            self._server.disconnect(self._cid)
+            self._lost()
+        self._poll()
+
     def send(self, msg) -> bool:
         frame = self.codec.encode(msg)
         self._poll()

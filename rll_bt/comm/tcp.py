@@ -218,6 +218,13 @@ class StreamClient(PumpedTransport):
         self._event(DISCONNECTED, self.address)
         self._schedule_retry()
 
+    def reconnect(self) -> None:
+        """Drop the connection (a peer that went silent) and connect again at once."""
+        with self._io_lock:
+            self._lost()
+            self._backoff = self.backoff_initial
+            self._next_attempt = self.clock.now()
+
     # -- transport interface ---------------------------------------------------
     def send(self, msg) -> bool:
         frame = self.codec.encode(msg)

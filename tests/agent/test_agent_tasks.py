@@ -140,3 +140,16 @@ def test_shutdown_reports_the_running_task_and_stops(rig):
     res = final(srv, 13)
     assert code(res) == "INTERNAL" and "maintenance" in res.text
     assert rig.drives()[-1][1] == "stop"
+
+
+def test_a_silent_team_server_link_is_dropped_and_reconnected(rig):
+    srv = rig.server
+    rig.run(1.0)
+    assert len(srv.of("RobotHello")) == 1 and rig.agent.connected
+    srv.heartbeat_every = 10 ** 9          # connected, but the server says nothing any more
+    rig.until(lambda: len(srv.of("RobotHello")) == 2, seconds=rig.agent.config.server_timeout + 3,
+              what="re-registration after silence")
+    assert srv.of("RobotHello")[-1].restarted is False
+    srv.heartbeat_every = 20
+    rig.run(2.0)
+    assert not rig.agent.server_silent

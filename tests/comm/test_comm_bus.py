@@ -116,3 +116,16 @@ def test_stream_wrong_key_client_cannot_read_or_task(tm):
     assert [(e.kind, e.peer) for e in bad.events()] == [(CONNECTED, "ts"), (DISCONNECTED, "ts"),
                                                         (CONNECTED, "ts")]  # and it retries
     assert bad.connections == 2
+
+
+def test_stream_client_reconnect_gets_a_new_client_id(tm):
+    bus = Bus()
+    srv = bus.stream_server("ts", registry=tm.registry(), key=KEY)
+    c = bus.stream_client("ts", registry=tm.registry(), key=KEY, name="robot1")
+    assert srv.clients() == [1]
+    c.reconnect()
+    assert c.connected and c.connections == 2 and srv.clients() == [2]
+    assert [(e.kind, e.peer) for e in c.events()] == [(CONNECTED, "ts"), (DISCONNECTED, "ts"),
+                                                       (CONNECTED, "ts")]
+    assert c.send(tm.TeamCmd(robot=1, text="after"))
+    assert [(r.msg.text, r.source) for r in srv.receive()] == [("after", 2)]

@@ -200,3 +200,21 @@ def test_threaded_server(server, tm):
     finally:
         server.stop()
         c.close()
+
+
+def test_client_reconnect_drops_a_silent_link_and_connects_again(tm):
+    clock = SimClock()
+    srv = StreamServer(0, registry=tm.registry(), host="127.0.0.1")
+    c = StreamClient("127.0.0.1", srv.port, registry=tm.registry(), clock=clock, backoff_initial=5.0)
+    try:
+        box = Inbox(srv, c)
+        assert box.wait_for(lambda: c.connected and len(srv.clients()) == 1)
+        first = srv.clients()[0]
+        c.reconnect()                       # no backoff wait, though the clock stands still
+        assert box.wait_for(lambda: c.connections == 2 and c.connected
+                            and srv.clients() and srv.clients()[0] != first)
+        assert c.send(tm.Hello(name="again"))
+        assert box.wait_for(lambda: [r.msg.name for r in box.msgs(srv)] == ["again"])
+    finally:
+        c.close()
+        srv.close()
