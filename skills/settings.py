@@ -39,6 +39,7 @@ class SkillSettings:
     max_omega: float = 1.6            # rad/s
     max_accel: float = 0.8            # m/s^2
     max_decel: float = 1.2            # m/s^2, planned; the base can do 1.5
+    emergency_decel: float = 1.5      # m/s^2, braking for an obstacle the laser sees
     max_alpha: float = 1.6            # rad/s^2
     control_period: float = 0.1       # s, the expected time between polls
     position_tolerance: float = 0.05  # m, a navigation goal is reached

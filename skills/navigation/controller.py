@@ -11,7 +11,8 @@ Limits: translation speed ``max_speed`` (the rules' 0.7 m/s), the speed
 from which the robot can still stop at the goal with ``max_decel``, and an
 optional external cap (the laser safety check); the commanded velocity
 vector changes by at most ``max_accel * dt`` (``max_decel * dt`` when
-slowing); angular speed and acceleration likewise.  Velocities are planned
+slowing, ``emergency_decel * dt`` when the laser check caps the speed);
+angular speed and acceleration likewise.  Velocities are planned
 in the field frame and sent in the robot frame.
 """
 from __future__ import annotations
@@ -32,11 +33,12 @@ class Limits:
     max_accel: float = 0.8
     max_decel: float = 1.2
     max_alpha: float = 1.6
+    emergency_decel: float = 1.5      # braking for an obstacle: what the base can do
 
     @classmethod
     def from_settings(cls, s, max_speed: float | None = None) -> "Limits":
         return cls(min(max_speed or s.max_speed, s.max_speed), s.max_omega, s.max_accel,
-                   s.max_decel, s.max_alpha)
+                   s.max_decel, s.max_alpha, max(s.emergency_decel, s.max_decel))
 
 
 class VelocityLimiter:
@@ -51,13 +53,19 @@ class VelocityLimiter:
         self.v[:] = 0.0
         self.omega = 0.0
 
-    def apply(self, v_des: np.ndarray, omega_des: float, dt: float) -> tuple[np.ndarray, float]:
+    def apply(self, v_des: np.ndarray, omega_des: float, dt: float,
+              emergency: bool = False) -> tuple[np.ndarray, float]:
+        """Move the command toward (v_des, omega_des); ``emergency`` brakes
+        at ``emergency_decel`` instead of ``max_decel``."""
         lim = self.limits
         speed = float(np.hypot(*v_des))
         if speed > lim.max_speed:
             v_des = v_des * (lim.max_speed / speed)
         dv = v_des - self.v
-        a = lim.max_accel if np.hypot(*v_des) > np.hypot(*self.v) else lim.max_decel
+        if np.hypot(*v_des) > np.hypot(*self.v):
+            a = lim.max_accel
+        else:
+            a = lim.emergency_decel if emergency else lim.max_decel
         n = float(np.hypot(*dv))
         if n > a * dt:
             dv = dv * (a * dt / n)
@@ -86,7 +94,7 @@ class PathFollower:
 
     def __init__(self, path: np.ndarray, goal_theta: float | None, limits: Limits,
                  position_tolerance: float = 0.05, heading_tolerance: float = 0.05,
-                 lookahead: float = 0.5, align_distance: float = 0.8, gain: float = 1.5):
+                 lookahead: float = 0.5, align_distance: float = 0.8, gain: float = 2.5):
         self.path = np.asarray(path, dtype=float)
         if len(self.path) == 1:
             self.path = np.vstack([self.path, self.path])
@@ -204,5 +212,5 @@ class PathFollower:
             return 0.0, 0.0, 0.0
         if self.goal_theta is None and at_position:
             omega_des = 0.0
-        self.limiter.apply(v_des, omega_des, dt)
+        self.limiter.apply(v_des, omega_des, dt, emergency=self.capped)
         return self.limiter.to_robot(pose.theta)

@@ -125,6 +125,10 @@ class Navigate(Activity):
                 if abs(wrap_angle(math.atan2(uy, ux) - pose.theta)) > half_fov - 0.4:
                     limit = min(limit, s.blind_speed)
                 return limit
+        # near obstacles look less far ahead: a long look-ahead cuts corners
+        clear = float(ctx.costmap.clearance()[ctx.costmap.spec.cell_of(pose.x, pose.y)]) \
+            if bool(ctx.costmap.spec.inside(*ctx.costmap.spec.cell_of(pose.x, pose.y))) else 0.0
+        self.follower.lookahead = float(np.clip(2.0 * (clear - ctx.robot.radius), 0.15, 0.5))
         vx, vy, w = self.follower.command(pose, dt, cap)
         if self.follower.done:
             self.message = f"reached {self.goal.describe()}" if hasattr(self.goal, "describe") else "reached"

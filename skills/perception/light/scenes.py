@@ -49,6 +49,8 @@ class TowerLabel:
     visible: float                   # visible pixels / pixels of the unoccluded tower
     distance: float                  # camera to tower axis, horizontal, metres
     mask: np.ndarray | None = None   # bool mask of the tower pixels inside ``box``
+    region: tuple[int, int, int, int] | None = None   # where its tag says the tower is
+    tower_height: float | None = None                  # the tower's height there, pixels
 
     @property
     def clean(self) -> bool:
@@ -245,12 +247,37 @@ class SceneRenderer:
             inside = fx0 >= 0 and fy0 >= 0 and fx1 < intr.width and fy1 < intr.height
             full_box = (int(round(fx0)), int(round(fy0)), int(round(fx1 - fx0)), int(round(fy1 - fy0)))
             tp = np.array(st.tower_point(1))
+            where = self.tag_region(st, eye, rot, intr)
             frame.towers.append(TowerLabel(
                 name, states[name], box, full_box if inside else None,
                 min(1.0, float(mask.sum()) / max(self._silhouette_area(full), 1.0)),
                 float(math.hypot(tp[0] - eye[0], tp[1] - eye[1])),
-                mask[box[1]:box[1] + box[3], box[0]:box[0] + box[2]].copy()))
+                mask[box[1]:box[1] + box[3], box[0]:box[0] + box[2]].copy(),
+                *(where if where is not None else (None, None))))
         return frame
+
+    def tag_region(self, st, eye, rot, intr: CameraIntrinsics, pos_sigma: float = 0.01,
+                   rot_sigma: float = math.radians(1.5)):
+        """The search region the station's tag facing the camera would give
+        (:func:`.region.tower_region`), from its true pose in the camera frame
+        with tag-detection noise: position ``pos_sigma`` per metre of range,
+        rotation ``rot_sigma``."""
+        import cv2
+        from rll_bt.backend import TagDetection
+        from .region import tower_region
+        best = None
+        for side in ("input", "output"):
+            centre, frame = st.tag_frame(side)
+            facing = float(frame[:, 2] @ (eye - centre))
+            if best is None or facing > best[0]:
+                best = (facing, side, centre, frame)
+        _, side, centre, frame = best
+        t = (centre - eye) @ rot
+        t = t + self.rng.normal(0.0, pos_sigma * float(np.linalg.norm(t)), 3)
+        jitter, _ = cv2.Rodrigues(self.rng.normal(0.0, rot_sigma, 3).reshape(3, 1))
+        rvec, _ = cv2.Rodrigues(jitter @ (rot.T @ frame))
+        det = TagDetection(st.tag_id(side), tuple(float(v) for v in t), tuple(float(v) for v in rvec.ravel()))
+        return tower_region(det, side.upper(), self.mps, intr)
 
     def _silhouette_area(self, full) -> float:
         """Pixels of an unoccluded tower: its outline nearly fills the box,
