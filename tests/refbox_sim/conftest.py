@@ -1,10 +1,15 @@
-"""Fixtures for the simulated refbox: a game on a simulated clock and an in-memory world."""
+"""Fixtures for the simulated refbox: a game on a simulated clock and an in-memory world,
+and a scripted robot on the in-process bus."""
 from __future__ import annotations
+
+from collections import defaultdict
 
 import pytest
 
 from backends.sim.refbox import RefboxGame, Timing
+from backends.sim.refbox.messages import set_enum
 from rll_bt.clock import SimClock
+from rll_bt.comm import MessageRegistry
 from rll_bt.rules import profile
 
 
@@ -68,3 +73,44 @@ def harness():
 def harness25():
     """Factory of 2025 games: ``harness25(seed=..., exploration=..., production=...)``."""
     return lambda **kw: Harness(rules="rcll2025", **kw)
+
+
+class BusTeam:
+    """A scripted robot of ``team_name``: listens on the public bus channel and its team
+    ``channel`` (encrypted with ``key``), keeps what arrived by (channel, type)."""
+
+    def __init__(self, bus, message_set, key, channel="cyan", team_name="Caro", number=2):
+        self.ms = message_set
+        reg = MessageRegistry.from_message_set(message_set)
+        self.public = bus.peer("public", registry=reg, name="robot-public")
+        self.team = bus.peer(channel, registry=reg, key=key, name=f"robot-{channel}")
+        self.color = channel.upper()
+        self.team_name, self.number = team_name, number
+        self.got = defaultdict(list)          # (channel, type) -> messages
+        self.seq = 0
+
+    def poll(self):
+        for rec in self.public.receive():
+            self.got[("public", rec.type_name)].append(rec.msg)
+        for rec in self.team.receive():
+            self.got[("team", rec.type_name)].append(rec.msg)
+
+    def last(self, channel, name):
+        items = self.got[(channel, name)]
+        return items[-1] if items else None
+
+    def beacon(self, clock):
+        b = self.ms.BeaconSignal()
+        b.time.sec, b.time.nsec = int(clock.epoch()), 0
+        self.seq += 1
+        b.seq, b.number, b.team_name, b.peer_name = self.seq, self.number, self.team_name, "R2"
+        set_enum(b, "team_color", self.color)
+        b.pose.timestamp.sec, b.pose.timestamp.nsec = int(clock.epoch()), 0
+        b.pose.x, b.pose.y, b.pose.ori = 1.5, 0.5, 0.0
+        self.team.send(b)
+
+
+@pytest.fixture
+def bus_team():
+    """The :class:`BusTeam` class: ``bus_team(bus, message_set, key, channel=...)``."""
+    return BusTeam

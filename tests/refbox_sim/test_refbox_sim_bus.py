@@ -1,8 +1,6 @@
 """The refbox on the in-process bus, against a scripted team speaking the wire protocol."""
 from __future__ import annotations
 
-from collections import defaultdict
-
 import pytest
 
 from backends.sim.refbox import RefboxGame, Timing
@@ -18,38 +16,12 @@ REG = MessageRegistry.from_message_set(MS)
 KEYS = {"Caro": "cyan-secret", "Grips": "magenta-secret"}
 
 
-class Team:
-    """A scripted robot of "Caro": listens on public and its encrypted cyan channel."""
-
-    def __init__(self, bus, key=KEYS["Caro"], channel="cyan"):
-        self.public = bus.peer("public", registry=REG, name="robot-public")
-        self.team = bus.peer(channel, registry=REG, key=key, name=f"robot-{channel}")
-        self.got = defaultdict(list)          # (channel, type) -> messages
-        self.seq = 0
-
-    def poll(self):
-        for rec in self.public.receive():
-            self.got[("public", rec.type_name)].append(rec.msg)
-        for rec in self.team.receive():
-            self.got[("team", rec.type_name)].append(rec.msg)
-
-    def last(self, channel, name):
-        items = self.got[(channel, name)]
-        return items[-1] if items else None
-
-    def beacon(self, clock):
-        b = MS.BeaconSignal()
-        b.time.sec, b.time.nsec = int(clock.epoch()), 0
-        self.seq += 1
-        b.seq, b.number, b.team_name, b.peer_name = self.seq, 2, "Caro", "R2"
-        set_enum(b, "team_color", "CYAN")
-        b.pose.timestamp.sec, b.pose.timestamp.nsec = int(clock.epoch()), 0
-        b.pose.x, b.pose.y, b.pose.ori = 1.5, 0.5, 0.0
-        self.team.send(b)
-
-
 @pytest.fixture
-def setup():
+def setup(bus_team):
+    def Team(bus, key=KEYS["Caro"], channel="cyan"):
+        """A scripted robot of "Caro" (or, on "magenta", of "Grips") speaking the 2016 set."""
+        return bus_team(bus, MS, key, channel)
+
     clock = SimClock()
     timing = Timing.from_profile(profile("rcll2016"), setup=3, exploration=20, production=120)
     game = RefboxGame("rcll2016", clock, seed=21, team_cyan="Caro", team_magenta="Grips",

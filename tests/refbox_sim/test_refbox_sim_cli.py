@@ -51,6 +51,20 @@ def _start(*args) -> subprocess.Popen:
                             stderr=subprocess.PIPE, text=True)
 
 
+def _listen(proc, public, cyan, got, each=None, seconds=30.0):
+    """Collect what arrives on ``public`` and ``cyan`` into ``got`` while ``proc`` runs,
+    calling ``each()`` once per poll."""
+    deadline = time.monotonic() + seconds
+    while proc.poll() is None and time.monotonic() < deadline:
+        public.wait(0.05)
+        for rec in public.receive():
+            got[("public", rec.type_name)].append(rec.msg)
+        for rec in cyan.receive():
+            got[("cyan", rec.type_name)].append(rec.msg)
+        if each is not None:
+            each()
+
+
 def test_udp_game_against_a_listening_team():
     off = _free_offset()
     proc = _start("--team-cyan", "Caro", "--key-cyan", "cyan-key", "--team-magenta", "Grips",
@@ -70,17 +84,13 @@ def test_udp_game_against_a_listening_team():
         start = MS.SetGameState()
         set_enum(start, "state", "RUNNING")
         assert ctrl.send(start)
-        deadline = time.monotonic() + 30
-        while proc.poll() is None and time.monotonic() < deadline:
-            public.wait(0.05)
-            for rec in public.receive():
-                got[("public", rec.type_name)].append(rec.msg)
-            for rec in cyan.receive():
-                got[("cyan", rec.type_name)].append(rec.msg)
+
+        def beacon():
             b = MS.BeaconSignal()
             b.time.sec, b.time.nsec, b.seq, b.number = int(time.time()), 0, 1, 1
             b.team_name, b.peer_name = "Caro", "R1"
             cyan.send(b)
+        _listen(proc, public, cyan, got, beacon)
         ctrl.close()
         out, err = proc.communicate(timeout=10)
     finally:
@@ -102,6 +112,39 @@ def test_udp_game_against_a_listening_team():
         "PRE_GAME -> SETUP", "SETUP -> EXPLORATION", "EXPLORATION -> PRODUCTION",
         "PRODUCTION -> POST_GAME"]
     assert lines[-1].startswith("final score: Caro 0 : 0 Grips (POST_GAME")
+
+
+def test_udp_2025_game_explores_inside_production():
+    ms = msgs.message_set("rcll2025")
+    reg = MessageRegistry.from_message_set(ms)
+    off = _free_offset()
+    proc = _start("--profile", "rcll2025", "--team-cyan", "Caro", "--key-cyan", "cyan-key",
+                  "--seed", "4", "--port-offset", str(off), "--phase-lengths",
+                  "setup=0.5,exploration=1.5,production=3,overtime=0", "--quit-after-game")
+    public = UdpPeer("127.0.0.1", 4445 + off, 4444 + off, registry=reg, channel="public")
+    cyan = UdpPeer("127.0.0.1", 4446 + off, 4441 + off, registry=reg, channel="team",
+                   key="cyan-key")
+    got = defaultdict(list)
+    try:
+        _listen(proc, public, cyan, got)
+        out, err = proc.communicate(timeout=10)
+    finally:
+        public.close()
+        cyan.close()
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, err
+    phases = {enum_name(g, "phase") for g in got[("public", "GameState")]}
+    assert "PRODUCTION" in phases and "EXPLORATION" not in phases
+    assert got[("cyan", "MachineReportInfo")] and not got[("public", "ExplorationInfo")]
+    names = {m.name for mi in got[("cyan", "MachineInfo")] for m in mi.machines}
+    assert names == {f"C-{t}" for t in ("BS", "DS", "SS", "RS1", "RS2", "CS1", "CS2")}
+    assert all(o.HasField("competitive") for oi in got[("public", "OrderInfo")] for o in oi.orders)
+    lines = out.splitlines()
+    assert lines[0].startswith("refbox sim: rcll2025, seed 4")
+    assert [ln.split("] ")[1].split("  ")[0] for ln in lines if ln.startswith("[")] == [
+        "PRE_GAME -> SETUP", "SETUP -> PRODUCTION",
+        "exploration time over: every machine counts as reported", "PRODUCTION -> POST_GAME"]
 
 
 def test_sigterm_ends_cleanly():

@@ -67,3 +67,68 @@ def test_every_message_fits_an_encrypted_datagram(harness):
         assert len(codec.encode(msg)) <= 1024
     assert len(out[-4].orders) == 8 and len(out[-2].machines) == 6
     assert Timing.from_profile(profile("rcll2016")).production == 900
+
+
+def test_2025_storage_station_on_the_pybullet_world():
+    from backends.sim.refbox import SSInstruction
+    from backends.sim.world import World
+    world = World("rcll2025", seed=6)
+    try:
+        g = RefboxGame("rcll2025", world.clock, world, seed=6, team_cyan="A", team_magenta="B",
+                       timing=Timing.from_profile(profile("rcll2025"), exploration=0))
+        g.start()
+        g.set_phase("PRODUCTION")
+        assert world.lights("C-SS") == {"RED": "OFF", "YELLOW": "OFF", "GREEN": "ON"}
+        robot = world.add_robot("CYAN", 1)
+        g.prepare("CYAN", "C-BS", BSInstruction("OUTPUT", "BASE_SILVER"), "CYAN")
+        world.run(5.5, callback=lambda t: g.tick())
+        world.teleport("CYAN", 1, world.station("C-BS").approach_pose("output"))
+        robot.gripper.command("close", now=world.time)
+        world.run(3, callback=lambda t: g.tick())
+        assert g.prepare("CYAN", "C-SS", SSInstruction("STORE", 1, 2, "spare"), "CYAN") == \
+            "prepared"
+        world.teleport("CYAN", 1, world.station("C-SS").approach_pose("input"))
+        robot.gripper.command("open", now=world.time)
+        world.run(3, callback=lambda t: g.tick())
+        assert world.workpiece_at("C-SS", "input") is None          # taken into the shelf
+        world.run(10, callback=lambda t: g.tick())
+        assert g.stations["C-SS"].stored()[(1, 2)].base == "BASE_SILVER"
+        g.prepare("CYAN", "C-SS", SSInstruction("RETRIEVE", 1, 2), "CYAN")
+        world.run(10.5, callback=lambda t: g.tick())
+        assert world.workpiece_at("C-SS", "output").base == "BASE_SILVER"
+        assert world.lights("C-SS") == {"RED": "OFF", "YELLOW": "ON", "GREEN": "BLINK"}
+    finally:
+        world.close()
+
+
+def test_every_2025_message_fits_an_encrypted_datagram(harness25):
+    from backends.sim.refbox import ReportEntry, StationConfig, Workpiece
+    h = harness25(config=StationConfig(delivery_confirm=60)).production()
+    g = h.game
+    for n in range(1, 4):
+        g.beacon(number=n, team_name="Caro", peer_name=f"robot-{n}", pose=(1.0, 2.0, 3.0))
+    zones = g.profile.machine_zones("CYAN")
+    g.machine_report("CYAN", [ReportEntry(None, t, z, None) for t in ("BS", "DS", "SS", "RS",
+                                                                     "CS") for z in zones[:2]]
+                     + [ReportEntry(m, None, zones[0], 0) for m in g.profile.machines("CYAN")],
+                     "CYAN")
+    m = Messages("rcll2025")
+    codec = FrameCodec(MessageRegistry.from_message_set(msgs.message_set("rcll2025")),
+                       key="k", max_frame=1024)
+    out = [m.game_state(g), m.robot_info(g), m.machine_report_info(g, "CYAN"),
+           m.attention("x" * 500, "CYAN")]
+    ss = g.stations["C-SS"]
+    for place in ss.status():
+        ss.put_in_storage(place.shelf, place.slot, Workpiece("BASE_RED", ("RING_BLUE",)),
+                          f"a long note about shelf {place.shelf} slot {place.slot}")
+    for o in g.orders:
+        o.active = True
+        for _ in range(2):
+            g.deliver(g.stations["C-DS"], Workpiece(o.base, o.rings, o.cap), 0, 10.0)
+    out += [m.order_info(g), m.ring_info(g), m.machine_info(g, "CYAN"),
+            m.machine_info(g, "MAGENTA")]
+    for msg in out:
+        assert msg.IsInitialized(), msg.DESCRIPTOR.name
+        assert len(codec.encode(msg)) <= 1024, msg.DESCRIPTOR.name
+    assert len(out[2].reported_types) == 7 and len(out[4].orders) == 11      # 1 BS, DS, SS; 2 RS, CS
+    assert len(out[-2].machines) == 7 and len(out[-2].machines[2].status_ss) == 48

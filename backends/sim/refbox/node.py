@@ -256,7 +256,11 @@ class RefboxNode:
         """Apply an operator command if it came on a control channel."""
         if not self._control_allowed(label) or value is None:
             return False
-        return apply(value) is not False
+        try:
+            return apply(value) is not False
+        except ValueError as exc:        # e.g. SetGamePhase EXPLORATION for rcll2025
+            log.warning("operator command refused: %s", exc)
+            return False
 
     def _on_SetGameState(self, msg, rec, label, team) -> bool:
         return self._control(label, enum_name(msg, "state"), self.game.set_state)

@@ -96,6 +96,25 @@ def schedule_2016(profile, rng: random.Random, timing) -> list[Order]:
     """The game's orders (not yet active), per the module docstring."""
     P = float(timing.production)
     scale = timing.production_scale
+
+    def window(cx: int) -> tuple[int, int, int]:
+        (dlo, dhi), earliest, (llo, lhi) = WINDOWS_2016[cx]
+        dur = rng.uniform(dlo, dhi) * scale
+        lo, hi = earliest * scale, max(earliest * scale, P - dur)
+        begin = min(rng.uniform(lo, hi), max(0.0, P - dur))
+        end = min(P, begin + dur)
+        act = max(0.0, begin - rng.uniform(llo, lhi) * scale)
+        return int(begin), int(math.ceil(end)), int(act)
+    return build_schedule(profile, rng, timing, window)
+
+
+def build_schedule(profile, rng: random.Random, timing, window,
+                   competitive_ids=()) -> list[Order]:
+    """One order per shape of ``profile.orders``: complexity, colours and gate drawn from
+    ``rng``; standing orders span the production, overtime orders the overtime, the others
+    get ``window(complexity)`` -> (begin, end, activate_at) in whole game seconds.  Orders
+    in ``competitive_ids`` are competitive besides those whose shape is."""
+    P = float(timing.production)
     orders = []
     for i, shape in enumerate(profile.orders, start=1):
         cx = rng.choice(shape.complexities)
@@ -104,21 +123,15 @@ def schedule_2016(profile, rng: random.Random, timing) -> list[Order]:
         rings = tuple(rng.sample(RING_COLORS, cx))
         gate = rng.randint(1, 3)
         if shape.standing:
-            begin, end, act = 0.0, P, 0.0
+            begin, end, act = 0, int(P), 0
         elif shape.overtime:
-            begin, end, act = P, P + timing.overtime, P
+            begin, end, act = int(P), int(math.ceil(P + timing.overtime)), int(P)
         else:
-            (dlo, dhi), earliest, (llo, lhi) = WINDOWS_2016[cx]
-            dur = rng.uniform(dlo, dhi) * scale
-            lo, hi = earliest * scale, max(earliest * scale, P - dur)
-            begin = min(rng.uniform(lo, hi), max(0.0, P - dur))
-            end = min(P, begin + dur)
-            act = max(0.0, begin - rng.uniform(llo, lhi) * scale)
+            begin, end, act = window(cx)
         orders.append(Order(id=i, complexity=cx, base=base, rings=rings, cap=cap,
-                            quantity=shape.quantity, gate=gate, begin=int(begin),
-                            end=int(math.ceil(end)), activate_at=int(act),
-                            standing=shape.standing, overtime=shape.overtime,
-                            competitive=shape.competitive))
+                            quantity=shape.quantity, gate=gate, begin=begin, end=end,
+                            activate_at=act, standing=shape.standing, overtime=shape.overtime,
+                            competitive=shape.competitive or i in competitive_ids))
     return orders
 
 

@@ -50,9 +50,9 @@ from __future__ import annotations
 import math
 import random
 
-from rll_bt.rules import BASE_COLORS, CAP_COLORS, RING_COLORS, other_team
+from rll_bt.rules import other_team
 
-from .orders2016 import DeliveryResult, Order, product_awards
+from .orders2016 import DeliveryResult, Order, build_schedule, product_awards
 from .world import Workpiece
 
 #: complexity -> (window length range, earliest window start, lead time range), 1200 s game
@@ -71,32 +71,19 @@ def schedule_2025(profile, rng: random.Random, timing) -> list[Order]:
     explore = float(timing.exploration_time)
     random_ids = [i for i, s in enumerate(profile.orders, start=1)
                   if not (s.standing or s.overtime)]
-    extra_competitive = rng.choice(random_ids) if random_ids else None
-    orders = []
-    for i, shape in enumerate(profile.orders, start=1):
-        cx = rng.choice(shape.complexities)
-        base = rng.choice(BASE_COLORS)
-        cap = rng.choice(CAP_COLORS)
-        rings = tuple(rng.sample(RING_COLORS, cx))
-        gate = rng.randint(1, 3)
-        if shape.standing:
-            begin, end, act = 0.0, P, 0.0
-        elif shape.overtime:
-            begin, end, act = P, P + timing.overtime, P
-        else:
-            (dlo, dhi), earliest, (llo, lhi) = WINDOWS_2025[cx]
-            dur = rng.uniform(dlo, dhi) * scale
-            lo = earliest * scale
-            begin = rng.uniform(lo, max(lo, P - dur))
-            act = min(P, max(explore, begin - rng.uniform(llo, lhi) * scale))
-            begin = max(begin, act)
-            end = min(P, begin + dur)
-        orders.append(Order(id=i, complexity=cx, base=base, rings=rings, cap=cap,
-                            quantity=shape.quantity, gate=gate, begin=int(begin),
-                            end=max(int(math.ceil(end)), int(begin)), activate_at=int(math.ceil(act)),
-                            standing=shape.standing, overtime=shape.overtime,
-                            competitive=shape.competitive or i == extra_competitive))
-    return orders
+    extra_competitive = (rng.choice(random_ids),) if random_ids else ()
+
+    def window(cx: int) -> tuple[int, int, int]:
+        (dlo, dhi), earliest, (llo, lhi) = WINDOWS_2025[cx]
+        dur = rng.uniform(dlo, dhi) * scale
+        lo = earliest * scale
+        begin = rng.uniform(lo, max(lo, P - dur))
+        act = min(P, max(explore, begin - rng.uniform(llo, lhi) * scale))
+        end = min(P, max(begin, act) + dur)
+        act_s = int(math.ceil(act))
+        begin_s = max(int(begin), act_s)
+        return begin_s, max(int(math.ceil(end)), begin_s), act_s
+    return build_schedule(profile, rng, timing, window, extra_competitive)
 
 
 def judge_delivery_2025(profile, orders: list[Order], team: str, wp: Workpiece,

@@ -97,6 +97,10 @@ class Rules2016:
             return f"invalid delivery gate {instr.gate}"
         return None
 
+    def delivery_gate(self, game, instr) -> int:
+        """The gate a prepared DS delivers to: the instructed one (2016)."""
+        return int(instr.gate)
+
     def make_orders(self, profile, rng: random.Random, timing):
         return schedule_2016(profile, rng, timing)
 

@@ -97,6 +97,11 @@ class Rules2025(Rules2016):
             return f"invalid order ID {instr.order_id}"
         return None
 
+    def delivery_gate(self, game, instr) -> int:
+        """The gate comes from the order (0 when only consuming)."""
+        order = game.order(instr.order_id) if instr.order_id else None
+        return order.gate if order is not None else 0
+
     def make_orders(self, profile, rng: random.Random, timing):
         return schedule_2025(profile, rng, timing)
 

@@ -521,7 +521,8 @@ class DeliveryStation(Station):
 
     def finish(self) -> None:
         wp, self.inside = self.inside, None
-        self.host.deliver(self, wp, int(self.instruction.gate), self.now)
+        self.host.deliver(self, wp, self.host.rules.delivery_gate(self.host, self.instruction),
+                          self.now)
         self._idle("delivered")
 
 
