@@ -98,7 +98,9 @@ class InProcessTeamServer(TeamServerHandle):
                 if guess.zone is not None and guess.zone_confidence >= self.config.explore_thresh:
                     known[name] = int(guess.zone)
         delivered = sum(1 for p in kb.products.values() if p.state == "DELIVERED")
+        stations = {name: st.state for name, st in kb.stations.items()}
         return {"robots": robots, "tasks": tasks, "known": known, "delivered": delivered,
+                "stations": stations,
                 "color": color, "restarts": self.restarts}
 
     def close(self) -> None:

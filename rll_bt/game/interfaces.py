@@ -170,7 +170,8 @@ class TeamServerHandle(abc.ABC):
         None, "task_id", "status"}}, ``tasks`` [{"id", "kind", "state",
         "robot", "machine", "assigned_at", "finished_at"}], ``known``
         {machine: zone} of the machines whose zone the server is sure of (its
-        own reporting confidence) and ``delivered`` (products delivered)."""
+        own reporting confidence), ``stations`` {machine: state as the
+        server last heard it} and ``delivered`` (products delivered)."""
 
     def close(self) -> None:
         pass

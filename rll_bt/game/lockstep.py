@@ -152,12 +152,14 @@ class LockstepGame:
         """One lockstep round of ``dt`` seconds."""
         for n in sorted(self.agents):
             agent = self.agents[n]
+            before = agent.run
             agent.step()
             run = agent.run
+            ended = before.outcome.status if before is not None and before.done else None
             if run is not None and not run.done:
-                self.recorder.task(n, run.kind, run.task_id)
+                self.recorder.task(n, run.kind, run.task_id, outcome=ended)
             else:
-                self.recorder.task(n, None, outcome=run.outcome.status if run is not None else None)
+                self.recorder.task(n, None, outcome=ended)
         self.sim.step(self.options.dt)
         self.sim.refbox_step()
         self.teamserver.tick()

@@ -54,7 +54,9 @@ class Recorder:
             return
         if cur is not None:
             cur["end"] = now
-            cur["outcome"] = outcome or cur.get("outcome")
+            cur["outcome"] = outcome or "CANCELLED"
+        elif outcome is not None and runs and runs[-1]["outcome"] is None:
+            runs[-1]["outcome"] = outcome
         if kind is not None:
             runs.append({"kind": kind, "id": task_id, "start": now, "end": None, "outcome": None})
 
