@@ -9,7 +9,9 @@ as is, and :class:`TableWorld` implements it with dictionaries, so the game
 logic runs and is tested without physics.
 
 Slots (as the PyBullet world): ``input``; ``output`` (not on a DS);
-``slide`` (RS, holds many); ``shelf0``..``shelf2`` (CS).  Colours are the
+``slide`` (RS, holds many); ``shelf0``..``shelf2`` (CS).  The storage
+station (2025) has only ``input`` and ``output``: what it stores is kept by
+the refbox (:mod:`.storage`), not in the world.  Colours are the
 ``llsf_msgs`` enum names (``BASE_RED``, ``RING_BLUE``, ``CAP_GREY``); lights
 are ``OFF``/``ON``/``BLINK`` for ``RED``, ``YELLOW``, ``GREEN``.
 """
