@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from rll_bt import rules  # noqa: E402
 from rll_bt.backend import Pose2D, open_backend, wrap_angle  # noqa: E402
 from skills.activity import Status  # noqa: E402
-from skills.context import SkillContext  # noqa: E402
+from skills.context import FunctionPose, SkillContext  # noqa: E402
 from skills.localisation import AmclConfig, Localiser  # noqa: E402
 from skills.maps import FieldMap  # noqa: E402
 from skills.navigation import Navigate, StationSideGoal  # noqa: E402
@@ -37,20 +37,6 @@ CONFIGS = {
     "standard (KLD 100..1000, 60 beams)": AmclConfig.standard(),
     "cheap (KLD 60..300, 24 beams)": AmclConfig.cheap(),
 }
-
-
-class GroundTruth:
-    """A pose source reading the world's truth (benchmarks only)."""
-
-    def __init__(self, fn):
-        self.fn = fn
-        self.confidence, self.lost = 1.0, False
-
-    def pose(self):
-        return self.fn()
-
-    def update(self):
-        return False
 
 
 def sim_scene(seed):
@@ -93,7 +79,7 @@ def run(seed, world_kind, results):
     fmap = FieldMap.from_profile(prof)
     for n, p in stations.items():
         fmap.add_station(n, p)
-    ctx = SkillContext(bot, world.clock, prof, fmap, GroundTruth(truth))
+    ctx = SkillContext(bot, world.clock, prof, fmap, FunctionPose(truth))
     for n, p in stations.items():
         ctx.machines.set(n, p, confirm=False)
     locs = {}

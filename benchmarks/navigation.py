@@ -26,22 +26,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from rll_bt.backend import Pose2D, open_backend  # noqa: E402
 from skills.activity import Status  # noqa: E402
-from skills.context import SkillContext  # noqa: E402
+from skills.context import FunctionPose, SkillContext  # noqa: E402
 from skills.navigation import Navigate, PoseGoal, StationSideGoal, ZoneGoal  # noqa: E402
 
 MAX_SPEED = 0.7
-
-
-class GroundTruth:
-    def __init__(self, fn):
-        self.fn = fn
-        self.confidence, self.lost = 1.0, False
-
-    def pose(self):
-        return self.fn()
-
-    def update(self):
-        return False
 
 
 def free_spot(ctx, rng, margin=0.6):
@@ -71,7 +59,7 @@ def run_seed(seed, n_goals, n_others, localisation, rows):
     start = world.robot_pose("CYAN", 1)
     if localisation == "truth":
         ctx = SkillContext.create(bot, world.clock, world.profile, start, localisation=None)
-        ctx.pose_source = GroundTruth(lambda: world.robot_pose("CYAN", 1))
+        ctx.pose_source = FunctionPose(lambda: world.robot_pose("CYAN", 1))
     else:
         ctx = SkillContext.create(bot, world.clock, world.profile, start, localisation=localisation, seed=seed)
     for n, st in world.stations.items():

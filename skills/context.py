@@ -59,6 +59,22 @@ class OdometryPose:
         return None
 
 
+class FunctionPose:
+    """A pose source that asks a function (a simulator's ground truth in
+    tests and benchmarks, or an external localisation system)."""
+
+    def __init__(self, fn, confidence: float = 1.0):
+        self.fn = fn
+        self.confidence = confidence
+        self.lost = False
+
+    def update(self) -> bool:
+        return False
+
+    def pose(self) -> Pose2D:
+        return self.fn()
+
+
 class SkillContext:
     def __init__(self, backend: Backend, clock: Clock, profile: Profile, field_map: FieldMap,
                  pose_source: PoseSource, machines: MachineMap | None = None,

@@ -58,9 +58,17 @@ def skills_service(run_ctx) -> SkillContext:
         ctx.pose_source.initialise_global()
         log.warning("no start pose given: localising globally")
         return ctx
-    if not isinstance(start, Pose2D):
-        start = Pose2D(*start) if isinstance(start, (list, tuple)) else Pose2D(**start)
+    start = as_pose(start)
     return SkillContext.create(run_ctx.backend, run_ctx.clock, profile, start, localisation=preset)
+
+
+def as_pose(value) -> Pose2D:
+    """A pose from a Pose2D, [x, y, theta] or {x:, y:, theta:}."""
+    if isinstance(value, Pose2D):
+        return value
+    if isinstance(value, dict):
+        return Pose2D(float(value.get("x", 0.0)), float(value.get("y", 0.0)), float(value.get("theta", 0.0)))
+    return Pose2D(*(float(v) for v in value))
 
 
 def zone_number(profile, zone) -> int:
@@ -172,7 +180,7 @@ class ExploreZoneNode(SkillNode):
     requires_capabilities = Capability.DRIVE | Capability.ODOMETRY
 
     def make(self, sctx):
-        vps = [p if isinstance(p, Pose2D) else Pose2D(*p) for p in (self.viewpoints or [])]
+        vps = [as_pose(p) for p in (self.viewpoints or [])]
         want = self.want_light and sctx.profile.exploration_reports == "type+zone"
         return ExploreZone(sctx, zone_number(sctx.profile, self.zone), vps or None, want, timeout=self.timeout)
 

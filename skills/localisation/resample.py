@@ -37,10 +37,12 @@ def systematic_indices(weights: np.ndarray, rng: np.random.Generator) -> np.ndar
 
 
 def draw(weights: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
-    """``count`` indices in random order: as many systematic passes over the
-    weights as needed, shuffled together (the order matters for KLD, which
-    keeps a prefix)."""
+    """``count`` indices in random order: one systematic pass over the
+    weights repeated ``k`` times (each copy weighing 1/k), enough for
+    ``count`` draws, then shuffled (the order matters for KLD, which keeps a
+    prefix)."""
     n = len(weights)
-    passes = max(1, -(-count // n))
-    idx = np.concatenate([systematic_indices(weights, rng) for _ in range(passes)])
+    k = max(1, -(-count // n))
+    tiled = np.tile(np.asarray(weights, dtype=float) / k, k)
+    idx = systematic_indices(tiled, rng) % n
     return idx[rng.permutation(len(idx))[:count]]

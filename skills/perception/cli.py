@@ -59,7 +59,7 @@ def register(cli) -> None:
                     "scaled conjugate gradient, report held-out accuracy and write the model files.")
     t.add_argument("--out", required=True, metavar="DIR", help="directory for the model files and report")
     t.add_argument("--samples", type=_int_at_least(10), default=None, metavar="N",
-                   help="rendered training frames (default 1400; --quick: 60)")
+                   help="rendered training frames (default 1000; --quick: 60)")
     t.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
     t.add_argument("--quick", action="store_true", help="a tiny run (for tests and trying things out)")
     t.add_argument("--workers", type=_int_at_least(1), default=min(2, os.cpu_count() or 1), metavar="W",
@@ -96,8 +96,9 @@ def register(cli) -> None:
 def cmd_train_light(args) -> int:
     from .light.evaluation import confusion_table
     from .light.training import TrainOptions, train_light
-    samples = args.samples if args.samples is not None else (60 if args.quick else 1400)
-    opts = TrainOptions(out=args.out, samples=samples, seed=args.seed, quick=args.quick, workers=args.workers)
+    samples = args.samples if args.samples is not None else (60 if args.quick else 1000)
+    opts = TrainOptions(out=args.out, samples=samples, seed=args.seed, quick=args.quick, workers=args.workers,
+                        **({"iterations": 60, "rounds": 1} if args.quick else {}))
     report = train_light(opts, progress=lambda s: print(s, file=sys.stderr, flush=True))
     h = report["heldout"]
     d = report["detector"]

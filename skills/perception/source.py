@@ -19,10 +19,10 @@ import logging
 
 import numpy as np
 
-from rll_bt.backend import (Backend, BackendError, Capability, CapabilityError, Detections,
-                            LightDetection)
+from rll_bt.backend import Backend, BackendError, Capability, CapabilityError, Detections, LightDetection
 from rll_bt.rules import Profile
 
+from ..machines import BackendTagSource as OracleSource
 from .light.region import tower_region
 from .tags import TagDetector
 
@@ -106,20 +106,5 @@ def make_tag_source(backend: Backend, profile: Profile, mode: str = "auto", **op
     if mode == "oracle" or (mode == "auto" and has_oracle):
         if not has_oracle:
             raise CapabilityError(f"{backend.name}: no built-in perception (DETECTIONS) for mode 'oracle'")
-        return OracleSource(backend, options.get("camera", "front"))
+        return OracleSource(backend, options.get("camera", "front"))    # skills.machines.BackendTagSource
     return CameraPerception(backend, profile, **options)
-
-
-class OracleSource:
-    """Tags and lights the backend perceives itself (``Capability.DETECTIONS``)."""
-
-    def __init__(self, backend: Backend, camera: str = "front"):
-        self.backend = backend
-        self.camera = camera
-
-    def detections(self) -> Detections | None:
-        try:
-            return self.backend.detections(self.camera)
-        except BackendError as exc:
-            log.debug("no detections: %s", exc)
-            return None

@@ -114,3 +114,16 @@ def test_estimate_has_a_covariance_and_the_pose_follows_odometry_between_updates
         scene.world.step(0.1)
         assert not loc.update()               # 5 cm: no filter update
     assert loc.pose().distance_to(scene.robot.true_pose) < 0.05
+
+
+def test_relocalise_recovers_a_pose_that_is_off():
+    from skills.activity import Status
+    from skills.localisation.relocalise import Relocalise
+    scene = Scene(seed=5, start=Pose2D(2.0, 2.0, 0.3))
+    loc = scene.ctx.pose_source
+    loc.initialise(Pose2D(2.4, 2.3, 0.6), (0.02, 0.02, 0.02))     # confidently wrong
+    act = Relocalise(scene.ctx)
+    assert scene.run(act) is Status.SUCCESS, act.message
+    err_xy, err_th = scene.pose_error()
+    assert err_xy < 0.1 and err_th < 0.1
+    assert scene.world.collisions == 0

@@ -225,7 +225,7 @@ def make_chunk(spec: ChunkSpec, world_class) -> ChunkResult:
         if rng.random() < spec.keep:
             res.frames.append(PackedFrame.pack(img, truths, source, dist))
     if spec.extract:
-        negs = random_negatives(neg_imgs, 12 * len(neg_imgs), rng, neg_avoid) if neg_imgs else []
+        negs = random_negatives(neg_imgs, 8 * len(neg_imgs), rng, neg_avoid) if neg_imgs else []
         res.pos = window_features(hog, pos)
         res.neg = window_features(hog, negs)
         if crops:

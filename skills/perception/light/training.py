@@ -46,7 +46,7 @@ HELDOUT_SEED = 1_000_003
 @dataclass
 class TrainOptions:
     out: Path
-    samples: int = 1400            # rendered training frames
+    samples: int = 1000            # rendered training frames
     seed: int = 0
     quick: bool = False
     workers: int = 2
@@ -183,7 +183,8 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
 
         # -- detector: SVM, hard negatives, SVM again ------------------------
         rng = np.random.default_rng(opts.seed)
-        mine = [frames[i] for i in rng.permutation(len(frames))[: (120 if opts.quick else 450)]]
+        mine = [frames[i] for i in rng.permutation(len(frames))[: (40 if opts.quick else 350)]]
+        per_frame = max(2, 3000 // max(1, len(mine)))     # hard negatives per frame and round
         low = -0.6
         hard_all = np.zeros((0, pos_f.shape[1]), np.float32)
         vector = train_svm(pos_f, neg_f)
@@ -191,7 +192,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         hits: list[FrameHits] = []
         for r in range(opts.rounds + 1):
             hits = []
-            for part in pool.map(_mine_job, [(vector, fs, low, 20) for fs in _split(mine, opts.workers * 2)]):
+            for part in pool.map(_mine_job, [(vector, fs, low, per_frame) for fs in _split(mine, opts.workers * 2)]):
                 hits.extend(part)
             order = [f for fs in _split(mine, opts.workers * 2) for f in fs]
             mine = order
@@ -228,7 +229,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
     y = np.concatenate([states_a, np.asarray(det_states, np.int64)])
     x = np.stack([crop_features(c) for c in x_crops]).astype(np.float64)
     net = Mlp.create(x.shape[1], opts.hidden, DEFAULT_SIZE, seed=opts.seed)
-    iters = 60 if opts.quick else opts.iterations
+    iters = opts.iterations
     say(f"training the network ({x.shape[1]} inputs, {opts.hidden} hidden, 8 states) on {len(x)} crops "
         f"with SCG, {iters} iterations")
 
