@@ -5,7 +5,7 @@ from rll_bt.backend import BackendError, Pose2D
 from skills.activity import Activity, Sequence, Status
 from skills.errors import SkillError, SkillFailure
 
-from conftest import Scene
+from skills_scene import Scene
 
 
 class Counter(Activity):

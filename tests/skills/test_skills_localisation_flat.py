@@ -8,7 +8,7 @@ import pytest
 from rll_bt.backend import Pose2D, wrap_angle
 from skills.localisation import AmclConfig, Localiser
 
-from conftest import Scene
+from skills_scene import Scene
 
 
 def drive_through(scene, loc, waypoints, speed=0.5):

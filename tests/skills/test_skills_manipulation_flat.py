@@ -10,7 +10,7 @@ from skills.errors import SkillError, SkillFailure
 from skills.manipulation import (ApproachStation, GrabFrom, Place, PutOnto, fit_face, gripper_target,
                                  lateral_offset, place_for)
 
-from conftest import Scene
+from skills_scene import Scene
 
 
 @pytest.mark.parametrize("start", [Pose2D(4.5, 2.0, math.pi / 2), Pose2D(2.0, 1.0, 0.0),

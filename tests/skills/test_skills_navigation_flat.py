@@ -9,7 +9,7 @@ from skills.activity import Status
 from skills.errors import SkillError
 from skills.navigation import Navigate, PoseGoal, StationSideGoal, ZoneGoal, approach_pose
 
-from conftest import STATIONS, Scene
+from skills_scene import STATIONS, Scene
 
 
 @pytest.mark.parametrize("goal", [

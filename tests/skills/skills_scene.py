@@ -1,8 +1,7 @@
 """Shared scenes for the skills tests: a 2016 field in the flat test world
-(fast, exact) with six stations, and a helper to run activities."""
+(fast, exact) with six stations, and a helper to run activities.  (A
+uniquely named module: every test folder has its own conftest.py.)"""
 import math
-
-import pytest
 
 from rll_bt import rules
 from rll_bt.backend import Pose2D
@@ -43,8 +42,3 @@ class Scene:
     def pose_error(self):
         est, tp = self.ctx.pose(), self.robot.true_pose
         return math.hypot(est.x - tp.x, est.y - tp.y), abs(math.remainder(est.theta - tp.theta, 2 * math.pi))
-
-
-@pytest.fixture
-def scene():
-    return Scene()
