@@ -1,0 +1,101 @@
+"""Exploration strategies side by side in whole simulated games.
+
+For every seed and strategy (Algorithm 1 of the paper, random, nearest, and
+the oracle that knows where the stations stand) a lockstep game with three
+robots plays its exploration (SETUP shortened to 1 s) and stops as soon as
+every own station is correctly known and all exploration points are
+scored, or when the exploration time is over.  Measured per game: the
+exploration points and the game seconds until every own station was
+correctly known (the team server sure of its zone).
+
+    .venv/bin/python benchmarks/exploration.py [--profile rcll2016|rcll2025] [--seeds 30]
+                                               [--strategies algorithm1,random,nearest,oracle]
+                                               [--jobs 2] [--per-seed] [--json FILE]
+
+Aim: full points in at least 95 % of seeds and a median time within 1.3x
+of the oracle's.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from rll_bt import rules  # noqa: E402
+from rll_bt.game.batch import fmt, median, run_batch  # noqa: E402
+from rll_bt.game.options import STRATEGIES, GameOptions  # noqa: E402
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--profile", default="rcll2016", choices=rules.PROFILES)
+    ap.add_argument("--seeds", type=int, default=30, help="seeds 1..N (default 30)")
+    ap.add_argument("--first-seed", type=int, default=1)
+    ap.add_argument("--strategies", default=",".join(STRATEGIES))
+    ap.add_argument("--jobs", type=int, default=2, help="games in parallel (default 2)")
+    ap.add_argument("--per-seed", action="store_true", help="also print every game")
+    ap.add_argument("--json", type=Path, help="write every game's numbers here")
+    args = ap.parse_args(argv)
+    strategies = [s for s in args.strategies.split(",") if s]
+    bad = set(strategies) - set(STRATEGIES)
+    if bad:
+        ap.error(f"unknown strategy {', '.join(sorted(bad))} (known: {', '.join(STRATEGIES)})")
+    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+    games = [GameOptions(profile=args.profile, seed=s, strategy=st, until="exploration", setup=1.0)
+             for st in strategies for s in seeds]
+    t0 = time.perf_counter()
+
+    def done(i, row):
+        g = games[i]
+        what = row.get("error") or (f"{row['exploration']['points']} pts, known after "
+                                    f"{fmt(row['exploration']['known_all_after'])} s")
+        print(f"  [{time.perf_counter() - t0:6.0f} s] {g.strategy:10} seed {g.seed:3d}: {what}",
+              file=sys.stderr, flush=True)
+
+    rows = run_batch(games, jobs=args.jobs, stop="explored", done=done)
+    wall = time.perf_counter() - t0
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=1, default=str))
+    print(render(args.profile, strategies, seeds, games, rows, wall, args.per_seed))
+    return 0 if all("error" not in r for r in rows) else 1
+
+
+def render(profile, strategies, seeds, games, rows, wall, per_seed=False) -> str:
+    by = {st: [r for g, r in zip(games, rows) if g.strategy == st] for st in strategies}
+    oracle = median(r["exploration"]["known_all_after"] for r in by.get("oracle", []) if "error" not in r)
+    lines = [f"exploration, {profile}, {len(seeds)} seeds ({seeds[0]}..{seeds[-1]}), 3 robots, "
+             f"oracle perception; {wall:.0f} s wall",
+             "",
+             f"{'strategy':11} {'full points':>12} {'median pts':>11} {'known':>7} {'median time s':>14} "
+             f"{'vs oracle':>10} {'errors':>7}",
+             f"{'-' * 11} {'-' * 12} {'-' * 11} {'-' * 7} {'-' * 14} {'-' * 10} {'-' * 7}"]
+    for st in strategies:
+        ok = [r for r in by[st] if "error" not in r]
+        full = sum(1 for r in ok if r["exploration"]["points"] >= r["exploration"]["max_points"])
+        known = sum(1 for r in ok if r["exploration"]["known_all_after"] is not None)
+        # a game that never knew everything counts as taking the whole exploration time
+        times = [r["exploration"]["known_all_after"] if r["exploration"]["known_all_after"] is not None
+                 else r["phase_lengths"].get("EXPLORATION") or r["sim_time"] for r in ok]
+        med = median(times)
+        ratio = med / oracle if med is not None and oracle else None
+        share = f"{full}/{len(ok)} ({100 * full / len(ok):.0f}%)" if ok else "-"
+        lines.append(f"{st:11} {share:>12} {fmt(median(r['exploration']['points'] for r in ok), '.0f'):>11} "
+                     f"{known:>3}/{len(ok):<3} {fmt(med):>14} {fmt(ratio, '.2f') + 'x' if ratio else '-':>10} "
+                     f"{len(by[st]) - len(ok):>7}")
+    if per_seed:
+        lines += ["", f"{'strategy':11} {'seed':>4} {'points':>6} {'known after s':>13} {'wall s':>7}"]
+        for g, r in zip(games, rows):
+            if "error" in r:
+                lines.append(f"{g.strategy:11} {g.seed:4d} error: {r['error']}")
+            else:
+                lines.append(f"{g.strategy:11} {g.seed:4d} {r['exploration']['points']:6d} "
+                             f"{fmt(r['exploration']['known_all_after']):>13} {fmt(r['wall_time'], '.0f'):>7}")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

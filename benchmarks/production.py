@@ -1,0 +1,103 @@
+"""Production points per game: the HTN team server against a greedy baseline.
+
+For every seed two whole lockstep games are played (three robots, oracle
+perception, Algorithm 1 exploration, SETUP shortened to 10 s): one with the
+team server's HTN planning (several products at once, orders chosen by
+simulating the plan), one with the greedy baseline (one order at a time,
+the plannable one with the earliest deadline; ``rll-bt sim --baseline``).
+Measured per game: production points, orders delivered, total score.
+
+    .venv/bin/python benchmarks/production.py [--profile rcll2016|rcll2025] [--seeds 20]
+                                              [--jobs 2] [--per-seed] [--json FILE]
+
+Aim: at least 100 production points per game and at least 1.5x the baseline.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from rll_bt import rules  # noqa: E402
+from rll_bt.game.batch import fmt, mean, median, run_batch  # noqa: E402
+from rll_bt.game.options import GameOptions  # noqa: E402
+
+VARIANTS = {"htn": False, "baseline": True}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--profile", default="rcll2016", choices=rules.PROFILES)
+    ap.add_argument("--seeds", type=int, default=20, help="seeds 1..N (default 20)")
+    ap.add_argument("--first-seed", type=int, default=1)
+    ap.add_argument("--production", type=float, help="PRODUCTION length in game s (default: the rules')")
+    ap.add_argument("--jobs", type=int, default=2, help="games in parallel (default 2)")
+    ap.add_argument("--per-seed", action="store_true", help="also print every game")
+    ap.add_argument("--json", type=Path, help="write every game's numbers here")
+    args = ap.parse_args(argv)
+    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+    games = [GameOptions(profile=args.profile, seed=s, baseline=base, production=args.production)
+             for s in seeds for base in VARIANTS.values()]
+    t0 = time.perf_counter()
+
+    def done(i, row):
+        g = games[i]
+        what = row.get("error") or (f"{row['points']['production']} production pts, "
+                                    f"{row['orders_delivered']} orders")
+        print(f"  [{time.perf_counter() - t0:6.0f} s] {'baseline' if g.baseline else 'htn':8} seed {g.seed:3d}: "
+              f"{what}", file=sys.stderr, flush=True)
+
+    rows = run_batch(games, jobs=args.jobs, done=done)
+    wall = time.perf_counter() - t0
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=1, default=str))
+    print(render(args.profile, seeds, games, rows, wall, args.per_seed))
+    return 0 if all("error" not in r for r in rows) else 1
+
+
+def render(profile, seeds, games, rows, wall, per_seed=False) -> str:
+    by = {name: [r for g, r in zip(games, rows) if g.baseline == base and "error" not in r]
+          for name, base in VARIANTS.items()}
+    errors = sum(1 for r in rows if "error" in r)
+    lines = [f"production, {profile}, {len(seeds)} seeds ({seeds[0]}..{seeds[-1]}), 3 robots, "
+             f"oracle perception; {wall:.0f} s wall" + (f"; {errors} games failed" if errors else ""),
+             "",
+             f"{'team server':12} {'games':>5} {'mean prod pts':>14} {'median':>7} {'min':>5} {'max':>5} "
+             f"{'>=100 pts':>10} {'orders/game':>12} {'mean score':>11}",
+             f"{'-' * 12} {'-' * 5} {'-' * 14} {'-' * 7} {'-' * 5} {'-' * 5} {'-' * 10} {'-' * 12} {'-' * 11}"]
+    means = {}
+    for name, rs in by.items():
+        pts = [r["points"]["production"] for r in rs]
+        means[name] = mean(pts)
+        hundred = sum(1 for p in pts if p >= 100)
+        lines.append(f"{name:12} {len(rs):5d} {fmt(mean(pts)):>14} {fmt(median(pts), '.0f'):>7} "
+                     f"{fmt(min(pts) if pts else None, 'd'):>5} {fmt(max(pts) if pts else None, 'd'):>5} "
+                     f"{hundred:>4}/{len(rs):<5} {fmt(mean(r['orders_delivered'] for r in rs), '.2f'):>12} "
+                     f"{fmt(mean(r['points']['total'] for r in rs)):>11}")
+    if means.get("baseline"):
+        lines += ["", f"HTN / baseline (mean production points): {means['htn'] / means['baseline']:.2f}x"]
+    elif means.get("htn") is not None:
+        lines += ["", "HTN / baseline: the baseline scored no production points"]
+    if per_seed:
+        lines += ["", f"{'seed':>4} {'htn pts':>8} {'orders':>7} {'baseline pts':>13} {'orders':>7}"]
+        table = {}
+        for g, r in zip(games, rows):
+            table.setdefault(g.seed, {})["baseline" if g.baseline else "htn"] = r
+        for seed in seeds:
+            cells = []
+            for name in VARIANTS:
+                r = table.get(seed, {}).get(name, {})
+                if "error" in r or not r:
+                    cells.append(f"{'error':>8} {'':>7}")
+                else:
+                    cells.append(f"{r['points']['production']:8d} {r['orders_delivered']:7d}")
+            lines.append(f"{seed:4d} {cells[0]} {cells[1].rjust(21)}")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

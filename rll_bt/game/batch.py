@@ -1,0 +1,91 @@
+"""Many lockstep games in worker processes, for the benchmarks.
+
+    rows = run_batch([GameOptions(seed=s) for s in range(1, 31)], jobs=2)
+
+Each game runs in a fresh process of a ``spawn`` pool (one PyBullet world
+at a time per worker) and returns its report summary (:mod:`.report`) plus
+``wall_time``; a game that raises returns ``{"error": ...}`` instead, so one
+bad seed does not lose a long run.  ``stop="explored"`` ends a game as soon
+as every own station is correctly known and the exploration points are
+complete (the exploration benchmark's measure).  ``done(i, row)`` is called
+in the parent as results arrive (progress).
+"""
+from __future__ import annotations
+
+import multiprocessing as mp
+import statistics
+import traceback
+from typing import Callable, Iterable
+
+from .options import GameOptions, max_exploration_points
+
+
+def explored(game) -> bool:
+    """Every own station correctly known and every exploration point scored."""
+    rec = game.recorder.rec
+    if rec.known_all_at is None:
+        return False
+    want = max_exploration_points(game.options.rules)
+    got = sum(a.points for a in game.sim.awards() if a.team == "CYAN" and a.order is None
+              and (a.phase == "EXPLORATION" or " zone " in a.reason or " rotation " in a.reason))
+    return got >= want
+
+
+STOPS: dict[str, Callable | None] = {"explored": explored, None: None}
+
+
+def play_one(args: tuple[GameOptions, str | None]) -> dict:
+    options, stop = args
+    from ..clock import WallClock
+    from . import finish
+    from .lockstep import LockstepGame
+    wall = WallClock()
+    t0 = wall.now()
+    try:
+        with LockstepGame(options) as game:
+            result = game.run(stop=STOPS[stop])
+            summary = finish(result, options, wall.now() - t0)
+        summary.pop("awards", None)
+        return summary
+    except Exception as exc:  # noqa: BLE001 - one bad game must not end the batch
+        return {"seed": options.seed, "strategy": options.strategy, "baseline": options.baseline,
+                "error": f"{type(exc).__name__}: {exc}", "trace": traceback.format_exc()}
+
+
+def run_batch(games: Iterable[GameOptions], *, jobs: int = 2, stop: str | None = None,
+              done: Callable[[int, dict], None] | None = None) -> list[dict]:
+    """Summaries in the order of ``games``."""
+    work = [(g, stop) for g in games]
+    out: list[dict | None] = [None] * len(work)
+    if jobs <= 1:
+        for i, item in enumerate(work):
+            out[i] = play_one(item)
+            if done:
+                done(i, out[i])
+        return out  # type: ignore[return-value]
+    ctx = mp.get_context("spawn")
+    with ctx.Pool(jobs, maxtasksperchild=4) as pool:
+        for i, row in pool.imap_unordered(_indexed, list(enumerate(work))):
+            out[i] = row
+            if done:
+                done(i, row)
+    return out  # type: ignore[return-value]
+
+
+def _indexed(item):
+    i, args = item
+    return i, play_one(args)
+
+
+def median(values) -> float | None:
+    vals = [v for v in values if v is not None]
+    return statistics.median(vals) if vals else None
+
+
+def mean(values) -> float | None:
+    vals = [v for v in values if v is not None]
+    return statistics.fmean(vals) if vals else None
+
+
+def fmt(value, spec: str = ".1f", none: str = "-") -> str:
+    return none if value is None else format(value, spec)
