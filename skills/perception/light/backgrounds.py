@@ -74,14 +74,10 @@ def _clutter(rng: np.random.Generator, img: np.ndarray, count: int) -> None:
                      int(rng.integers(1, 6)), cv2.LINE_AA)
         elif kind == 2:                              # disc / blob
             cv2.circle(img, (x, y), int(rng.integers(3, 60)), col, -1, cv2.LINE_AA)
-        elif kind == 3:                              # upright bar shaped like a tower's outline
+        elif kind == 3:                              # upright dark bar about a tower's shape
             bw = int(rng.integers(4, 40))
             bh = int(bw * rng.uniform(2.0, 6.0))
             cv2.rectangle(img, (x, y), (x + bw, y + bh), _colour(rng, 0, 90), -1)
-            if rng.random() < 0.5:                   # with bands, like segments
-                for k in range(1, int(rng.integers(2, 5))):
-                    yk = y + k * bh // 4
-                    cv2.line(img, (x, yk), (x + bw, yk), _colour(rng), max(1, bw // 8))
         elif kind == 4:                              # lamp, LED or reflection in a saturated colour
             hue = int(rng.choice([0, 15, 30, 60, 90, 120, 150, 175]))
             hsv = np.uint8([[[hue, int(rng.integers(150, 256)), int(rng.integers(150, 256))]]])

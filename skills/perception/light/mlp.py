@@ -1,7 +1,9 @@
 """A small feed-forward network over signal-tower crops: the classifier of
 the paper's chain.  One tanh hidden layer, softmax over the eight light
-states (green 1, yellow 2, red 4), cross-entropy with weight decay, trained
-with scaled conjugate gradient on a flat parameter vector.
+states (green 1, yellow 2, red 4) and optionally a ninth class, "no
+tower", with which the network also checks the detector's hits;
+cross-entropy with weight decay, trained with scaled conjugate gradient on
+a flat parameter vector.
 
 Input: the tower's crop resized to ``size`` (w, h; 8 x 32 pixels by
 default, the tower's shape) in BGR, as floats in [0, 1] minus 0.5,
@@ -17,6 +19,7 @@ import numpy as np
 from .scg import scg
 
 N_STATES = 8
+NO_TOWER = 8          # the index of the optional ninth class
 
 
 DEFAULT_SIZE = (8, 32)
@@ -38,11 +41,17 @@ class Mlp:
     size: tuple[int, int] = DEFAULT_SIZE
 
     @classmethod
-    def create(cls, n_in: int, n_hidden: int, size=DEFAULT_SIZE, seed: int = 0) -> "Mlp":
+    def create(cls, n_in: int, n_hidden: int, size=DEFAULT_SIZE, seed: int = 0,
+               n_out: int = N_STATES) -> "Mlp":
         rng = np.random.default_rng(seed)
         return cls(rng.normal(0, 1 / np.sqrt(n_in), (n_in, n_hidden)), np.zeros(n_hidden),
-                   rng.normal(0, 1 / np.sqrt(n_hidden), (n_hidden, N_STATES)), np.zeros(N_STATES),
+                   rng.normal(0, 1 / np.sqrt(n_hidden), (n_hidden, n_out)), np.zeros(n_out),
                    tuple(size))
+
+    @property
+    def verifies(self) -> bool:
+        """Whether the network has the "no tower" class."""
+        return self.w2.shape[1] > N_STATES
 
     # -- flat parameter vector for the optimiser ---------------------------
     def _shapes(self):

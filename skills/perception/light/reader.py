@@ -20,7 +20,7 @@ from rll_bt.backend import LightDetection
 from rll_bt.errors import UserError
 
 from .hog import TowerDetector, crop_window
-from .mlp import Mlp, crop_features
+from .mlp import N_STATES, NO_TOWER, Mlp, crop_features
 
 MODEL_DIR = Path(__file__).with_name("models")
 DETECTOR_FILE = "tower_hog_svm.npz"
@@ -29,10 +29,11 @@ REPORT_FILE = "training_report.json"
 
 
 class LightReader:
-    def __init__(self, detector: TowerDetector, classifier: Mlp, max_detections: int = 3):
+    def __init__(self, detector: TowerDetector, classifier: Mlp, max_detections: int = 3, reject: float = 0.5):
         self.detector = detector
         self.classifier = classifier
         self.max_detections = max_detections
+        self.reject = reject          # "no tower" probability at which a hit is dropped
 
     @classmethod
     def load(cls, directory: str | Path | None = None, **detector_options) -> "LightReader":
@@ -54,22 +55,35 @@ class LightReader:
         settings.update(detector_options)
         return cls(TowerDetector(vector, **settings), classifier)
 
-    def classify(self, image: np.ndarray, boxes) -> np.ndarray:
-        """Probabilities over the eight states for each tower box (x, y, w, h) of ``image``."""
+    def network_output(self, image: np.ndarray, boxes) -> np.ndarray:
+        """The network's probabilities (8 states, and "no tower" when it has
+        that class) for each tower box (x, y, w, h) of ``image``."""
+        n_out = self.classifier.w2.shape[1]
         if len(boxes) == 0:
-            return np.zeros((0, 8))
+            return np.zeros((0, n_out))
         x = np.stack([crop_features(crop_window(image, b, self.classifier.size), self.classifier.size)
                       for b in boxes]).astype(np.float64)
         return self.classifier.probabilities(x)
 
+    def classify(self, image: np.ndarray, boxes) -> np.ndarray:
+        """Probabilities over the eight states for each tower box (x, y, w, h) of ``image``."""
+        p = self.network_output(image, boxes)[:, :N_STATES]
+        return p / np.maximum(p.sum(axis=1, keepdims=True), 1e-12)
+
     def read(self, image: np.ndarray, region: tuple[int, int, int, int] | None = None,
              tower_height: float | None = None, camera: str = "front") -> list[LightDetection]:
-        """Signal towers in a BGR image with their light states, best first."""
-        boxes = self.detector.detect(image, region=region, tower_height=tower_height)[: self.max_detections]
-        probs = self.classify(image, [b.xywh for b in boxes])
-        return [LightDetection(box=b.xywh, state=int(p.argmax()), score=b.score,
-                               probabilities=tuple(float(v) for v in p), camera=camera)
-                for b, p in zip(boxes, probs)]
+        """Signal towers in a BGR image with their light states, best first.
+        Hits the network calls "no tower" are dropped."""
+        boxes = self.detector.detect(image, region=region, tower_height=tower_height)[: 4 * self.max_detections]
+        out = self.network_output(image, [b.xywh for b in boxes])
+        found = []
+        for b, p in zip(boxes, out):
+            if self.classifier.verifies and p[NO_TOWER] >= self.reject:
+                continue
+            states = p[:N_STATES] / max(float(p[:N_STATES].sum()), 1e-12)
+            found.append(LightDetection(box=b.xywh, state=int(states.argmax()), score=b.score,
+                                        probabilities=tuple(float(v) for v in states), camera=camera))
+        return found[: self.max_detections]
 
 
 def save_detector(path: str | Path, vector: np.ndarray, **settings) -> None:

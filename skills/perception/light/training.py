@@ -36,7 +36,7 @@ from rll_bt.errors import UserError
 from .dataset import ChunkResult, ChunkSpec, PackedFrame, make_chunk
 from .evaluation import LightScore
 from .hog import TowerDetector, crop_window, iou, make_hog, select, train_svm, window_features, window_for_tower
-from .mlp import DEFAULT_SIZE, Mlp, crop_features
+from .mlp import DEFAULT_SIZE, N_STATES, NO_TOWER, Mlp, crop_features
 from .reader import CLASSIFIER_FILE, DETECTOR_FILE, REPORT_FILE, LightReader, save_detector
 
 PROFILES = ("rcll2016", "rcll2025")
@@ -89,9 +89,11 @@ def _chunk_job(spec: ChunkSpec) -> ChunkResult:
 
 @dataclass
 class FrameHits:
-    """Raw detections of one frame at a low threshold, for mining and calibration."""
-    boxes: np.ndarray             # N x 4
-    scores: np.ndarray            # N
+    """What the detector finds in one frame at a low threshold, for mining and calibration."""
+    boxes: np.ndarray             # N x 4 tower boxes after non-maximum suppression
+    scores: np.ndarray            # N SVM scores
+    false: np.ndarray             # N bools: matches no tower
+    crops: np.ndarray             # N x 32 x 8 x 3 network crops
     hard: np.ndarray              # HOG features of the strongest false hits
 
 
@@ -103,10 +105,14 @@ def _mine_job(args) -> list[FrameHits]:
     for f in frames:
         img = f.image
         boxes, scores = det.raw_hits(img, max_hits=300)
-        kept = select(boxes, scores, low, 1, det.nms_overlap)
-        false = [k for k in kept if all(iou(k.xywh, t.box) < 0.2 for t in f.truths)][:per_frame]
-        crops = [crop_window(img, window_for_tower(k.xywh)) for k in false]
-        out.append(FrameHits(boxes, scores, window_features(hog, crops)))
+        kept = select(boxes, scores, low, 1, det.nms_overlap)[:40]
+        false = np.array([all(iou(k.xywh, t.box) < 0.2 for t in f.truths) for k in kept], bool)
+        hard = [crop_window(img, window_for_tower(k.xywh)) for k, bad in zip(kept, false) if bad][:per_frame]
+        crops = np.stack([crop_window(img, k.xywh, DEFAULT_SIZE) for k in kept]) if kept else \
+            np.zeros((0, DEFAULT_SIZE[1], DEFAULT_SIZE[0], 3), np.uint8)
+        out.append(FrameHits(np.array([k.xywh for k in kept], np.float32).reshape(-1, 4),
+                             np.array([k.score for k in kept], np.float32), false, crops,
+                             window_features(hog, hard)))
     return out
 
 
@@ -120,26 +126,23 @@ def _split(items: list, n: int) -> list[list]:
     return [items[i::n] for i in range(n)]
 
 
-def calibrate(frames: list[PackedFrame], hits: list[FrameHits], low: float
-              ) -> tuple[float, int, dict]:
-    """The threshold and minimum support with the most recall on ``frames``
-    and no false detection (or, when none is free of them, the fewest)."""
+def calibrate(frames: list[PackedFrame], hits: list[FrameHits], accepted: list[np.ndarray], low: float
+              ) -> tuple[float, dict]:
+    """The detector threshold with the most recall on ``frames`` and the
+    fewest false detections there (hits the network rejects do not count)."""
     top = max((float(h.scores.max()) for h in hits if len(h.scores)), default=low + 1.0)
-    candidates = sorted(set(np.round(np.linspace(low, max(top, low + 0.1), 30), 4)))
     best = None
-    for support in (1, 2, 3):
-        for t in candidates:
-            score = LightScore()
-            for f, h in zip(frames, hits):
-                dets = select(h.boxes, h.scores, t, support)
-                score.add(f.truths, [(d.xywh, 0) for d in dets])
-            key = (score.false_all, -score.hits, t)
-            if best is None or key < best[0]:
-                best = (key, t, support, score)
-    (_, _, _), t, support, score = best
-    return float(t), int(support), {"threshold": float(t), "min_support": int(support),
-                                    "train_recall": score.hits / max(score.required, 1),
-                                    "train_false": score.false_all, "train_frames": score.frames}
+    for t in sorted(set(np.round(np.linspace(low, max(top, low + 0.1), 40), 4))):
+        score = LightScore()
+        for f, h, ok in zip(frames, hits, accepted):
+            keep = (h.scores >= t) & ok
+            score.add(f.truths, [(tuple(b), 0) for b in h.boxes[keep]])
+        key = (score.false_all, -score.hits, t)
+        if best is None or key < best[0]:
+            best = (key, t, score)
+    _, t, score = best
+    return float(t), {"threshold": float(t), "train_recall": score.hits / max(score.required, 1),
+                      "train_false": score.false_all, "train_frames": score.frames}
 
 
 def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: None,
@@ -203,40 +206,44 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
             hard_all = np.vstack([hard_all, hard])
             vector = train_svm(pos_f, np.vstack([neg_f, hard_all]))
             say(f"SVM round {r + 1} trained with {len(hard_all)} hard negatives")
-        threshold, support, cal = calibrate(mine, hits, low)
-        say(f"threshold {threshold:.3f}, min support {support}: training recall {cal['train_recall']:.3f}, "
-            f"{cal['train_false']} false on {cal['train_frames']} frames")
-        settings = {"threshold": threshold, "min_support": support}
-        detector = TowerDetector(vector, **settings)
-
-        # -- network: truth crops plus the detector's own boxes ---------------
-        det_crops, det_states = [], []
+        # -- network: truth crops, the detector's own boxes, and its false hits --
+        det_crops, det_states, neg_crops = [], [], []
         for f, h in zip(mine, hits):
-            dets = select(h.boxes, h.scores, threshold, support)
-            if not dets:
-                continue
-            img = None
-            for t in f.truths:
-                if not (t.clean and t.box[3] >= 20):
+            for k in range(len(h.scores)):
+                if h.false[k]:
+                    neg_crops.append(h.crops[k])
                     continue
-                for box in (d.xywh for d in dets):
-                    if iou(box, t.box) >= 0.3:
-                        img = f.image if img is None else img
-                        det_crops.append(crop_window(img, box, DEFAULT_SIZE))
+                for t in f.truths:
+                    if t.clean and t.box[3] >= 20 and iou(tuple(h.boxes[k]), t.box) >= 0.3:
+                        det_crops.append(h.crops[k])
                         det_states.append(t.state)
                         break
-    x_crops = np.concatenate([crops_a, np.stack(det_crops)]) if det_crops else crops_a
-    y = np.concatenate([states_a, np.asarray(det_states, np.int64)])
+    neg_crops = [neg_crops[i] for i in rng.permutation(len(neg_crops))[: 2 * len(crops_a)]]
+    x_crops = np.concatenate([crops_a] + ([np.stack(det_crops)] if det_crops else [])
+                             + ([np.stack(neg_crops)] if neg_crops else []))
+    y = np.concatenate([states_a, np.asarray(det_states, np.int64), np.full(len(neg_crops), NO_TOWER)])
     x = np.stack([crop_features(c) for c in x_crops]).astype(np.float64)
-    net = Mlp.create(x.shape[1], opts.hidden, DEFAULT_SIZE, seed=opts.seed)
+    net = Mlp.create(x.shape[1], opts.hidden, DEFAULT_SIZE, seed=opts.seed, n_out=N_STATES + 1)
     iters = opts.iterations
-    say(f"training the network ({x.shape[1]} inputs, {opts.hidden} hidden, 8 states) on {len(x)} crops "
-        f"with SCG, {iters} iterations")
+    say(f"training the network ({x.shape[1]} inputs, {opts.hidden} hidden, 8 states + no tower) on "
+        f"{len(x)} crops ({len(neg_crops)} not towers) with SCG, {iters} iterations")
 
     def tick(k, _, fx):
         if k % 50 == 0:
             say(f"  SCG iteration {k}: loss {fx:.4f}")
     net.train(x, y, max_iter=iters, decay=1e-3, callback=tick)
+    accepted = []
+    for h in hits:
+        if len(h.crops):
+            p = net.probabilities(np.stack([crop_features(c) for c in h.crops]).astype(np.float64))
+            accepted.append(p[:, NO_TOWER] < 0.5)
+        else:
+            accepted.append(np.zeros(0, bool))
+    threshold, cal = calibrate(mine, hits, accepted, low)
+    support = 1
+    settings = {"threshold": threshold, "min_support": support}
+    say(f"threshold {threshold:.3f}: training recall {cal['train_recall']:.3f}, "
+        f"{cal['train_false']} false on {cal['train_frames']} frames")
     train_acc = float((net.predict(x) == y).mean())
 
     # -- write and evaluate --------------------------------------------------
