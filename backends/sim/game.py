@@ -46,10 +46,12 @@ class PyBulletGame(Simulation):
     def attach_bus(self, bus) -> None:
         self.node = RefboxNode.on_bus(self.game, bus, keys={self.team_name: self.key})
 
-    def attach_udp(self, host: str = "127.0.0.1", port_layout: str = "sim") -> None:
+    def attach_udp(self, host: str = "127.0.0.1", port_layout="sim") -> None:
+        """``host``: where the refbox sends (a broadcast address for several
+        listeners on one machine); ``port_layout``: a name or a
+        :class:`rll_bt.comm.Layout`.  No control stream."""
         self.node = RefboxNode.on_udp(self.game, host=host, layout=port_layout,
-                                      keys={self.team_name: self.key}, stream_port=-1,
-                                      bind_host=host)
+                                      keys={self.team_name: self.key}, stream_port=-1)
 
     def refbox_registry(self):
         return RefboxNode.registry(self.game)

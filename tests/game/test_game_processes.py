@@ -1,0 +1,97 @@
+"""``rll-bt sim --processes``: the remote backend, and a short game with the team
+server and an agent as their own processes over loopback UDP and TCP."""
+import json
+import threading
+
+import numpy as np
+import pytest
+
+from rll_bt.backend import (Backend, Capability, CapabilityError, Detections, GripperState, GripperStatus,
+                            LaserScan, Odometry, Pose2D, TagDetection, open_backend)
+from rll_bt.cli import main
+from rll_bt.clock import SimClock
+from rll_bt.game.remote import BackendServer
+
+
+class Fake(Backend):
+    name = "fake"
+    capabilities = Capability.DRIVE | Capability.ODOMETRY | Capability.LASER | Capability.DETECTIONS
+
+    def __init__(self):
+        self.commands = []
+
+    def drive(self, vx, vy, omega):
+        self.commands.append((vx, vy, omega))
+
+    def odometry(self):
+        return Odometry(10.0, Pose2D(1.0, 2.0, 0.5), 0.1, 0.0, 0.2)
+
+    def laser_scan(self):
+        return LaserScan(10.0, -1.0, 0.5, 0.05, 5.0, np.array([1.0, np.inf, 2.5, 0.3, 4.0]))
+
+    def detections(self, camera="front"):
+        return Detections(10.0, tags=(TagDetection(66, (0.1, 0.0, 0.6), (0.0, 3.1, 0.0)),))
+
+    def gripper_status(self):
+        return GripperStatus(GripperState.IDLE, True, (0.0, 0.0, 0.05), holding=False)
+
+
+@pytest.fixture
+def served():
+    fake = Fake()
+    clock = SimClock(start=10.0)
+    server = BackendServer(lambda team, n: fake if (team, n) == ("CYAN", 2) else None, clock.now)
+    stop = threading.Event()
+
+    def serve():
+        while not stop.is_set():
+            server.poll(0.01)
+    t = threading.Thread(target=serve, daemon=True)
+    t.start()
+    yield fake, server, clock
+    stop.set()
+    t.join(2.0)
+    server.close()
+
+
+def test_the_remote_backend_carries_every_reading_and_command(served):
+    fake, server, _ = served
+    clock = SimClock(start=100.0)
+    bot = open_backend("remote", address=f"127.0.0.1:{server.port}", robot=2, clock=clock)
+    try:
+        assert bot.capabilities == fake.capabilities
+        bot.drive(0.3, -0.1, 0.5)
+        bot.stop()
+        assert fake.commands == [(0.3, -0.1, 0.5), (0.0, 0.0, 0.0)]
+        odo = bot.odometry()
+        assert odo.pose == Pose2D(1.0, 2.0, 0.5) and (odo.vx, odo.omega) == (0.1, 0.2)
+        assert odo.stamp == pytest.approx(100.0)            # on the client's clock
+        scan = bot.laser_scan()
+        assert np.isinf(scan.ranges[1]) and scan.ranges[2] == pytest.approx(2.5) and scan.angle_increment == 0.5
+        assert bot.detections().tags[0].tag_id == 66
+        assert bot.gripper_status().is_open and bot.holding() is False
+        with pytest.raises(CapabilityError):
+            bot.camera_image()
+    finally:
+        bot.close()
+
+
+def test_a_robot_the_world_does_not_have_is_an_error_not_a_hang(served):
+    _, server, _ = served
+    from rll_bt.backend import BackendError
+    with pytest.raises(BackendError):
+        open_backend("remote", address=f"127.0.0.1:{server.port}", robot=3)
+
+
+def test_a_short_game_in_processes_scores_exploration_over_udp(tmp_path, capsys):
+    out = tmp_path / "game"
+    rc = main(["sim", "--processes", "--robots", "1", "--setup", "1", "--exploration", "15", "--production", "2",
+               "--out", str(out), "-q"])
+    assert rc == 0, (out / "teamserver.log").read_text() if (out / "teamserver.log").exists() else ""
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["finished"] and rep["points"]["exploration"] > 0       # reports reached the refbox
+    snap = json.loads((out / "teamserver.json").read_text())
+    assert snap["robots"]["1"]["status"] == "ACTIVE"                   # the agent joined over TCP
+    assert any(t["kind"] == "explore_zone" and t["robot"] == 1 for t in snap["tasks"])
+    assert rep["robot_stats"]["1"]["distance"] > 1.0                    # and drove through the remote backend
+    assert (out / "timeline.png").stat().st_size > 0
