@@ -112,7 +112,7 @@ def cmd_train_light(args) -> int:
           f"({h['false_detections_free']} on {h['tower_free_frames']} tower-free frames)")
     print(f"  false per 1000 frames  {h['false_per_1000_all']:.1f} (any frame)")
     print(f"  ms per frame           {h['ms_median']:.1f} median, {h['ms_p95']:.1f} p95")
-    print(f"  threshold {d['threshold']:.3f}, min support {d['min_support']}")
+    print(f"  detector threshold {d['threshold']:.3f}")
     print("confusion (rows: true state, columns: read state):")
     print(confusion_table(h["confusion"]))
     return EXIT_OK

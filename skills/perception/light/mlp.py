@@ -5,7 +5,7 @@ tower", with which the network also checks the detector's hits;
 cross-entropy with weight decay, trained with scaled conjugate gradient on
 a flat parameter vector.
 
-Input: the tower's crop resized to ``size`` (w, h; 8 x 32 pixels by
+Input: the tower's crop resized to ``size`` (w, h; 6 x 24 pixels by
 default, the tower's shape) in BGR, as floats in [0, 1] minus 0.5,
 flattened.
 """
@@ -22,7 +22,7 @@ N_STATES = 8
 NO_TOWER = 8          # the index of the optional ninth class
 
 
-DEFAULT_SIZE = (8, 32)
+DEFAULT_SIZE = (6, 24)
 
 
 def crop_features(crop: np.ndarray, size: tuple[int, int] = DEFAULT_SIZE) -> np.ndarray:

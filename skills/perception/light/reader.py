@@ -29,7 +29,9 @@ REPORT_FILE = "training_report.json"
 
 
 class LightReader:
-    def __init__(self, detector: TowerDetector, classifier: Mlp, max_detections: int = 3, reject: float = 0.5):
+    def __init__(self, detector: TowerDetector, classifier: Mlp, max_detections: int = 3, reject: float = 0.5,
+                 candidates: int = 40):
+        self.candidates = candidates  # detector hits the network looks at, strongest first
         self.detector = detector
         self.classifier = classifier
         self.max_detections = max_detections
@@ -52,8 +54,9 @@ class LightReader:
             classifier = Mlp.load(net_path)
         except (OSError, ValueError, KeyError) as exc:
             raise UserError(f"cannot read the light models in {d}: {exc}") from None
+        reject = float(settings.pop("reject", 0.5))
         settings.update(detector_options)
-        return cls(TowerDetector(vector, **settings), classifier)
+        return cls(TowerDetector(vector, **settings), classifier, reject=reject)
 
     def network_output(self, image: np.ndarray, boxes) -> np.ndarray:
         """The network's probabilities (8 states, and "no tower" when it has
@@ -74,7 +77,7 @@ class LightReader:
              tower_height: float | None = None, camera: str = "front") -> list[LightDetection]:
         """Signal towers in a BGR image with their light states, best first.
         Hits the network calls "no tower" are dropped."""
-        boxes = self.detector.detect(image, region=region, tower_height=tower_height)[: 4 * self.max_detections]
+        boxes = self.detector.detect(image, region=region, tower_height=tower_height)[: self.candidates]
         out = self.network_output(image, [b.xywh for b in boxes])
         found = []
         for b, p in zip(boxes, out):
@@ -87,5 +90,7 @@ class LightReader:
 
 
 def save_detector(path: str | Path, vector: np.ndarray, **settings) -> None:
-    """Write a detector vector and its :class:`TowerDetector` settings."""
+    """Write a detector vector, its :class:`TowerDetector` settings and the
+    reader's ``reject`` level (the network's "no tower" probability at which
+    a hit is dropped)."""
     np.savez_compressed(path, detector=np.asarray(vector, np.float32), settings=np.array(json.dumps(settings)))

@@ -51,8 +51,8 @@ class TrainOptions:
     quick: bool = False
     workers: int = 2
     rounds: int = 2                # hard-negative rounds
-    hidden: int = 24
-    iterations: int = 300          # SCG iterations
+    hidden: int = 40
+    iterations: int = 400          # SCG iterations
     heldout: int | None = None     # rendered held-out frames (default samples / 3)
 
     def __post_init__(self):
@@ -93,7 +93,7 @@ class FrameHits:
     boxes: np.ndarray             # N x 4 tower boxes after non-maximum suppression
     scores: np.ndarray            # N SVM scores
     false: np.ndarray             # N bools: matches no tower
-    crops: np.ndarray             # N x 32 x 8 x 3 network crops
+    crops: np.ndarray             # N x 24 x 6 x 3 network crops (DEFAULT_SIZE)
     hard: np.ndarray              # HOG features of the strongest false hits
 
 
@@ -126,23 +126,26 @@ def _split(items: list, n: int) -> list[list]:
     return [items[i::n] for i in range(n)]
 
 
-def calibrate(frames: list[PackedFrame], hits: list[FrameHits], accepted: list[np.ndarray], low: float
-              ) -> tuple[float, dict]:
-    """The detector threshold with the most recall on ``frames`` and the
-    fewest false detections there (hits the network rejects do not count)."""
+def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[np.ndarray], low: float
+              ) -> tuple[float, float, dict]:
+    """The detector threshold and the network's "no tower" level at which a
+    hit is dropped, with the fewest false detections on ``frames`` and then
+    the most recall."""
     top = max((float(h.scores.max()) for h in hits if len(h.scores)), default=low + 1.0)
     best = None
-    for t in sorted(set(np.round(np.linspace(low, max(top, low + 0.1), 40), 4))):
-        score = LightScore()
-        for f, h, ok in zip(frames, hits, accepted):
-            keep = (h.scores >= t) & ok
-            score.add(f.truths, [(tuple(b), 0) for b in h.boxes[keep]])
-        key = (score.false_all, -score.hits, t)
-        if best is None or key < best[0]:
-            best = (key, t, score)
-    _, t, score = best
-    return float(t), {"threshold": float(t), "train_recall": score.hits / max(score.required, 1),
-                      "train_false": score.false_all, "train_frames": score.frames}
+    for reject in (0.5, 0.3, 0.2, 0.1, 0.05):
+        for t in sorted(set(np.round(np.linspace(low, max(top, low + 0.1), 40), 4))):
+            score = LightScore()
+            for f, h, p in zip(frames, hits, no_tower):
+                keep = (h.scores >= t) & (p < reject)
+                score.add(f.truths, [(tuple(b), 0) for b in h.boxes[keep]])
+            key = (score.false_all, -score.hits, -reject, t)
+            if best is None or key < best[0]:
+                best = (key, t, reject, score)
+    _, t, reject, score = best
+    return float(t), float(reject), {"threshold": float(t), "reject": float(reject),
+                                     "train_recall": score.hits / max(score.required, 1),
+                                     "train_false": score.false_all, "train_frames": score.frames}
 
 
 def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: None,
@@ -188,7 +191,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         rng = np.random.default_rng(opts.seed)
         mine = [frames[i] for i in rng.permutation(len(frames))[: (40 if opts.quick else 350)]]
         per_frame = max(2, 3000 // max(1, len(mine)))     # hard negatives per frame and round
-        low = -0.6
+        low = -0.8
         hard_all = np.zeros((0, pos_f.shape[1]), np.float32)
         vector = train_svm(pos_f, neg_f)
         say(f"SVM round 0 trained on {len(pos_f)} + {len(neg_f)} windows")
@@ -207,8 +210,10 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
             vector = train_svm(pos_f, np.vstack([neg_f, hard_all]))
             say(f"SVM round {r + 1} trained with {len(hard_all)} hard negatives")
         # -- network: truth crops, the detector's own boxes, and its false hits --
+        # the first half of the mining frames teaches the network, the second calibrates
+        half = len(mine) // 2
         det_crops, det_states, neg_crops = [], [], []
-        for f, h in zip(mine, hits):
+        for f, h in zip(mine[:half], hits[:half]):
             for k in range(len(h.scores)):
                 if h.false[k]:
                     neg_crops.append(h.crops[k])
@@ -222,7 +227,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
     x_crops = np.concatenate([crops_a] + ([np.stack(det_crops)] if det_crops else [])
                              + ([np.stack(neg_crops)] if neg_crops else []))
     y = np.concatenate([states_a, np.asarray(det_states, np.int64), np.full(len(neg_crops), NO_TOWER)])
-    x = np.stack([crop_features(c) for c in x_crops]).astype(np.float64)
+    x = np.stack([crop_features(c, DEFAULT_SIZE) for c in x_crops]).astype(np.float64)
     net = Mlp.create(x.shape[1], opts.hidden, DEFAULT_SIZE, seed=opts.seed, n_out=N_STATES + 1)
     iters = opts.iterations
     say(f"training the network ({x.shape[1]} inputs, {opts.hidden} hidden, 8 states + no tower) on "
@@ -232,29 +237,29 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         if k % 50 == 0:
             say(f"  SCG iteration {k}: loss {fx:.4f}")
     net.train(x, y, max_iter=iters, decay=1e-3, callback=tick)
-    accepted = []
-    for h in hits:
+    no_tower = []
+    for h in hits[half:]:
         if len(h.crops):
-            p = net.probabilities(np.stack([crop_features(c) for c in h.crops]).astype(np.float64))
-            accepted.append(p[:, NO_TOWER] < 0.5)
+            no_tower.append(net.probabilities(np.stack([crop_features(c, net.size) for c in h.crops])
+                                              .astype(np.float64))[:, NO_TOWER])
         else:
-            accepted.append(np.zeros(0, bool))
-    threshold, cal = calibrate(mine, hits, accepted, low)
+            no_tower.append(np.zeros(0))
+    threshold, reject, cal = calibrate(mine[half:], hits[half:], no_tower, low)
     support = 1
     settings = {"threshold": threshold, "min_support": support}
-    say(f"threshold {threshold:.3f}: training recall {cal['train_recall']:.3f}, "
-        f"{cal['train_false']} false on {cal['train_frames']} frames")
+    say(f"detector threshold {threshold:.3f}, network rejects at {reject:.2f}: recall {cal['train_recall']:.3f}, "
+        f"{cal['train_false']} false on {cal['train_frames']} calibration frames")
     train_acc = float((net.predict(x) == y).mean())
 
     # -- write and evaluate --------------------------------------------------
-    save_detector(out / DETECTOR_FILE, vector, **settings)
+    save_detector(out / DETECTOR_FILE, vector, reject=reject, **settings)
     net.save(out / CLASSIFIER_FILE)
     reader = LightReader.load(out)
     say(f"evaluating on {len(heldout)} held-out frames")
     score = evaluate_parallel(out, heldout, opts.workers)
     report = {
         "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(opts).items()},
-        "detector": {**cal, "windows_pos": int(len(pos_f)), "windows_neg": int(len(neg_f)),
+        "detector": {**cal, "min_support": support, "windows_pos": int(len(pos_f)), "windows_neg": int(len(neg_f)),
                      "hard_negatives": int(len(hard_all))},
         "network": {"crops": int(len(x)), "train_accuracy": train_acc, "hidden": opts.hidden},
         "heldout": score.metrics(),
