@@ -4,8 +4,9 @@ Run: .venv/bin/python benchmarks/navigation.py [--seeds 5] [--goals 6] [--others
 
 For each field layout (seed) a cyan robot drives to a sequence of random
 goals - station sides (0.62 m in front of an input or output face), zone
-centres, free poses - while ``--others`` robots stand parked at random free
-spots the robot does not know about (it sees them only by laser).  The
+centres, free poses, none within 0.8 m of a parked robot - while
+``--others`` robots stand parked at random free spots the robot does not
+know about (it sees them only by laser).  The
 robot localises with the given preset (``truth`` uses ground truth).
 Reported per goal kind: success rate, collisions, time to goal, and that
 time against the straight-line lower bound (distance / 0.7 m/s; a ratio of
@@ -65,13 +66,19 @@ def run_seed(seed, n_goals, n_others, localisation, rows):
     for n, st in world.stations.items():
         ctx.machines.set(n, st.pose)
     rng = random.Random(seed)
+    parked = []
     for k in range(n_others):
         x, y = free_spot(ctx, rng)
         open_backend("sim", world=world, robot=("MAGENTA", k + 1), pose=Pose2D(x, y, rng.uniform(-3, 3)))
+        parked.append((x, y))
     kinds = ["station side", "zone", "pose"]
     for i in range(n_goals):
         kind = kinds[i % 3]
-        goal = random_goal(ctx, rng, kind)
+        while True:         # a goal a parked robot stands on is not reachable: draw again
+            goal = random_goal(ctx, rng, kind)
+            target, _ = goal.resolve(ctx)
+            if all(math.hypot(target.x - x, target.y - y) > 0.8 for x, y in parked):
+                break
         t0, c0, p0 = world.time, world.collision_count, world.robot_pose("CYAN", 1)
         log0 = len(world.collision_log)
         nav = Navigate(ctx, goal).start()

@@ -24,6 +24,7 @@ from .localisation import AmclConfig, Localiser, PoseEstimate
 from .machines import BackendTagSource, MachineMap, TagSource
 from .maps import FieldMap
 from .navigation.costmap import Costmap
+from .navigation.laserview import LaserMemory, OdometryHistory
 from .settings import ManipulationSettings, SkillSettings
 
 
@@ -90,6 +91,8 @@ class SkillContext:
         self.robot = profile.robot
         self._updated_at: float | None = None
         self._costmap: Costmap | None = None
+        self.odometry_history = OdometryHistory()
+        self.laser_memory = LaserMemory()
 
     @classmethod
     def create(cls, backend: Backend, clock: Clock, profile: Profile, start: Pose2D,
@@ -113,6 +116,8 @@ class SkillContext:
             return
         self._updated_at = now
         self.pose_source.update()
+        odom = self.backend.odometry()
+        self.odometry_history.add(odom.stamp, odom.pose)
 
     def pose(self) -> Pose2D:
         pose = self.pose_source.pose()

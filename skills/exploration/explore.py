@@ -8,7 +8,7 @@ faces), turns to face the zone and sweeps the camera across it, feeding
 machine observations).  It stops early once a station in the zone is known
 with ``min_confidence`` and, when ``want_light``, its light state has been
 read; if the light is still missing it looks from in front of the
-station's output face.  The zone is explored when the activity succeeds:
+station's output face, then its input face.  The zone is explored when the activity succeeds:
 ``found`` lists the stations seen in it (possibly none).  It fails with
 NAVIGATION_FAILED only when no viewpoint could be reached.
 """
@@ -23,21 +23,31 @@ from rll_bt.backend import Pose2D
 from ..activity import Activity, Status
 from ..errors import SkillError, SkillFailure
 from ..navigation import Navigate, PoseGoal, approach_pose
+from ..navigation.goals import feasible_distance
 from ..navigation.motions import Turn
 from .sightings import SightingCollector
 
 
 def ring_viewpoints(ctx, zone: int, radius: float | None = None, count: int = 8) -> list[Pose2D]:
-    """Free poses on a ring around the zone centre, facing the centre."""
+    """Free poses on two rings around the zone centre (the outer one
+    ``radius`` out, default half the zone's diagonal plus 0.5 m, and one at
+    half that), facing the centre.  A point is free when the robot fits
+    there in the map and no unmapped obstacle was seen within 0.5 m of it
+    lately (``ctx.laser_memory``)."""
     rect = ctx.profile.zones.bounds(zone)
     cx, cy = rect.centre
     if radius is None:
         radius = 0.5 * math.hypot(rect.x_max - rect.x_min, rect.y_max - rect.y_min) + 0.5
+    seen = ctx.laser_memory.points[ctx.laser_memory.expiry > ctx.clock.now()]
     out = []
-    for k in range(count):
-        a = 2.0 * math.pi * k / count
-        x, y = cx + radius * math.cos(a), cy + radius * math.sin(a)
-        if bool(ctx.costmap.is_free(x, y)):
+    for r in (radius, 0.5 * radius):
+        for k in range(count):
+            a = 2.0 * math.pi * (k + (0.5 if r < radius else 0.0)) / count
+            x, y = cx + r * math.cos(a), cy + r * math.sin(a)
+            if not bool(ctx.costmap.is_free(x, y)):
+                continue
+            if len(seen) and np.hypot(seen[:, 0] - x, seen[:, 1] - y).min() < 0.5:
+                continue
             out.append(Pose2D(x, y, math.atan2(cy - y, cx - x)))
     return out
 
@@ -94,7 +104,7 @@ class ExploreZone(Activity):
         if not points:
             raise SkillFailure(SkillError.NAVIGATION_FAILED, f"no free viewpoint around {self.name[8:]}")
         self.plan = order_viewpoints(points, self.ctx.pose(), centre, self.max_viewpoints)
-        self.light_visit_done = False
+        self.light_sides = ["OUTPUT", "INPUT"]       # where to read a light not yet seen
         self.child: Activity | None = None
         self.phase = "next"
         self.visited = 0
@@ -112,15 +122,19 @@ class ExploreZone(Activity):
             vp = self.plan.pop(0)
             self.phase = "go"
             return Navigate(self.ctx, PoseGoal(vp), position_tolerance=0.1, heading_tolerance=0.1,
-                            timeout=90.0)
+                            timeout=60.0, max_blocked=8.0)
         found = self.collector.machines_in_zone(self.zone, self.min_confidence)
         missing = [m for m in found if self.want_light and self.collector.light_state(m) is None]
-        if missing and not self.light_visit_done:
-            self.light_visit_done = True
+        while missing and self.light_sides:
+            side = self.light_sides.pop(0)
             est = self.collector.tracker.estimate(missing[0])
+            mps = self.ctx.profile.mps
+            d = feasible_distance(self.ctx, est.pose, side, 1.2, mps.belt_offset_y, minimum=0.6)
+            if d is None:
+                continue
             self.phase = "go"
-            return Navigate(self.ctx, PoseGoal(approach_pose(est.pose, "OUTPUT", 1.0, mps=self.ctx.profile.mps)),
-                            position_tolerance=0.1, heading_tolerance=0.1, timeout=90.0)
+            return Navigate(self.ctx, PoseGoal(approach_pose(est.pose, side, d, mps=mps)),
+                            position_tolerance=0.1, heading_tolerance=0.1, timeout=60.0, max_blocked=8.0)
         return None
 
     def _step(self, now: float) -> Status:
@@ -130,7 +144,7 @@ class ExploreZone(Activity):
                 return self._succeed()
             self.child = self._next_child()
             if self.child is None:
-                if self.visited == 0:
+                if self.visited == 0 and not self._seen_in_zone():
                     raise SkillFailure(SkillError.NAVIGATION_FAILED, f"no viewpoint of {self.name[8:]} reached")
                 return self._succeed()
             self.child.start()
@@ -149,8 +163,13 @@ class ExploreZone(Activity):
         self.child = None
         return Status.RUNNING
 
+    def _seen_in_zone(self) -> list[str]:
+        """Stations seen in the zone at all (a third of the confidence that
+        ends the search early): weak evidence is still worth reporting."""
+        return self.collector.machines_in_zone(self.zone, self.min_confidence / 3.0)
+
     def _succeed(self) -> Status:
-        self.found = self.collector.machines_in_zone(self.zone, self.min_confidence)
+        self.found = self._seen_in_zone()
         zone = self.ctx.profile.zone_name(self.zone)
         self.message = f"{zone}: {', '.join(self.found) if self.found else 'no station'} " \
                        f"({self.visited} viewpoints)"

@@ -42,9 +42,13 @@ class AmclConfig:
     still_update_period: float | None = 0.5   # s; update a standing robot while not confident
     still_jitter: tuple[float, float] = (0.01, 0.01)   # m, rad of roughening for those
     resample_interval: int = 1
-    # recovery (augmented MCL); 0 disables injection
+    # recovery (augmented MCL); alpha_slow 0 disables injection
     alpha_slow: float = 0.001
     alpha_fast: float = 0.1
+    recovery_ratio: float = 0.7          # inject once w_fast falls below this share of w_slow
+    max_injection: float = 0.15          # at most this share of random particles per resample
+    trim_beams: float = 0.0              # share of worst beams left out of the recovery statistic
+    inject_above_contradiction: float = 0.05   # inject only while more beams than this pass mapped walls
     # confidence
     confident: float = 0.6               # above this the pose is trusted
     lost: float = 0.2                    # below this for lost_updates updates: lost

@@ -34,7 +34,7 @@ class PoseEstimate:
     """The localiser's belief.  ``pose`` in the field frame; ``covariance``
     3x3 over (x [m], y [m], theta [rad]); ``confidence`` 0..1 combines the
     share of weight in the main cluster, its spread and how well the scan
-    agrees with the map from that pose (``fit``)."""
+    agrees with the map from that pose (``fit``, see :meth:`Localiser.fit`)."""
     stamp: float
     pose: Pose2D
     covariance: np.ndarray
@@ -86,7 +86,7 @@ class Localiser:
         self._low_streak = 0
         self._estimate: PoseEstimate | None = None
         self.filter_updates = 0
-        self.filter_seconds = 0.0          # measured by the caller's clock only in benchmarks
+        self.last_contradiction = 0.0      # share of beams through mapped walls at the estimate
 
     # -- set-up -----------------------------------------------------------
     def initialise(self, pose: Pose2D, sigma: tuple[float, float, float] = (0.1, 0.1, 0.1)) -> None:
@@ -140,6 +140,8 @@ class Localiser:
         beams = beam_endpoints(ranges, angles, scan.mount)
         self.filter.correct(beams)
         if self.filter.updates % self.config.resample_interval == 0:
+            self.filter.allow_injection = (self._estimate is None
+                                           or self.last_contradiction > self.config.inject_above_contradiction)
             self.filter.resample()
         self._odom_at_update = odom
         self._last_filter_time = now
@@ -155,7 +157,8 @@ class Localiser:
             return None
 
     def _make_estimate(self, now: float, ranges, angles, mount: Pose2D) -> PoseEstimate:
-        cl = self.filter.estimate()
+        previous = self._estimate.pose if self._estimate is not None else None
+        cl = self.filter.estimate(previous)
         fit = self.fit(cl.pose, ranges, angles, mount)
         std = math.sqrt(max(cl.covariance[0, 0] + cl.covariance[1, 1], 0.0))
         spread = 1.0 / (1.0 + (std / 0.15) ** 2)
@@ -165,20 +168,34 @@ class Localiser:
         return PoseEstimate(now, cl.pose, cl.covariance, confidence, fit, len(self.filter.particles), lost)
 
     def fit(self, pose: Pose2D, ranges: np.ndarray, angles: np.ndarray, mount: Pose2D) -> float:
-        """Agreement of a scan with the map seen from ``pose``: a beam that
-        ends at the expected wall counts 1, one cut short (an unmapped
-        obstacle, another robot) 0.5, one that passes through a mapped
-        wall 0."""
+        """Agreement (0..1) of a scan with the map seen from ``pose``.
+
+        Only beams expected to reach at least 0.3 m count.  Beams cut short
+        are neutral (unmapped stations, other robots); beams that reach past
+        a mapped wall contradict the pose, beams that end at the expected
+        wall support it: agreement = (1 - long / 0.2) *
+        min(1, match / 0.3), each factor clipped to [0, 1].  Sets
+        ``last_contradiction`` (the share of beams through walls), which
+        gates the random injection."""
         if len(ranges) == 0:
+            self.last_contradiction = 0.0
             return 0.0
         spec, occ = self.map.occupancy(self.config.grid_resolution)
         origin = pose.compose(mount)
         expected = march_rays(spec, occ, (origin.x, origin.y), angles + origin.theta,
                               self.filter.field.range_max)
+        # beams ending next to the robot (docked at a station) graze corners
+        # of the rasterised map: they say little about the pose
+        judged = expected >= 0.3
+        if not judged.any():
+            self.last_contradiction = 0.0
+            return 1.0
+        r, e = ranges[judged], expected[judged]
         tol = self.config.fit_tolerance
-        match = np.abs(ranges - expected) <= tol
-        short = ranges < expected - tol
-        return float((match.sum() + 0.5 * short.sum()) / len(ranges))
+        match = float(np.mean(np.abs(r - e) <= tol))
+        long = float(np.mean(r > e + tol))
+        self.last_contradiction = long
+        return float(np.clip(1.0 - long / 0.2, 0.0, 1.0) * min(1.0, match / 0.3))
 
     # -- results ----------------------------------------------------------
     def estimate(self) -> PoseEstimate | None:

@@ -52,6 +52,9 @@ class ParticleFilter:
         self.last_w_avg = 0.0
         self.injected = 0
         self.updates = 0
+        #: set by the localiser: inject only while the scan contradicts the
+        #: estimate (a symmetric field would otherwise grow a mirror pose)
+        self.allow_injection = True
         self._free: tuple[int, np.ndarray] | None = None
 
     # -- initialisation ---------------------------------------------------
@@ -109,7 +112,11 @@ class ParticleFilter:
         lp = self.field.log_likelihood(self.particles, beams)
         s = lp.sum(axis=1, dtype=np.float64)
         m = len(beams)
-        w_avg = float(np.sum(self.weights * np.exp(s / m)))
+        # the recovery statistic ignores each particle's worst beams: readings
+        # of unmapped stations and robots must not look like a lost pose
+        keep = max(1, int(round(m * (1.0 - self.config.trim_beams))))
+        best = -np.partition(-lp, keep - 1, axis=1)[:, :keep] if keep < m else lp
+        w_avg = float(np.sum(self.weights * np.exp(best.mean(axis=1, dtype=np.float64))))
         lw = np.log(np.maximum(self.weights, 1e-300)) + s / self.config.beam_correlation
         # a robot is never inside an obstacle or outside the field
         clearance = self.map.distance(self.config.grid_resolution).lookup(self.particles[:, 0],
@@ -128,14 +135,20 @@ class ParticleFilter:
         self.updates += 1
         return w_avg
 
+    def _near(self, xy: np.ndarray, theta: float) -> np.ndarray:
+        c, p = self.config, self.particles
+        dth = (p[:, 2] - theta + np.pi) % (2 * np.pi) - np.pi
+        return (np.hypot(p[:, 0] - xy[0], p[:, 1] - xy[1]) <= c.cluster_xy) & (np.abs(dth) <= c.cluster_theta)
+
     @property
     def injection_probability(self) -> float:
         """Augmented MCL: the share of random particles at the next resample,
-        1 - w_fast / (0.5 w_slow), clipped to [0, 1]; the factor 0.5 keeps
-        passing robots and unmapped stations from triggering it."""
-        if self.config.alpha_slow <= 0 or not self.w_slow:
+        1 - w_fast / (recovery_ratio * w_slow), clipped to [0, 1]; a ratio
+        below 1 keeps passing robots and unmapped stations from triggering it."""
+        c = self.config
+        if c.alpha_slow <= 0 or not self.w_slow:
             return 0.0
-        return float(min(max(1.0 - self.w_fast / (0.5 * self.w_slow), 0.0), 1.0))
+        return float(min(max(1.0 - self.w_fast / (c.recovery_ratio * self.w_slow), 0.0), 1.0))
 
     @property
     def effective_size(self) -> float:
@@ -151,7 +164,8 @@ class ParticleFilter:
             n = kld_prefix_length(keys, c.min_particles, c.max_particles, c.kld_epsilon, c.kld_z)
             new = new[:n]
         new = np.array(new)
-        inject = int(self.rng.binomial(len(new), self.injection_probability))
+        p_inj = min(self.injection_probability, c.max_injection) if self.allow_injection else 0.0
+        inject = int(self.rng.binomial(len(new), p_inj))
         if inject:
             new[:inject] = self.random_poses(inject)
         self.injected = inject
@@ -159,9 +173,12 @@ class ParticleFilter:
         self.weights = np.full(len(new), 1.0 / len(new))
 
     # -- estimate ---------------------------------------------------------
-    def estimate(self) -> ClusterEstimate:
+    def estimate(self, previous: Pose2D | None = None) -> ClusterEstimate:
         """Mean and covariance of the heaviest cluster: the particles within
-        ``cluster_xy`` / ``cluster_theta`` of the heaviest histogram bin."""
+        ``cluster_xy`` / ``cluster_theta`` of the heaviest histogram bin.
+        With ``previous`` (the last estimate), its own cluster is kept while
+        it holds at least half the weight of the heaviest one, so a few
+        injected particles that happen to fit do not make the pose jump."""
         c = self.config
         p, w = self.particles, self.weights
         keys = bin_keys(p, c.cluster_xy, c.cluster_theta)
@@ -169,12 +186,12 @@ class ParticleFilter:
         best = int(np.argmax(np.bincount(inv, weights=w, minlength=len(uniq))))
         in_bin = inv == best
         wb = w[in_bin]
-        centre_xy = (wb[:, None] * p[in_bin, :2]).sum(axis=0) / wb.sum()
-        centre_th = circular_mean(p[in_bin, 2], wb)
-        dth = (p[:, 2] - centre_th + np.pi) % (2 * np.pi) - np.pi
-        near = (np.hypot(p[:, 0] - centre_xy[0], p[:, 1] - centre_xy[1]) <= c.cluster_xy) \
-            & (np.abs(dth) <= c.cluster_theta)
-        near |= in_bin
+        near = self._near(np.array([(wb[:, None] * p[in_bin, :2]).sum(axis=0) / wb.sum()]).ravel(),
+                          circular_mean(p[in_bin, 2], wb)) | in_bin
+        if previous is not None:
+            around = self._near(np.array([previous.x, previous.y]), previous.theta)
+            if not (around & near).any() and w[around].sum() >= 0.5 * w[near].sum():
+                near = around
         wc = w[near]
         total = float(wc.sum())
         wn = wc / total

@@ -5,7 +5,10 @@ path (pure pursuit, but an omni base needs no curvature: it translates
 straight at the carrot) and, independently, turns the body: along the
 direction of travel while far from the goal (so the laser, which sees
 240 degrees forward, looks where the robot goes) and to the goal heading
-for the last ``align_distance`` metres.
+for the last ``align_distance`` metres - except while the direction of
+travel lies more than ``blind_angle`` off the heading (where the laser is
+blind) and more than ``blind_creep`` metres remain: then it turns to the
+direction of travel first.
 
 Limits: translation speed ``max_speed`` (the rules' 0.7 m/s), the speed
 from which the robot can still stop at the goal with ``max_decel``, and an
@@ -94,7 +97,8 @@ class PathFollower:
 
     def __init__(self, path: np.ndarray, goal_theta: float | None, limits: Limits,
                  position_tolerance: float = 0.05, heading_tolerance: float = 0.05,
-                 lookahead: float = 0.5, align_distance: float = 0.8, gain: float = 2.5):
+                 lookahead: float = 0.5, align_distance: float = 0.8, gain: float = 2.5,
+                 blind_angle: float | None = None, blind_creep: float = 0.15):
         self.path = np.asarray(path, dtype=float)
         if len(self.path) == 1:
             self.path = np.vstack([self.path, self.path])
@@ -108,6 +112,8 @@ class PathFollower:
         self.lookahead = lookahead
         self.align_distance = align_distance
         self.gain = gain
+        self.blind_angle = blind_angle
+        self.blind_creep = blind_creep
         self.limiter = VelocityLimiter(limits)
         self.progress = 0.0           # arc length of the closest path point
         self.done = False
@@ -197,7 +203,12 @@ class PathFollower:
         if at_position:
             v_des = np.zeros(2)
         # heading
-        if self.goal_theta is not None and remaining <= self.align_distance:
+        travel = math.atan2(direction[1], direction[0]) if n > 1e-9 else pose.theta
+        blind = (self.blind_angle is not None and wanted > 0.05 and d_goal > self.blind_creep
+                 and abs(wrap_angle(travel - pose.theta)) > self.blind_angle)
+        if blind:
+            want = travel            # never drive far where the laser cannot see: turn first
+        elif self.goal_theta is not None and remaining <= self.align_distance:
             want = self.goal_theta
         elif wanted > 0.05 and n > 1e-9 and remaining > self.align_distance:
             want = math.atan2(direction[1], direction[0])

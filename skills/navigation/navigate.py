@@ -25,6 +25,7 @@ from ..errors import SkillError, SkillFailure
 from .controller import Limits, PathFollower
 from .planner import GridPlanner, NoPath
 from .goals import standing_clearance
+from .laserview import points_now
 from .safety import clear_distance, scan_points, speed_limit, to_field
 
 
@@ -86,8 +87,9 @@ class Navigate(Activity):
         self.ctx.costmap.expire(self.ctx.clock.now())
         self.path = self.planner.plan((start.x, start.y), (self.target.x, self.target.y))
         old = self.follower
+        blind = self.ctx.robot.laser_fov / 2.0 - 0.4 if self.use_laser else None
         self.follower = PathFollower(self.path, self._goal_heading, self.limits,
-                                     self.position_tolerance, self.heading_tolerance)
+                                     self.position_tolerance, self.heading_tolerance, blind_angle=blind)
         if old is not None:      # keep the current velocity: no jump in the command
             self.follower.limiter.v = old.limiter.v.copy()
             self.follower.limiter.omega = old.limiter.omega
@@ -110,6 +112,9 @@ class Navigate(Activity):
             static = ctx.map.distance(ctx.costmap.resolution).lookup(points[:, 0] + pose.x,
                                                                      points[:, 1] + pose.y) <= 0.1
             fixed, moving = points[static], points[~static]
+            now_t = ctx.clock.now()
+            ctx.laser_memory.add(moving + np.array([pose.x, pose.y]), now_t, (pose.x, pose.y))
+            remembered = ctx.laser_memory.relative(pose, now_t)
             decel = self.limits.max_decel * 0.8
 
             def cap(ux: float, uy: float) -> float:
@@ -121,9 +126,12 @@ class Navigate(Activity):
                                             s.control_period),
                                 speed_limit(moving, ux, uy, ctx.robot.radius, s.safety_margin + 0.07, 0.08,
                                             decel, s.control_period + 0.1, s.closing_speed))
-                # the laser does not see behind: creep where it is blind
+                # the laser does not see behind: creep where it is blind, and
+                # stop for what it saw there a moment ago
                 if abs(wrap_angle(math.atan2(uy, ux) - pose.theta)) > half_fov - 0.4:
-                    limit = min(limit, s.blind_speed)
+                    limit = min(limit, s.blind_speed,
+                                speed_limit(remembered, ux, uy, ctx.robot.radius, s.safety_margin + 0.07,
+                                            0.08, decel, s.control_period))
                 return limit
         # near obstacles look less far ahead: a long look-ahead cuts corners
         clear = float(ctx.costmap.clearance()[ctx.costmap.spec.cell_of(pose.x, pose.y)]) \
@@ -193,15 +201,21 @@ class Navigate(Activity):
         return now - self._stall_ref[0] > self.stall_time
 
     def _points(self, pose: Pose2D) -> np.ndarray | None:
-        """Laser points relative to the robot, in field-frame axes."""
+        """Laser points relative to the robot, in field-frame axes, moved
+        from the time of the scan to now."""
+        ctx = self.ctx
         try:
-            scan = self.ctx.backend.laser_scan()
+            scan = ctx.backend.laser_scan()
         except CapabilityError:
             self.use_laser = False
             return None
         if scan is None:
             return None
         pts = scan_points(scan, max_range=3.0)
+        odom_now = ctx.backend.odometry().pose
+        odom_then = ctx.odometry_history.at(scan.stamp)
+        if odom_then is not None:
+            pts = points_now(pts, odom_then, odom_now)
         return to_field(pts, Pose2D(0.0, 0.0, pose.theta))
 
     def _replan_around(self, pose: Pose2D, points: np.ndarray | None, now: float) -> None:

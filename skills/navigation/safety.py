@@ -51,6 +51,37 @@ def clear_distance(points: np.ndarray, vx: float, vy: float, radius: float,
     return float(max(front.min(), 0.0))
 
 
+def free_distance(points: np.ndarray, vx: float, vy: float, radius: float, margin: float,
+                  lateral_margin: float, hard: float = 0.02) -> float:
+    """Distance (m) the robot may still travel along (vx, vy) keeping
+    ``margin`` ahead of every point and ``lateral_margin`` beside it.
+
+    A point already inside that band is different: ahead of the robot it
+    blocks only when the bare disc (plus ``hard``) would run into it;
+    beside or behind it does not block a motion that does not approach it
+    (the robot may pass a station at a few centimetres, never into it)."""
+    speed = math.hypot(vx, vy)
+    if speed < 1e-6 or len(points) == 0:
+        return math.inf
+    ux, uy = vx / speed, vy / speed
+    along = points[:, 0] * ux + points[:, 1] * uy
+    lateral = np.abs(points[:, 1] * ux - points[:, 0] * uy)
+    width = radius + lateral_margin
+    band = lateral < width
+    if not band.any():
+        return math.inf
+    along, lateral = along[band], lateral[band]
+    t = along - np.sqrt(np.maximum(width * width - lateral * lateral, 0.0))
+    ahead = t > 0.0
+    free = math.inf
+    if ahead.any():
+        free = float(max(t[ahead].min() - margin, 0.0))
+    inside = ~ahead & (along > 0.0) & (lateral < radius + hard)
+    if inside.any():
+        free = 0.0
+    return free
+
+
 def speed_limit(points: np.ndarray, vx: float, vy: float, radius: float, margin: float,
                 lateral_margin: float, decel: float, latency: float = 0.0, closing: float = 0.0) -> float:
     """Highest speed v (m/s) along (vx, vy) that still stops ``margin``
@@ -58,8 +89,8 @@ def speed_limit(points: np.ndarray, vx: float, vy: float, radius: float, margin:
     seconds, while the point itself may come closer at ``closing`` m/s
     until the robot stands (another robot braking too):
     v * latency + v^2 / (2 decel) + closing * (latency + v / decel) <= free.
-    0 means blocked."""
-    free = clear_distance(points, vx, vy, radius, lateral_margin) - margin
+    0 means blocked.  The free distance is :func:`free_distance`."""
+    free = free_distance(points, vx, vy, radius, margin, lateral_margin)
     if math.isinf(free):
         return math.inf
     b = latency + closing / decel

@@ -129,6 +129,35 @@ def _read_image(path: str):
     return img, None
 
 
+class _Images:
+    """The readable images among ``paths`` as (path, BGR image); unreadable
+    ones are reported on stderr and make the exit code 2."""
+
+    def __init__(self, paths: list[str]):
+        self.paths = paths
+        self.failed = 0
+
+    def __iter__(self):
+        for path in self.paths:
+            img, why = _read_image(path)
+            if img is None:
+                print(f"rll-bt: error: {path}: {why}", file=sys.stderr)
+                self.failed += 1
+                continue
+            yield path, img
+
+    @property
+    def exit_code(self) -> int:
+        return EXIT_USAGE if self.failed else EXIT_OK
+
+
+def _timed(clock, fn, *args, **kw):
+    """(fn's result, milliseconds it took on ``clock``)."""
+    t0 = clock.now()
+    out = fn(*args, **kw)
+    return out, (clock.now() - t0) * 1000.0
+
+
 def light_json(path: str, ms: float, detections) -> dict:
     """The ``vision light --json`` object of one image."""
     return {"image": path, "ms": round(ms, 3), "detections": [
@@ -144,16 +173,9 @@ def cmd_light(args) -> int:
     from .light.reader import LightReader
     reader = LightReader.load(args.models)
     clock = WallClock()
-    failed = 0
-    for path in args.images:
-        img, why = _read_image(path)
-        if img is None:
-            print(f"rll-bt: error: {path}: {why}", file=sys.stderr)
-            failed += 1
-            continue
-        t0 = clock.now()
-        dets = reader.read(img, region=args.region)
-        ms = (clock.now() - t0) * 1000.0
+    images = _Images(args.images)
+    for path, img in images:
+        dets, ms = _timed(clock, reader.read, img, region=args.region)
         if args.json:
             print(json.dumps(light_json(path, ms, dets)), flush=True)
         elif not dets:
@@ -163,7 +185,7 @@ def cmd_light(args) -> int:
                 on = "+".join(n for n in ("red", "yellow", "green") if d.lights[n]) or "all off"
                 print(f"{path}: tower at {list(d.box)} score {d.score:.2f}: state {d.state} ({on}), "
                       f"p={max(d.probabilities):.3f} ({ms:.1f} ms)")
-    return EXIT_USAGE if failed else EXIT_OK
+    return images.exit_code
 
 
 # -- tags --------------------------------------------------------------------
@@ -182,17 +204,9 @@ def cmd_tags(args) -> int:
     camera = load_camera(args.camera)
     detector = TagDetector(profile.tag_size, valid_ids=None if args.all_ids else set(profile.all_tag_ids))
     clock = WallClock()
-    failed = 0
-    for path in args.images:
-        img, why = _read_image(path)
-        if img is None:
-            print(f"rll-bt: error: {path}: {why}", file=sys.stderr)
-            failed += 1
-            continue
-        intr = scaled(camera, img.shape[1], img.shape[0])
-        t0 = clock.now()
-        dets = detector.detect(img, intr)
-        ms = (clock.now() - t0) * 1000.0
+    images = _Images(args.images)
+    for path, img in images:
+        dets, ms = _timed(clock, detector.detect, img, scaled(camera, img.shape[1], img.shape[0]))
         tags = []
         for d in dets:
             owner = profile.machine_for_tag(d.tag_id)
@@ -214,4 +228,4 @@ def cmd_tags(args) -> int:
                 name = f"{t['machine']} {t['side']}" if t["machine"] else "unknown station"
                 print(f"{path}: tag {t['id']} ({name}) at {t['distance']:.3f} m, "
                       f"t={t['tvec']}, yaw {t['yaw_deg']:.1f} deg")
-    return EXIT_USAGE if failed else EXIT_OK
+    return images.exit_code

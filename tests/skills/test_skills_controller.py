@@ -73,3 +73,15 @@ def test_speed_limit_stops_in_time():
     assert v * 0.1 + v * v / 2.0 == pytest.approx(free)
     assert speed_limit(pts, 1.0, 0.0, 0.2, 0.9, 0.0, 1.0) == 0.0
     assert speed_limit(pts, 0.0, 1.0, 0.2, 0.1, 0.0, 1.0) == math.inf
+
+
+def test_points_beside_the_robot_do_not_block_a_motion_past_them():
+    from skills.navigation.safety import free_distance
+    side = np.array([[0.0, 0.29]])                    # 6.5 cm from a 0.225 m robot, to its left
+    assert free_distance(side, 1.0, 0.0, 0.225, 0.08, 0.08) == math.inf
+    assert free_distance(side, 0.0, 1.0, 0.225, 0.08, 0.08) == 0.0      # but not toward it
+    ahead = np.array([[0.28, 0.0]])                    # 5.5 cm in front: inside the margin
+    assert free_distance(ahead, 1.0, 0.0, 0.225, 0.08, 0.08) == 0.0
+    far = np.array([[1.0, 0.1]])
+    assert free_distance(far, 1.0, 0.0, 0.225, 0.08, 0.08) == pytest.approx(
+        1.0 - math.sqrt(0.305 ** 2 - 0.01) - 0.08)
