@@ -25,7 +25,7 @@ from .machines import BackendTagSource, MachineMap, TagSource
 from .maps import FieldMap
 from .navigation.costmap import Costmap
 from .navigation.laserview import LaserMemory, OdometryHistory
-from .settings import ManipulationSettings, SkillSettings
+from .settings import ManipulationSettings, SkillSettings  # noqa: F401  (re-exported)
 
 
 @runtime_checkable

@@ -32,16 +32,24 @@ def to_field(points: np.ndarray, pose: Pose2D) -> np.ndarray:
                             pose.y + s * points[:, 0] + c * points[:, 1]])
 
 
+def _project(points: np.ndarray, vx: float, vy: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """(along, |lateral|) of the points relative to the direction (vx, vy),
+    or None without motion or points."""
+    speed = math.hypot(vx, vy)
+    if speed < 1e-6 or len(points) == 0:
+        return None
+    ux, uy = vx / speed, vy / speed
+    return points[:, 0] * ux + points[:, 1] * uy, np.abs(points[:, 1] * ux - points[:, 0] * uy)
+
+
 def clear_distance(points: np.ndarray, vx: float, vy: float, radius: float,
                    lateral_margin: float) -> float:
     """Free distance (m) the robot's disc can travel along (vx, vy) before
     touching a point, ``inf`` when nothing is in the way."""
-    speed = math.hypot(vx, vy)
-    if speed < 1e-6 or len(points) == 0:
+    proj = _project(points, vx, vy)
+    if proj is None:
         return math.inf
-    ux, uy = vx / speed, vy / speed
-    along = points[:, 0] * ux + points[:, 1] * uy
-    lateral = np.abs(points[:, 1] * ux - points[:, 0] * uy)
+    along, lateral = proj
     width = radius + lateral_margin
     hit = (along > 0.0) & (lateral < width)
     if not hit.any():
@@ -60,12 +68,10 @@ def free_distance(points: np.ndarray, vx: float, vy: float, radius: float, margi
     blocks only when the bare disc (plus ``hard``) would run into it;
     beside or behind it does not block a motion that does not approach it
     (the robot may pass a station at a few centimetres, never into it)."""
-    speed = math.hypot(vx, vy)
-    if speed < 1e-6 or len(points) == 0:
+    proj = _project(points, vx, vy)
+    if proj is None:
         return math.inf
-    ux, uy = vx / speed, vy / speed
-    along = points[:, 0] * ux + points[:, 1] * uy
-    lateral = np.abs(points[:, 1] * ux - points[:, 0] * uy)
+    along, lateral = proj
     width = radius + lateral_margin
     band = lateral < width
     if not band.any():

@@ -20,7 +20,7 @@ horizontally and vertically of the gripper point (unless
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import cv2
 import numpy as np

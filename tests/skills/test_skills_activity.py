@@ -1,7 +1,5 @@
 """Activity semantics and the error codes."""
-import pytest
-
-from rll_bt.backend import BackendError, Pose2D
+from rll_bt.backend import BackendError
 from skills.activity import Activity, Sequence, Status
 from skills.errors import SkillError, SkillFailure
 

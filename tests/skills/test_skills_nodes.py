@@ -2,7 +2,6 @@
 from YAML driving the flat world, errors on the blackboard, interruption."""
 import math
 
-import pytest
 from py_trees.common import Status as TreeStatus
 
 from rll_bt.backend import Pose2D

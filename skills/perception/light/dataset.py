@@ -109,7 +109,7 @@ def classifier_crops(image: np.ndarray, box, rng: np.random.Generator, count: in
     """Crops of a tower box as a detector would cut it (position and scale off a little)."""
     out = [crop_window(image, box, DEFAULT_SIZE)]
     for _ in range(count - 1):
-        out.append(crop_window(image, jitter_box(box, rng, (0.18, 0.06), 0.1), DEFAULT_SIZE))
+        out.append(crop_window(image, jitter_box(box, rng, (0.2, 0.1), 0.2), DEFAULT_SIZE))
     return out
 
 

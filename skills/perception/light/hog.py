@@ -258,7 +258,8 @@ def select(boxes: np.ndarray, scores: np.ndarray, threshold: float, min_support:
            overlap: float = 0.3) -> list[Box]:
     """Non-maximum suppression of raw hits at ``threshold``: the strongest of
     every group overlapping by ``overlap`` or more, kept when at least
-    ``min_support`` hits (itself included) overlap it by half or more."""
+    ``min_support`` hits (itself included) overlap it by half or more; its
+    box is the score-weighted mean of those hits."""
     keep = scores >= threshold
     b, s = boxes[keep], scores[keep]
     if len(s) == 0:
@@ -272,9 +273,12 @@ def select(boxes: np.ndarray, scores: np.ndarray, threshold: float, min_support:
         if not alive[i]:
             continue
         alive &= m[i] < overlap
-        support = int((m[i] >= 0.5).sum())
+        group = m[i] >= 0.5
+        support = int(group.sum())
         if support >= min_support:
-            x, y, w, h = b[i]
+            # the box is the score-weighted mean of its group: steadier in scale than the best hit alone
+            wts = np.exp((s[group] - s[i]) / 0.1)
+            x, y, w, h = (b[group] * wts[:, None]).sum(axis=0) / wts.sum()
             out.append(Box(int(round(x)), int(round(y)), max(1, int(round(w))), max(1, int(round(h))),
                            float(s[i]), support))
     return out

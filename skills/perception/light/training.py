@@ -213,10 +213,11 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         # the first half of the mining frames teaches the network, the second calibrates
         half = len(mine) // 2
         det_crops, det_states, neg_crops = [], [], []
-        for f, h in zip(mine[:half], hits[:half]):
+        for j, (f, h) in enumerate(zip(mine, hits)):
             for k in range(len(h.scores)):
                 if h.false[k]:
-                    neg_crops.append(h.crops[k])
+                    if j < half:
+                        neg_crops.append(h.crops[k])
                     continue
                 for t in f.truths:
                     if t.clean and t.box[3] >= 20 and iou(tuple(h.boxes[k]), t.box) >= 0.3:
