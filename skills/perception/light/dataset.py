@@ -9,7 +9,8 @@ frame gets photometric augmentation, then the worker cuts out
 - detector positives (HOG of the window around each fully visible tower,
   slightly jittered, mirrored at random) and random negative windows,
 - classifier crops of each fully visible tower (jittered like a detector's
-  box) with its state,
+  box) with its state, and badly placed crops of it (stretched over the
+  mount, slid up off the lights) as "no tower",
 
 and keeps the frames themselves (JPEG-packed, with their labels) for
 hard-negative mining and evaluation.  Labels: tower boxes (x, y, w, h)
@@ -26,7 +27,7 @@ import numpy as np
 from .augment import photometric
 from .backgrounds import procedural_background
 from .hog import crop_window, make_hog, random_negatives, window_features, window_for_tower
-from .mlp import DEFAULT_SIZE
+from .mlp import DEFAULT_SIZE, NO_TOWER
 from .synth import draw_tower, paste
 
 #: a tower a detector must find: fully visible and at least this tall (pixels)
@@ -111,6 +112,16 @@ def classifier_crops(image: np.ndarray, box, rng: np.random.Generator, count: in
     for _ in range(count - 1):
         out.append(crop_window(image, jitter_box(box, rng, (0.2, 0.1), 0.2), DEFAULT_SIZE))
     return out
+
+
+def misaligned_crops(image: np.ndarray, box, rng: np.random.Generator) -> list[np.ndarray]:
+    """Crops of a tower box gone wrong, for the network's "no tower" class:
+    stretched down over the mount, and slid up off the lights."""
+    x, y, w, h = (float(v) for v in box)
+    k = rng.uniform(1.35, 1.8)
+    up = rng.uniform(0.35, 0.6)
+    return [crop_window(image, (x - w * (k - 1) / 2, y, w * k, h * k), DEFAULT_SIZE),
+            crop_window(image, (x, y - up * h, w, h), DEFAULT_SIZE)]
 
 
 def detector_positives(image: np.ndarray, box, rng: np.random.Generator, count: int) -> list[np.ndarray]:
@@ -220,6 +231,9 @@ def make_chunk(spec: ChunkSpec, world_class) -> ChunkResult:
                     for c in classifier_crops(img, t.box, rng, 3):
                         crops.append(c)
                         states.append(t.state)
+                    for c in misaligned_crops(img, t.box, rng):
+                        crops.append(c)
+                        states.append(NO_TOWER)
             neg_imgs.append(img)
             neg_avoid.append([t.box for t in truths])
         if rng.random() < spec.keep:

@@ -19,7 +19,7 @@ import numpy as np
 from rll_bt.backend import LightDetection
 from rll_bt.errors import UserError
 
-from .hog import TowerDetector, crop_window
+from .hog import TowerDetector, crop_window, iou
 from .mlp import N_STATES, NO_TOWER, Mlp, crop_features
 
 MODEL_DIR = Path(__file__).with_name("models")
@@ -78,15 +78,43 @@ class LightReader:
         """Signal towers in a BGR image with their light states, best first.
         Hits the network calls "no tower" are dropped."""
         boxes = self.detector.detect(image, region=region, tower_height=tower_height)[: self.candidates]
-        out = self.network_output(image, [b.xywh for b in boxes])
+        if not self.classifier.verifies:
+            probs = self.classify(image, [b.xywh for b in boxes])
+            return [LightDetection(box=b.xywh, state=int(p.argmax()), score=b.score,
+                                   probabilities=tuple(float(v) for v in p), camera=camera)
+                    for b, p in zip(boxes, probs)][: self.max_detections]
+        # the detector's box is often too tall (the tower's mount continues its outline):
+        # the network looks at shorter, top-anchored variants and keeps the most tower-like
+        if not boxes:
+            return []
+        variants = [refine_box(b.xywh, k) for b in boxes for k in REFINE_HEIGHTS]
+        out = self.network_output(image, variants).reshape(len(boxes), len(REFINE_HEIGHTS), -1)
         found = []
-        for b, p in zip(boxes, out):
-            if self.classifier.verifies and p[NO_TOWER] >= self.reject:
+        for b, outs, vs in zip(boxes, out, _chunks(variants, len(REFINE_HEIGHTS))):
+            best = int(np.argmin(outs[:, NO_TOWER]))
+            p = outs[best]
+            if p[NO_TOWER] >= self.reject:
                 continue
             states = p[:N_STATES] / max(float(p[:N_STATES].sum()), 1e-12)
-            found.append(LightDetection(box=b.xywh, state=int(states.argmax()), score=b.score,
-                                        probabilities=tuple(float(v) for v in states), camera=camera))
+            if any(iou(vs[best], f.box) > 0.3 for f in found):
+                continue
+            found.append(LightDetection(box=tuple(int(round(v)) for v in vs[best]), state=int(states.argmax()),
+                                        score=b.score, probabilities=tuple(float(v) for v in states),
+                                        camera=camera))
         return found[: self.max_detections]
+
+
+REFINE_HEIGHTS = (1.0, 0.82, 0.68)
+
+
+def refine_box(box, k: float) -> tuple[float, float, float, float]:
+    """``box`` shortened to ``k`` of its height, keeping its top and its centre line."""
+    x, y, w, h = (float(v) for v in box)
+    return (x + w * (1 - k) / 2, y, w * k, h * k)
+
+
+def _chunks(items: list, n: int) -> list[list]:
+    return [items[i:i + n] for i in range(0, len(items), n)]
 
 
 def save_detector(path: str | Path, vector: np.ndarray, **settings) -> None:
