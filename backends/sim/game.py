@@ -81,6 +81,9 @@ class PyBulletGame(Simulation):
     def collisions(self) -> int:
         return self.world.collision_count
 
+    def collision_log(self) -> list[tuple[float, str, str]]:
+        return [(c.time, f"{c.robot[0]}/{c.robot[1]}", str(c.obstacle)) for c in self.world.collision_log]
+
     # -- reading the game -----------------------------------------------------------------
     def status(self) -> GameStatus:
         g = self.game

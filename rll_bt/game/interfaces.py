@@ -126,6 +126,10 @@ class Simulation(abc.ABC):
     def collisions(self) -> int:
         return 0
 
+    def collision_log(self) -> list[tuple[float, str, str]]:
+        """(time, robot "TEAM/N", what it ran into: a machine, "wall" or "robot TEAM/N")."""
+        return []
+
     # -- reading the game ------------------------------------------------------------
     @abc.abstractmethod
     def status(self) -> GameStatus: ...

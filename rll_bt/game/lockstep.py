@@ -18,7 +18,7 @@ and demonstrations: :meth:`kill_agent`, :meth:`start_agent`,
 from __future__ import annotations
 
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
@@ -45,6 +45,7 @@ class GameResult:
     orders: list
     collisions: int
     sim_time: float
+    collision_log: list = field(default_factory=list)
     wall_time: float = 0.0
     messages: int = 0
 
@@ -224,7 +225,8 @@ class LockstepGame:
                           awards=self.sim.awards(), deliveries=self.sim.deliveries(),
                           snapshot=self.teamserver.snapshot(), stations=self.sim.stations(),
                           orders=self.sim.orders(), collisions=self.sim.collisions(),
-                          sim_time=self.clock.now(), messages=self.bus.frames)
+                          sim_time=self.clock.now(), messages=self.bus.frames,
+                          collision_log=self.sim.collision_log())
 
     def close(self) -> None:
         for agent in self.agents.values():

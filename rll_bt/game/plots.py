@@ -30,10 +30,10 @@ def _plt():
 
 
 def _phase_lines(ax, phases, end: float) -> None:
-    for t, name in phases:
+    for i, (t, name) in enumerate(phases):      # labels staggered: a short SETUP would overlap
         ax.axvline(t, color="#555555", lw=0.8, ls="--")
-        ax.text(t, 1.0, f" {name}", transform=ax.get_xaxis_transform(), fontsize=7, va="bottom",
-                color="#555555")
+        ax.text(t, 1.0 + 0.045 * (i % 2), f" {name}", transform=ax.get_xaxis_transform(), fontsize=7,
+                va="bottom", color="#555555")
     ax.set_xlim(0, max(end, 1.0))
 
 
@@ -125,7 +125,7 @@ def draw_timeline(recording, team: str, end: float, path: str | Path) -> Path:
         if handles:
             ax.legend(handles=handles, fontsize=6, ncol=min(len(handles), 7), loc="upper center",
                       bbox_to_anchor=(0.5, -0.18))
-        ax.set_title("robot tasks (hatched: failed) and station states", fontsize=9)
+        ax.set_title("robot tasks (hatched: failed) and station states", fontsize=9, pad=18)
         fig.tight_layout()
         fig.savefig(path, dpi=110)
     finally:
@@ -146,7 +146,7 @@ def draw_score(recording, end: float, path: str | Path) -> Path:
         ax.set_ylabel("points")
         ax.set_ylim(bottom=0)
         ax.grid(alpha=0.3)
-        ax.set_title(f"{recording.team} score", fontsize=9)
+        ax.set_title(f"{recording.team} score", fontsize=9, pad=18)
         fig.tight_layout()
         fig.savefig(path, dpi=110)
     finally:

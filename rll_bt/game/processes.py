@@ -185,7 +185,7 @@ class ProcessGame:
         return GameResult(finished=finished, status=self.sim.status(), recording=rec, awards=self.sim.awards(),
                           deliveries=self.sim.deliveries(), snapshot=snap, stations=self.sim.stations(),
                           orders=self.sim.orders(), collisions=self.sim.collisions(),
-                          sim_time=self.clock.now(), messages=0)
+                          sim_time=self.clock.now(), messages=0, collision_log=self.sim.collision_log())
 
     def _stop_children(self, timeout: float = 10.0) -> None:
         """SIGTERM to every child; keep serving the backends while they stop their robots."""

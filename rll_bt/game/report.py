@@ -22,6 +22,15 @@ def _distance(path) -> float:
     return sum(math.hypot(b[1] - a[1], b[2] - a[2]) for a, b in zip(path, path[1:]))
 
 
+def _collision_kinds(log) -> dict[str, int]:
+    """Collision events by what was hit: "robot", "wall" or "station"."""
+    out: dict[str, int] = {}
+    for _t, _robot, what in log:
+        kind = "robot" if what.startswith("robot") else ("wall" if what == "wall" else "station")
+        out[kind] = out.get(kind, 0) + 1
+    return out
+
+
 def _exploration(award) -> bool:
     """An exploration award: in its own phase, or a report judged inside PRODUCTION (2025)."""
     if award.phase == "EXPLORATION":
@@ -70,6 +79,7 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
         "deliveries": [asdict(d) for d in ours],
         "robot_stats": robots,
         "collisions": result.collisions,
+        "collisions_by_kind": _collision_kinds(result.collision_log),
         "messages": result.messages,
         "team_server_restarts": result.snapshot.get("restarts", 0),
         "awards": [asdict(a) for a in result.awards if a.team == team],
@@ -93,7 +103,8 @@ def table(summary: dict) -> str:
         f"{'production points':22} {s['points']['production']:5d}",
         f"{'total score':22} {s['points']['total']:5d}",
         f"{'orders delivered':22} {s['orders_delivered']:5d}",
-        f"{'collisions':22} {s['collisions']:5d}",
+        f"{'collisions':22} {s['collisions']:5d}   "
+        + ", ".join(f"{k} {v}" for k, v in sorted(s.get("collisions_by_kind", {}).items())),
         "",
         f"{'robot':6} {'busy s':>8} {'busy %':>7} {'tasks':>6} {'failed':>7} {'driven m':>9}",
     ]

@@ -60,10 +60,11 @@ def test_a_restarted_team_server_resumes_from_its_database_and_goes_on_playing()
         assert set(before) <= {t["id"] for t in snap["tasks"]}         # the plan survived
         assert all(snap["robots"][n]["status"] == "ACTIVE" for n in (1, 2, 3))
 
-        def progress(g):
-            return any(t["state"] == "DONE" and (t["finished_at"] or 0) > restarted
-                       and t["kind"] != "explore_zone" for t in tasks(g).values())
-        assert game.run_until(progress, limit=60.0), "nothing got done after the restart"
+        def resumed(g):     # results of the robots reach the new server, and it hands out work
+            ts = tasks(g).values()
+            return (any((t["finished_at"] or 0) > restarted for t in ts)
+                    and any((t["assigned_at"] or 0) > restarted for t in ts))
+        assert game.run_until(resumed, limit=60.0), "the new server neither heard results nor gave tasks"
         assert game.sim.status().phase == "PRODUCTION"
 
 
