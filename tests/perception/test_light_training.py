@@ -42,4 +42,5 @@ def test_chunk_labels_match_the_world(tmp_path):
     assert towers and free and all(f.tower_free for f in free)
     assert all(f.truths for f in towers)
     assert res.pos.shape[1] == res.neg.shape[1] == 1188
-    assert len(res.crops) == len(res.states) and set(res.states) <= set(range(8))
+    assert len(res.crops) == len(res.states) and set(res.states) <= set(range(9))
+    assert 8 in res.states and (res.states < 8).sum() > 0          # towers and misplaced crops ("no tower")

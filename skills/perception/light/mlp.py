@@ -1,9 +1,9 @@
 """A small feed-forward network over signal-tower crops: the classifier of
 the paper's chain.  One tanh hidden layer, softmax over the eight light
-states (green 1, yellow 2, red 4) and optionally a ninth class, "no
-tower", with which the network also checks the detector's hits;
-cross-entropy with weight decay, trained with scaled conjugate gradient on
-a flat parameter vector.
+states (green 1, yellow 2, red 4), cross-entropy with weight decay,
+trained with scaled conjugate gradient on a flat parameter vector.  The
+same kind of network with two outputs (tower, no tower) is the tower
+check that looks at the detector's hits first.
 
 Input: the tower's crop resized to ``size`` (w, h; 6 x 24 pixels by
 default, the tower's shape) in BGR, as floats in [0, 1] minus 0.5,
@@ -19,7 +19,7 @@ import numpy as np
 from .scg import scg
 
 N_STATES = 8
-NO_TOWER = 8          # the index of the optional ninth class
+NO_TOWER = 8          # the label of "no tower" crops in the training material
 
 
 DEFAULT_SIZE = (6, 24)
@@ -48,10 +48,6 @@ class Mlp:
                    rng.normal(0, 1 / np.sqrt(n_hidden), (n_hidden, n_out)), np.zeros(n_out),
                    tuple(size))
 
-    @property
-    def verifies(self) -> bool:
-        """Whether the network has the "no tower" class."""
-        return self.w2.shape[1] > N_STATES
 
     # -- flat parameter vector for the optimiser ---------------------------
     def _shapes(self):

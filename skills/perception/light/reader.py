@@ -20,29 +20,34 @@ from rll_bt.backend import LightDetection
 from rll_bt.errors import UserError
 
 from .hog import TowerDetector, crop_window, iou
-from .mlp import N_STATES, NO_TOWER, Mlp, crop_features
+from .mlp import Mlp, crop_features
 
 MODEL_DIR = Path(__file__).with_name("models")
 DETECTOR_FILE = "tower_hog_svm.npz"
 CLASSIFIER_FILE = "light_mlp.npz"
+CHECKER_FILE = "tower_check_mlp.npz"
 REPORT_FILE = "training_report.json"
 
 
 class LightReader:
-    def __init__(self, detector: TowerDetector, classifier: Mlp, max_detections: int = 3, reject: float = 0.5,
-                 candidates: int = 40):
-        self.candidates = candidates  # detector hits the network looks at, strongest first
+    """Detector, the tower check (a small network saying whether a hit is
+    a tower: optional) and the light network (8 states)."""
+
+    def __init__(self, detector: TowerDetector, classifier: Mlp, checker: Mlp | None = None,
+                 max_detections: int = 3, reject: float = 0.5, candidates: int = 40):
         self.detector = detector
         self.classifier = classifier
+        self.checker = checker
         self.max_detections = max_detections
         self.reject = reject          # "no tower" probability at which a hit is dropped
+        self.candidates = candidates  # detector hits the networks look at, strongest first
 
     @classmethod
     def load(cls, directory: str | Path | None = None, **detector_options) -> "LightReader":
         """The models in ``directory`` (default: the ones shipped in the package).
         ``detector_options`` override the saved detector settings."""
         d = Path(directory) if directory is not None else MODEL_DIR
-        det_path, net_path = d / DETECTOR_FILE, d / CLASSIFIER_FILE
+        det_path, net_path, check_path = d / DETECTOR_FILE, d / CLASSIFIER_FILE, d / CHECKER_FILE
         for p in (det_path, net_path):
             if not p.is_file():
                 raise UserError(f"model file missing: {p}",
@@ -52,56 +57,54 @@ class LightReader:
                 vector = f["detector"]
                 settings = json.loads(str(f["settings"])) if "settings" in f else {}
             classifier = Mlp.load(net_path)
+            checker = Mlp.load(check_path) if check_path.is_file() else None
         except (OSError, ValueError, KeyError) as exc:
             raise UserError(f"cannot read the light models in {d}: {exc}") from None
         reject = float(settings.pop("reject", 0.5))
         settings.update(detector_options)
-        return cls(TowerDetector(vector, **settings), classifier, reject=reject)
+        return cls(TowerDetector(vector, **settings), classifier, checker, reject=reject)
 
-    def network_output(self, image: np.ndarray, boxes) -> np.ndarray:
-        """The network's probabilities (8 states, and "no tower" when it has
-        that class) for each tower box (x, y, w, h) of ``image``."""
-        n_out = self.classifier.w2.shape[1]
+    @staticmethod
+    def _run(net: Mlp, image: np.ndarray, boxes) -> np.ndarray:
         if len(boxes) == 0:
-            return np.zeros((0, n_out))
-        x = np.stack([crop_features(crop_window(image, b, self.classifier.size), self.classifier.size)
-                      for b in boxes]).astype(np.float64)
-        return self.classifier.probabilities(x)
+            return np.zeros((0, net.w2.shape[1]))
+        x = np.stack([crop_features(crop_window(image, b, net.size), net.size) for b in boxes]).astype(np.float64)
+        return net.probabilities(x)
 
     def classify(self, image: np.ndarray, boxes) -> np.ndarray:
         """Probabilities over the eight states for each tower box (x, y, w, h) of ``image``."""
-        p = self.network_output(image, boxes)[:, :N_STATES]
-        return p / np.maximum(p.sum(axis=1, keepdims=True), 1e-12)
+        return self._run(self.classifier, image, boxes)
+
+    def no_tower(self, image: np.ndarray, boxes) -> np.ndarray:
+        """The tower check's probability that each box is not a tower (zeros without a check)."""
+        if self.checker is None:
+            return np.zeros(len(boxes))
+        return self._run(self.checker, image, boxes)[:, 1]
 
     def read(self, image: np.ndarray, region: tuple[int, int, int, int] | None = None,
              tower_height: float | None = None, camera: str = "front") -> list[LightDetection]:
         """Signal towers in a BGR image with their light states, best first.
-        Hits the network calls "no tower" are dropped."""
+        Hits the tower check calls "no tower" are dropped."""
         boxes = self.detector.detect(image, region=region, tower_height=tower_height)[: self.candidates]
-        if not self.classifier.verifies:
-            probs = self.classify(image, [b.xywh for b in boxes])
-            return [LightDetection(box=b.xywh, state=int(p.argmax()), score=b.score,
-                                   probabilities=tuple(float(v) for v in p), camera=camera)
-                    for b, p in zip(boxes, probs)][: self.max_detections]
-        # the detector's box is often too tall (the tower's mount continues its outline):
-        # the network looks at shorter, top-anchored variants and keeps the most tower-like
         if not boxes:
             return []
-        variants = [refine_box(b.xywh, k) for b in boxes for k in REFINE_HEIGHTS]
-        out = self.network_output(image, variants).reshape(len(boxes), len(REFINE_HEIGHTS), -1)
-        found = []
-        for b, outs, vs in zip(boxes, out, _chunks(variants, len(REFINE_HEIGHTS))):
-            best = int(np.argmin(outs[:, NO_TOWER]))
-            p = outs[best]
-            if p[NO_TOWER] >= self.reject:
+        # the detector's box is often too tall (the tower's mount continues its outline):
+        # the check looks at shorter, top-anchored variants and keeps the most tower-like
+        heights = REFINE_HEIGHTS if self.checker is not None else (1.0,)
+        variants = [refine_box(b.xywh, k) for b in boxes for k in heights]
+        p_no = self.no_tower(image, variants).reshape(len(boxes), len(heights))
+        chosen = []
+        for b, p, vs in zip(boxes, p_no, _chunks(variants, len(heights))):
+            best = int(np.argmin(p))
+            if p[best] >= self.reject or any(iou(vs[best], c[1]) > 0.3 for c in chosen):
                 continue
-            states = p[:N_STATES] / max(float(p[:N_STATES].sum()), 1e-12)
-            if any(iou(vs[best], f.box) > 0.3 for f in found):
-                continue
-            found.append(LightDetection(box=tuple(int(round(v)) for v in vs[best]), state=int(states.argmax()),
-                                        score=b.score, probabilities=tuple(float(v) for v in states),
-                                        camera=camera))
-        return found[: self.max_detections]
+            chosen.append((b, vs[best]))
+            if len(chosen) == self.max_detections:
+                break
+        probs = self.classify(image, [v for _, v in chosen])
+        return [LightDetection(box=tuple(int(round(c)) for c in v), state=int(p.argmax()), score=b.score,
+                               probabilities=tuple(float(x) for x in p), camera=camera)
+                for (b, v), p in zip(chosen, probs)]
 
 
 REFINE_HEIGHTS = (1.0, 0.82, 0.68)
@@ -119,6 +122,6 @@ def _chunks(items: list, n: int) -> list[list]:
 
 def save_detector(path: str | Path, vector: np.ndarray, **settings) -> None:
     """Write a detector vector, its :class:`TowerDetector` settings and the
-    reader's ``reject`` level (the network's "no tower" probability at which
-    a hit is dropped)."""
+    reader's ``reject`` level (the tower check's "no tower" probability at
+    which a hit is dropped)."""
     np.savez_compressed(path, detector=np.asarray(vector, np.float32), settings=np.array(json.dumps(settings)))

@@ -37,7 +37,8 @@ from .dataset import ChunkResult, ChunkSpec, PackedFrame, make_chunk
 from .evaluation import LightScore
 from .hog import TowerDetector, crop_window, iou, make_hog, select, train_svm, window_features, window_for_tower
 from .mlp import DEFAULT_SIZE, N_STATES, NO_TOWER, Mlp, crop_features
-from .reader import CLASSIFIER_FILE, DETECTOR_FILE, REPORT_FILE, LightReader, save_detector
+from .reader import (CHECKER_FILE, CLASSIFIER_FILE, DETECTOR_FILE, REFINE_HEIGHTS, REPORT_FILE, LightReader,
+                     refine_box, save_detector)
 
 PROFILES = ("rcll2016", "rcll2025")
 HELDOUT_SEED = 1_000_003
@@ -51,8 +52,8 @@ class TrainOptions:
     quick: bool = False
     workers: int = 2
     rounds: int = 2                # hard-negative rounds
-    hidden: int = 40
-    iterations: int = 400          # SCG iterations
+    hidden: int = 32
+    iterations: int = 300          # SCG iterations (each network)
     heldout: int | None = None     # rendered held-out frames (default samples / 3)
 
     def __post_init__(self):
@@ -93,7 +94,7 @@ class FrameHits:
     boxes: np.ndarray             # N x 4 tower boxes after non-maximum suppression
     scores: np.ndarray            # N SVM scores
     false: np.ndarray             # N bools: matches no tower
-    crops: np.ndarray             # N x 24 x 6 x 3 network crops (DEFAULT_SIZE)
+    crops: np.ndarray             # N x variants x 24 x 6 x 3 network crops (REFINE_HEIGHTS, DEFAULT_SIZE)
     hard: np.ndarray              # HOG features of the strongest false hits
 
 
@@ -108,8 +109,9 @@ def _mine_job(args) -> list[FrameHits]:
         kept = select(boxes, scores, low, 1, det.nms_overlap)[:40]
         false = np.array([all(iou(k.xywh, t.box) < 0.2 for t in f.truths) for k in kept], bool)
         hard = [crop_window(img, window_for_tower(k.xywh)) for k, bad in zip(kept, false) if bad][:per_frame]
-        crops = np.stack([crop_window(img, k.xywh, DEFAULT_SIZE) for k in kept]) if kept else \
-            np.zeros((0, DEFAULT_SIZE[1], DEFAULT_SIZE[0], 3), np.uint8)
+        crops = np.stack([[crop_window(img, refine_box(k.xywh, v), DEFAULT_SIZE) for v in REFINE_HEIGHTS]
+                          for k in kept]) if kept else \
+            np.zeros((0, len(REFINE_HEIGHTS), DEFAULT_SIZE[1], DEFAULT_SIZE[0], 3), np.uint8)
         out.append(FrameHits(np.array([k.xywh for k in kept], np.float32).reshape(-1, 4),
                              np.array([k.score for k in kept], np.float32), false, crops,
                              window_features(hog, hard)))
@@ -217,44 +219,60 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
             for k in range(len(h.scores)):
                 if h.false[k]:
                     if j < half:
-                        neg_crops.append(h.crops[k])
+                        neg_crops.extend(h.crops[k])
                     continue
                 for t in f.truths:
                     if t.clean and t.box[3] >= 20 and iou(tuple(h.boxes[k]), t.box) >= 0.3:
-                        det_crops.append(h.crops[k])
+                        det_crops.append(h.crops[k][0])
                         det_states.append(t.state)
                         break
     neg_crops = [neg_crops[i] for i in rng.permutation(len(neg_crops))[: 2 * len(crops_a)]]
-    x_crops = np.concatenate([crops_a] + ([np.stack(det_crops)] if det_crops else [])
-                             + ([np.stack(neg_crops)] if neg_crops else []))
-    y = np.concatenate([states_a, np.asarray(det_states, np.int64), np.full(len(neg_crops), NO_TOWER)])
-    x = np.stack([crop_features(c, DEFAULT_SIZE) for c in x_crops]).astype(np.float64)
-    net = Mlp.create(x.shape[1], opts.hidden, DEFAULT_SIZE, seed=opts.seed, n_out=N_STATES + 1)
-    iters = opts.iterations
-    say(f"training the network ({x.shape[1]} inputs, {opts.hidden} hidden, 8 states + no tower) on "
-        f"{len(x)} crops ({len(neg_crops)} not towers) with SCG, {iters} iterations")
+    towers = crops_a[states_a < N_STATES]
+    tower_states = states_a[states_a < N_STATES]
+    if det_crops:
+        towers = np.concatenate([towers, np.stack(det_crops)])
+        tower_states = np.concatenate([tower_states, np.asarray(det_states, np.int64)])
+    misplaced = [crops_a[states_a == NO_TOWER]] + ([np.stack(neg_crops)] if neg_crops else [])
+    not_towers = np.concatenate(misplaced)
+
+    def features(crops):
+        return np.stack([crop_features(c, DEFAULT_SIZE) for c in crops]).astype(np.float64)
 
     def tick(k, _, fx):
-        if k % 50 == 0:
+        if k % 100 == 0:
             say(f"  SCG iteration {k}: loss {fx:.4f}")
-    net.train(x, y, max_iter=iters, decay=1e-3, callback=tick)
+
+    true_boxes = crops_a[states_a < N_STATES]          # the check learns well-placed boxes only
+    x_check = features(np.concatenate([true_boxes, not_towers]))
+    y_check = np.concatenate([np.zeros(len(true_boxes), np.int64), np.ones(len(not_towers), np.int64)])
+    checker = Mlp.create(x_check.shape[1], opts.hidden, DEFAULT_SIZE, seed=opts.seed + 1, n_out=2)
+    say(f"training the tower check ({x_check.shape[1]} inputs, {opts.hidden} hidden, tower / no tower) on "
+        f"{len(true_boxes)} tower and {len(not_towers)} other crops with SCG, {opts.iterations} iterations")
+    checker.train(x_check, y_check, max_iter=opts.iterations, decay=1e-3, callback=tick)
+    x, y = features(towers), tower_states
+    net = Mlp.create(x.shape[1], opts.hidden, DEFAULT_SIZE, seed=opts.seed)
+    say(f"training the light network ({x.shape[1]} inputs, {opts.hidden} hidden, 8 states) on {len(x)} "
+        f"tower crops with SCG, {opts.iterations} iterations")
+    net.train(x, y, max_iter=opts.iterations, decay=1e-3, callback=tick)
     no_tower = []
     for h in hits[half:]:
         if len(h.crops):
-            no_tower.append(net.probabilities(np.stack([crop_features(c, net.size) for c in h.crops])
-                                              .astype(np.float64))[:, NO_TOWER])
+            n, v = h.crops.shape[:2]
+            p = checker.probabilities(features(h.crops.reshape((n * v,) + h.crops.shape[2:])))[:, 1]
+            no_tower.append(p.reshape(n, v).min(axis=1))
         else:
             no_tower.append(np.zeros(0))
     threshold, reject, cal = calibrate(mine[half:], hits[half:], no_tower, low)
     support = 1
     settings = {"threshold": threshold, "min_support": support}
-    say(f"detector threshold {threshold:.3f}, network rejects at {reject:.2f}: recall {cal['train_recall']:.3f}, "
-        f"{cal['train_false']} false on {cal['train_frames']} calibration frames")
+    say(f"detector threshold {threshold:.3f}, tower check rejects at {reject:.2f}: recall "
+        f"{cal['train_recall']:.3f}, {cal['train_false']} false on {cal['train_frames']} calibration frames")
     train_acc = float((net.predict(x) == y).mean())
 
     # -- write and evaluate --------------------------------------------------
     save_detector(out / DETECTOR_FILE, vector, reject=reject, **settings)
     net.save(out / CLASSIFIER_FILE)
+    checker.save(out / CHECKER_FILE)
     reader = LightReader.load(out)
     say(f"evaluating on {len(heldout)} held-out frames")
     score = evaluate_parallel(out, heldout, opts.workers)
@@ -263,9 +281,11 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         "detector": {**cal, "min_support": support, "windows_pos": int(len(pos_f)), "windows_neg": int(len(neg_f)),
                      "hard_negatives": int(len(hard_all))},
         "network": {"crops": int(len(x)), "train_accuracy": train_acc, "hidden": opts.hidden},
+        "tower_check": {"crops": int(len(x_check)),
+                        "train_accuracy": float((checker.predict(x_check) == y_check).mean())},
         "heldout": score.metrics(),
         "seconds": clock.now() - t_start,
-        "files": {p: os.path.getsize(out / p) for p in (DETECTOR_FILE, CLASSIFIER_FILE)},
+        "files": {p: os.path.getsize(out / p) for p in (DETECTOR_FILE, CLASSIFIER_FILE, CHECKER_FILE)},
     }
     del reader
     (out / REPORT_FILE).write_text(json.dumps(report, indent=1))
