@@ -70,7 +70,7 @@ def plan(opts: TrainOptions) -> tuple[list[ChunkSpec], list[ChunkSpec]]:
     train = []
     for i in range(n_train):
         n = opts.samples // n_train + (1 if i < opts.samples % n_train else 0)
-        free = max(1, n // 5)
+        free = max(1, n // 4)
         train.append(ChunkSpec(PROFILES[i % 2], opts.seed * 7919 + i, n - free, free, int(n * 0.7)))
     held = opts.heldout if opts.heldout is not None else max(10, opts.samples // 3)
     n_held = max(1, round(held / per))
@@ -130,9 +130,10 @@ def _split(items: list, n: int) -> list[list]:
 
 def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[np.ndarray], low: float
               ) -> tuple[float, float, dict]:
-    """The detector threshold and the network's "no tower" level at which a
-    hit is dropped, with the fewest false detections on ``frames`` and then
-    the most recall."""
+    """The detector threshold and the tower check's "no tower" level at which
+    a hit is dropped: no false detection on the tower-free ``frames``, and
+    then the most recall, each false detection elsewhere (a tower's mount,
+    a misplaced box) costing two hits."""
     top = max((float(h.scores.max()) for h in hits if len(h.scores)), default=low + 1.0)
     best = None
     for reject in (0.5, 0.3, 0.2, 0.1, 0.05):
@@ -141,13 +142,15 @@ def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[n
             for f, h, p in zip(frames, hits, no_tower):
                 keep = (h.scores >= t) & (p < reject)
                 score.add(f.truths, [(tuple(b), 0) for b in h.boxes[keep]])
-            key = (score.false_all, -score.hits, -reject, t)
+            # no false detection on tower-free frames; then recall, less two per other false detection
+            key = (score.false_free, -(score.hits - 2 * (score.false_all - score.false_free)), -reject, t)
             if best is None or key < best[0]:
                 best = (key, t, reject, score)
     _, t, reject, score = best
     return float(t), float(reject), {"threshold": float(t), "reject": float(reject),
                                      "train_recall": score.hits / max(score.required, 1),
-                                     "train_false": score.false_all, "train_frames": score.frames}
+                                     "train_false": score.false_all, "train_false_free": score.false_free,
+                                     "train_frames": score.frames}
 
 
 def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: None,
@@ -191,7 +194,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
 
         # -- detector: SVM, hard negatives, SVM again ------------------------
         rng = np.random.default_rng(opts.seed)
-        mine = [frames[i] for i in rng.permutation(len(frames))[: (40 if opts.quick else 350)]]
+        mine = [frames[i] for i in rng.permutation(len(frames))[: (40 if opts.quick else 500)]]
         per_frame = max(2, 3000 // max(1, len(mine)))     # hard negatives per frame and round
         low = -0.8
         hard_all = np.zeros((0, pos_f.shape[1]), np.float32)
