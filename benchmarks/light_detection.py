@@ -102,21 +102,6 @@ def _eval_job(args):
     raise ValueError(method)
 
 
-def merge(scores) -> LightScore:
-    total = LightScore()
-    for s in scores:
-        total.required += s.required
-        total.hits += s.hits
-        total.correct += s.correct
-        total.confusion += s.confusion
-        total.frames += s.frames
-        total.free_frames += s.free_frames
-        total.false_free += s.false_free
-        total.false_all += s.false_all
-        total.ms.extend(s.ms)
-    return total
-
-
 def tune_colour(frames) -> ColourModel:
     """The colour model's luma scale and lit fraction with the best ROI accuracy."""
     best = None
@@ -163,7 +148,7 @@ def main() -> None:
                 if not subset:
                     continue
                 parts = [subset[i::args.workers] for i in range(args.workers)]
-                results[(method, label)] = merge(pool.map(_eval_job, [(method, model_dir, p, colour)
+                results[(method, label)] = LightScore.combine(pool.map(_eval_job, [(method, model_dir, p, colour)
                                                                       for p in parts]))
                 print(f"  evaluated {method} on {label}", flush=True)
 

@@ -74,3 +74,28 @@ def test_light_state_of_a_rendered_tower(world, reader, state):
     assert lights, "no tower found in the tag-given region"
     assert lights[0].state == state
     assert max(lights[0].probabilities) > 0.5
+
+
+def test_service_on_the_sim_backend_reads_station_and_blinking_light(world, reader):
+    """Camera mode: the rendered world has no oracle, so the service runs the
+    detectors on the robot's camera frames, while the station blinks."""
+    from rll_bt.backend import open_backend
+    from skills.perception.service import PerceptionService
+    from skills.perception.source import make_tag_source
+
+    backend = open_backend("sim", world=world, robot=("CYAN", 1))
+    source = make_tag_source(backend, world.profile)
+    assert isinstance(source, CameraPerception)
+    source._reader = reader
+    seen = []
+    svc = PerceptionService(source, world.profile, lambda: world.robot_pose("CYAN", 1), seen.append)
+    world.set_lights(STATION, red="ON", green="BLINK")
+    look_at_face(world, STATION, "output", 1.4, 10)
+    for _ in range(16):
+        world.step(0.1)
+        svc.update()
+    r = svc.report(STATION)
+    st = world.station(STATION)
+    assert r.pose.distance_to(st.pose) < 0.05 and r.zone == st.zone and r.rotation_deg == st.rotation % 360
+    assert r.pattern.as_dict() == {"green": "BLINK", "yellow": "OFF", "red": "ON"}
+    assert seen and seen[-1].machine == STATION

@@ -115,13 +115,16 @@ def classifier_crops(image: np.ndarray, box, rng: np.random.Generator, count: in
 
 
 def misaligned_crops(image: np.ndarray, box, rng: np.random.Generator) -> list[np.ndarray]:
-    """Crops of a tower box gone wrong, for the network's "no tower" class:
-    stretched down over the mount, and slid up off the lights."""
+    """Crops of a tower box gone wrong, for the tower check's "no tower"
+    class: stretched down over the mount, slid up off the lights, and cut
+    short above the bottom light (the check picks among such variants)."""
     x, y, w, h = (float(v) for v in box)
     k = rng.uniform(1.35, 1.8)
     up = rng.uniform(0.35, 0.6)
+    short = rng.uniform(0.55, 0.75)
     return [crop_window(image, (x - w * (k - 1) / 2, y, w * k, h * k), DEFAULT_SIZE),
-            crop_window(image, (x, y - up * h, w, h), DEFAULT_SIZE)]
+            crop_window(image, (x, y - up * h, w, h), DEFAULT_SIZE),
+            crop_window(image, (x + w * (1 - short) / 2, y, w * short, h * short), DEFAULT_SIZE)]
 
 
 def detector_positives(image: np.ndarray, box, rng: np.random.Generator, count: int) -> list[np.ndarray]:

@@ -70,6 +70,22 @@ class LightScore:
         if not truths:
             self.false_free += false
 
+    @classmethod
+    def combine(cls, scores) -> "LightScore":
+        """One score over the frames of several (e.g. from worker processes)."""
+        total = cls()
+        for s in scores:
+            total.required += s.required
+            total.hits += s.hits
+            total.correct += s.correct
+            total.confusion += s.confusion
+            total.frames += s.frames
+            total.free_frames += s.free_frames
+            total.false_free += s.false_free
+            total.false_all += s.false_all
+            total.ms.extend(s.ms)
+        return total
+
     def metrics(self) -> dict:
         r = max(self.required, 1)
         return {

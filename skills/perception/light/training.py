@@ -304,18 +304,7 @@ def _eval_job(args) -> LightScore:
 
 def evaluate_parallel(model_dir, frames: list[PackedFrame], workers: int) -> LightScore:
     """Score the models in ``model_dir`` on ``frames`` using ``workers`` processes."""
-    total = LightScore()
     if not frames:
-        return total
+        return LightScore()
     with _pool(workers) as pool:
-        for s in pool.map(_eval_job, [(str(model_dir), fs) for fs in _split(frames, workers)]):
-            total.required += s.required
-            total.hits += s.hits
-            total.correct += s.correct
-            total.confusion += s.confusion
-            total.frames += s.frames
-            total.free_frames += s.free_frames
-            total.false_free += s.false_free
-            total.false_all += s.false_all
-            total.ms.extend(s.ms)
-    return total
+        return LightScore.combine(pool.map(_eval_job, [(str(model_dir), fs) for fs in _split(frames, workers)]))
