@@ -159,6 +159,8 @@ def main() -> None:
           f"{'false/1000':>10} {'ms med':>7} {'ms p95':>7}")
     for (method, label), s in results.items():
         m = s.metrics()
+        if not m["required_towers"] and not m["tower_free_frames"]:
+            continue                          # no tags there: no region to search
         false = f"{m['false_per_1000']:.1f}" if m["tower_free_frames"] else "-"
         print(f"{names[method]:<30} {label:<9} {m['required_towers']:>6} {m['state_accuracy']:>9.4f} "
               f"{m['recall']:>7.4f} {m['end_to_end']:>8.4f} {false:>10} {m['ms_median'] or 0:>7.1f} "

@@ -185,11 +185,11 @@ class TowerDetector:
 
     def levels(self, width: int, height: int, tower_height: float | None = None) -> list[float]:
         """Pyramid scales (image size factors) to search, largest first."""
-        hi = self.max_upscale
-        lo = TOWER_H / (self.max_tower_fraction * height)
         if tower_height is not None and tower_height > 0:
             s = TOWER_H / float(tower_height)
-            hi, lo = min(s * 1.3, max(hi, s * 1.3), 4.0), max(s / 1.3, lo)
+            hi, lo = min(s * 1.3, 4.0), s / 1.3
+        else:
+            hi, lo = self.max_upscale, TOWER_H / (self.max_tower_fraction * height)
         lo = max(lo, WIN[0] / width, WIN[1] / height)
         out, s = [], hi
         while s >= lo - 1e-9:
