@@ -59,12 +59,8 @@ def render(towers: int, free: int, pasted: int, workers: int, seed: int, per: in
 
 
 def _roi(t):
-    """The tight geometric ROI: the tag-given region without its margin."""
-    x, y, w, h = t.region
-    th = t.tower_height
-    tw = th * 36.0 / 147.0
-    cx, cy = x + w / 2, y + h / 2
-    return (cx - tw / 2, cy - th / 2, tw, th)
+    """The tight geometric ROI: the tower's box by the tag pose, no margin."""
+    return t.roi
 
 
 def score_region(frames, read_region, clock) -> LightScore:
@@ -75,7 +71,7 @@ def score_region(frames, read_region, clock) -> LightScore:
             continue
         img = f.image
         for t in f.truths:
-            if t.region is None:
+            if t.region is None or t.roi is None:
                 continue
             t0 = clock.now()
             dets = read_region(img, t)

@@ -43,6 +43,7 @@ class Truth:
     clean: bool                     # fully visible, inside the frame
     region: tuple[int, int, int, int] | None = None   # where its station's tag says it is
     tower_height: float | None = None                  # its height there, pixels
+    roi: tuple[int, int, int, int] | None = None       # its box by the same tag pose, no margin
 
     @property
     def required(self) -> bool:
@@ -218,7 +219,7 @@ def make_chunk(spec: ChunkSpec, world_class) -> ChunkResult:
         img, source = f.image, ("render" if f.towers else "free-render")
         if f.sky is not None and rng.random() < 0.5:
             img, source = _sky_swap(img, f.sky, rng), source + "+bg"
-        truths = [Truth(t.box, t.state, t.clean, t.region, t.tower_height) for t in f.towers]
+        truths = [Truth(t.box, t.state, t.clean, t.region, t.tower_height, t.roi) for t in f.towers]
         dist = min((t.distance for t in f.towers), default=None)
         frames.append((img, truths, source, dist))
     for i in range(spec.pasted):

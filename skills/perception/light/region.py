@@ -37,12 +37,15 @@ def tower_points_in_tag_frame(side: str, mps: MpsGeometry, ring: int = 8) -> np.
 
 
 def tower_region(det: TagDetection, side: str, mps: MpsGeometry, intrinsics: CameraIntrinsics,
-                 margin: float = 1.0, min_size: int = 24) -> tuple[tuple[int, int, int, int], float] | None:
+                 margin_x: float = 1.5, margin_y: float = 0.5, min_size: int = 24
+                 ) -> tuple[tuple[int, int, int, int], float] | None:
     """((x, y, w, h) image region to search, expected tower height in pixels),
     or None when the tower would be behind the camera or outside the image.
 
-    ``margin`` widens the projected tower box by that many tower widths on
-    each side and a quarter of it in height above and below."""
+    The projected tower box is widened by ``margin_x`` tower widths on each
+    side and ``margin_y`` tower heights above and below: room for the tag
+    pose's error and for the detector's window, which needs background
+    around the tower."""
     pts = tower_points_in_tag_frame(side, mps)
     rvec = np.asarray(det.rvec, np.float64).reshape(3, 1)
     tvec = np.asarray(det.tvec, np.float64).reshape(3, 1)
@@ -54,8 +57,8 @@ def tower_region(det: TagDetection, side: str, mps: MpsGeometry, intrinsics: Cam
     x0, y0 = uv.min(axis=0)
     x1, y1 = uv.max(axis=0)
     w, h = x1 - x0, y1 - y0
-    mx = max(margin * w, min_size / 2)
-    my = max(margin * 0.25 * h, min_size / 2)
+    mx = max(margin_x * w, min_size / 2)
+    my = max(margin_y * h, min_size / 2)
     rx0, ry0 = max(0, int(math.floor(x0 - mx))), max(0, int(math.floor(y0 - my)))
     rx1 = min(intrinsics.width, int(math.ceil(x1 + mx)))
     ry1 = min(intrinsics.height, int(math.ceil(y1 + my)))

@@ -51,6 +51,7 @@ class TowerLabel:
     mask: np.ndarray | None = None   # bool mask of the tower pixels inside ``box``
     region: tuple[int, int, int, int] | None = None   # where its tag says the tower is
     tower_height: float | None = None                  # the tower's height there, pixels
+    roi: tuple[int, int, int, int] | None = None       # the tower's box by the same tag pose, no margin
 
     @property
     def clean(self) -> bool:
@@ -253,15 +254,15 @@ class SceneRenderer:
                 min(1.0, float(mask.sum()) / max(self._silhouette_area(full), 1.0)),
                 float(math.hypot(tp[0] - eye[0], tp[1] - eye[1])),
                 mask[box[1]:box[1] + box[3], box[0]:box[0] + box[2]].copy(),
-                *(where if where is not None else (None, None))))
+                *(where if where is not None else (None, None, None))))
         return frame
 
     def tag_region(self, st, eye, rot, intr: CameraIntrinsics, pos_sigma: float = 0.01,
                    rot_sigma: float = math.radians(1.5)):
-        """The search region the station's tag facing the camera would give
-        (:func:`.region.tower_region`), from its true pose in the camera frame
-        with tag-detection noise: position ``pos_sigma`` per metre of range,
-        rotation ``rot_sigma``."""
+        """(search region, tower height, tight tower box) the station's tag
+        facing the camera would give (:func:`.region.tower_region`), from its
+        true pose in the camera frame with tag-detection noise: position
+        ``pos_sigma`` per metre of range, rotation ``rot_sigma``."""
         import cv2
         from rll_bt.backend import TagDetection
         from .region import tower_region
@@ -277,7 +278,11 @@ class SceneRenderer:
         jitter, _ = cv2.Rodrigues(self.rng.normal(0.0, rot_sigma, 3).reshape(3, 1))
         rvec, _ = cv2.Rodrigues(jitter @ (rot.T @ frame))
         det = TagDetection(st.tag_id(side), tuple(float(v) for v in t), tuple(float(v) for v in rvec.ravel()))
-        return tower_region(det, side.upper(), self.mps, intr)
+        where = tower_region(det, side.upper(), self.mps, intr)
+        tight = tower_region(det, side.upper(), self.mps, intr, margin_x=0.0, margin_y=0.0, min_size=0)
+        if where is None or tight is None:
+            return None
+        return where[0], where[1], tight[0]
 
     def _silhouette_area(self, full) -> float:
         """Pixels of an unoccluded tower: its outline nearly fills the box,
