@@ -53,6 +53,15 @@ class PyBulletGame(Simulation):
         self.node = RefboxNode.on_udp(self.game, host=host, layout=port_layout,
                                       keys={self.team_name: self.key}, stream_port=-1)
 
+    def tap(self, fn) -> None:
+        if self.node is None:
+            raise RuntimeError("attach the refbox to a bus or to UDP first")
+        ch = self.node.channels
+        ch.public = _Tapped(ch.public, "public", fn)
+        ch.team = {color: _Tapped(t, color.lower(), fn) for color, t in ch.team.items()}
+        if ch.stream is not None:
+            ch.stream = _Tapped(ch.stream, "stream", fn)
+
     def refbox_registry(self):
         return RefboxNode.registry(self.game)
 
@@ -130,6 +139,28 @@ class PyBulletGame(Simulation):
         if self.node is not None:
             self.node.close()
         self.world.close()
+
+
+class _Tapped:
+    """A refbox transport that shows ``fn`` every message it sends and receives."""
+
+    def __init__(self, inner, channel: str, fn):
+        self._inner, self._channel, self._fn = inner, channel, fn
+
+    def send(self, msg, *args, **kw):
+        sent = self._inner.send(msg, *args, **kw)
+        if sent:
+            self._fn(self._channel, "refbox", msg)
+        return sent
+
+    def receive(self):
+        got = self._inner.receive()
+        for rec in got:
+            self._fn(self._channel, str(rec.source), rec.msg)
+        return got
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)
 
 
 def open_game(**options) -> PyBulletGame:

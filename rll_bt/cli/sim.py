@@ -64,7 +64,8 @@ def register(cli) -> None:
     g.add_argument("--exploration", type=_seconds, metavar="S", help="exploration length (default: the rules')")
     g.add_argument("--production", type=_seconds, metavar="S", help="PRODUCTION length (default: the rules')")
     g = gp.add_argument_group("running")
-    g.add_argument("--gui", action="store_true", help="open PyBullet's window (needs a display)")
+    g.add_argument("--gui", action="store_true",
+                   help="open PyBullet's window (needs a display); the game then runs in real time")
     g.add_argument("--out", type=Path, metavar="DIR",
                    help="write messages.jsonl, report.json, field.png, timeline.png, score.png here")
     g.add_argument("--processes", action="store_true",

@@ -42,7 +42,7 @@ def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
         from .processes import ProcessGame
         game = ProcessGame(options, progress=bar, clock=clock)
     else:
-        game = LockstepGame(options, progress=bar)
+        game = LockstepGame(options, progress=bar, pace=clock if options.gui else None)
     try:
         result = game.run()
         if bar is not None:

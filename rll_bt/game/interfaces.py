@@ -98,6 +98,11 @@ class Simulation(abc.ABC):
     def attach_udp(self, host: str, port_layout: str) -> None:
         """Put the refbox on UDP (``port_layout`` "sim": split local ports)."""
 
+    def tap(self, fn: Callable[[str, str, Any], None]) -> None:
+        """Call ``fn(channel, source, message)`` for every message the refbox
+        receives or sends from now on (after :meth:`attach_bus` / :meth:`attach_udp`)."""
+        raise NotImplementedError
+
     def refbox_registry(self):
         """The refbox message registry (for logging what its channels carry)."""
         raise NotImplementedError

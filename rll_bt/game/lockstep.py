@@ -54,8 +54,9 @@ class LockstepGame:
     """See the module doc.  ``progress``: called with (sim time, status) after
     each sample; ``hooks``: callables ``hook(game)`` run after every round."""
 
-    def __init__(self, options: GameOptions, *, progress: Callable | None = None):
+    def __init__(self, options: GameOptions, *, progress: Callable | None = None, pace=None):
         self.options = o = options
+        self.pace = pace              # a wall Clock: keep to real time (``--gui``); None: as fast as possible
         sim_factory = load_simulator(o.simulator)
         ts_factory = load_teamserver(o.teamserver)
         self.sim = sim_factory(profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key,
@@ -165,12 +166,22 @@ class LockstepGame:
         self.sim.refbox_step()
         self.teamserver.tick()
         self.rounds += 1
+        if self.pace is not None:
+            self._keep_real_time()
         before = len(self.recorder.rec.samples)
         self.recorder.sample()
         if self.progress is not None and len(self.recorder.rec.samples) != before:
             self.progress(self.clock.now(), self.sim.status())
         for hook in list(self.hooks):
             hook(self)
+
+    def _keep_real_time(self) -> None:
+        if not hasattr(self, "_pace0"):
+            self._pace0 = (self.pace.now(), self.clock.now())
+        wall0, sim0 = self._pace0
+        ahead = (self.clock.now() - sim0) - (self.pace.now() - wall0)
+        if ahead > 0:
+            self.pace.sleep(ahead)
 
     def finished(self) -> bool:
         st = self.sim.status()

@@ -1,4 +1,5 @@
-"""The game's message log: every frame on the bus, decoded, as JSON lines.
+"""The game's message log: every frame on the bus, decoded, as JSON lines
+(with ``--processes``: every message the refbox sends or receives).
 
 One line per frame carried::
 
@@ -70,14 +71,23 @@ class MessageLog:
         if self._fh is None:
             return
         msg, cause = self.decode(channel, frame)
-        entry = {"t": round(self.clock.now(), 4), "channel": channel, "from": str(source)}
         if msg is None:
             self.undecoded += 1
-            entry.update(type=None, error=cause, bytes=len(frame))
+            self._write({"t": round(self.clock.now(), 4), "channel": channel, "from": str(source),
+                         "type": None, "error": cause, "bytes": len(frame)})
         else:
-            name = msg.DESCRIPTOR.name
-            self.types[name] = self.types.get(name, 0) + 1
-            entry.update(type=name, msg=to_dict(msg))
+            self.record(channel, source, msg)
+
+    def record(self, channel: str, source, msg) -> None:
+        """Log a message that is already decoded (a transport's tap)."""
+        if self._fh is None:
+            return
+        name = msg.DESCRIPTOR.name
+        self.types[name] = self.types.get(name, 0) + 1
+        self._write({"t": round(self.clock.now(), 4), "channel": channel, "from": str(source), "type": name,
+                     "msg": to_dict(msg)})
+
+    def _write(self, entry: dict) -> None:
         self._fh.write(json.dumps(entry, separators=(",", ":")) + "\n")
         self.lines += 1
 

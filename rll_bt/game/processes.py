@@ -10,8 +10,9 @@ wall clock: the world advances by the wall time that passed, so a game takes
 its real length.  The team server's view reaches this process through the
 snapshot file it rewrites every second.
 
-Not in this mode: the message log (frames cross sockets between other
-processes; the lockstep mode logs every frame), faults on command.
+The message log holds what the refbox sends and receives (the team
+server's link to the agents crosses sockets between other processes and is
+not logged; the lockstep mode logs every frame).  No faults on command.
 """
 from __future__ import annotations
 
@@ -50,6 +51,11 @@ class ProcessGame:
         self.layout = Layout("game", public=PeerPorts(send=p[0], recv=p[1]), cyan=PeerPorts(send=p[2], recv=p[3]),
                              magenta=PeerPorts(send=p[4], recv=p[5]), stream=-1)
         self.sim.attach_udp(BROADCAST, self.layout)
+        self.log = None
+        if o.out is not None:
+            from .msglog import MessageLog
+            self.log = MessageLog(self.dir / "messages.jsonl", self.clock, {}, self.sim.refbox_registry(), key=o.key)
+            self.sim.tap(self.log.record)
         self.robots = list(range(1, o.robots + 1))
         self.backends = {n: self.sim.backend(TEAM, n) for n in self.robots}
         self.server = BackendServer(lambda team, n: self.backends[int(n)] if team == TEAM else None,
@@ -185,7 +191,8 @@ class ProcessGame:
         return GameResult(finished=finished, status=self.sim.status(), recording=rec, awards=self.sim.awards(),
                           deliveries=self.sim.deliveries(), snapshot=snap, stations=self.sim.stations(),
                           orders=self.sim.orders(), collisions=self.sim.collisions(),
-                          sim_time=self.clock.now(), messages=0, collision_log=self.sim.collision_log())
+                          sim_time=self.clock.now(), messages=self.log.lines if self.log else 0,
+                          collision_log=self.sim.collision_log())
 
     def _stop_children(self, timeout: float = 10.0) -> None:
         """SIGTERM to every child; keep serving the backends while they stop their robots."""
@@ -205,5 +212,7 @@ class ProcessGame:
         for log in self._logs:
             log.close()
         self.server.close()
+        if self.log is not None:
+            self.log.close()
         self.sim.close()
         self._tmp.cleanup()

@@ -95,3 +95,7 @@ def test_a_short_game_in_processes_scores_exploration_over_udp(tmp_path, capsys)
     assert any(t["kind"] == "explore_zone" and t["robot"] == 1 for t in snap["tasks"])
     assert rep["robot_stats"]["1"]["distance"] > 1.0                    # and drove through the remote backend
     assert (out / "timeline.png").stat().st_size > 0
+    log = [json.loads(x) for x in (out / "messages.jsonl").read_text().splitlines()]
+    got = {(x["channel"], x["type"]) for x in log}
+    # the team server's reports and the agent's beacons arrived over UDP on the encrypted team channel
+    assert {("cyan", "MachineReport"), ("cyan", "BeaconSignal"), ("public", "GameState")} <= got
