@@ -62,6 +62,18 @@ class LockstepGame:
         self.sim = sim_factory(profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key,
                                perception=o.perception, gui=o.gui, phases=o.phases(),
                                world_step=o.world_step, robot_options={"laser_rate": o.laser_rate})
+        try:
+            self._wire(o, ts_factory)
+        except BaseException:
+            self.sim.close()
+            raise
+        self.progress = progress
+        self.hooks: list[Callable] = []
+        self.rounds = 0
+        self._started = False
+
+    def _wire(self, o: GameOptions, ts_factory) -> None:
+        """Bus, message log, team server, agents and recorder around the simulation."""
         self.clock = self.sim.clock
         self.bus = Bus(self.clock)
         self.ref_reg = self.sim.refbox_registry()
@@ -99,14 +111,11 @@ class LockstepGame:
             self.start_agent(n, restarted=False)
         self.recorder = Recorder(self.sim, TEAM, self.robot_numbers, o.sample_period,
                                  snapshot=self.teamserver.snapshot)
-        self.progress = progress
-        self.hooks: list[Callable] = []
-        self.rounds = 0
-        self._started = False
 
     # -- parts -------------------------------------------------------------------------
     def start_agent(self, number: int, restarted: bool = True) -> RobotAgent:
-        """A new agent process for robot ``number`` (its robot stays where it is)."""
+        """A new agent for robot ``number`` (its robot stays where it is; the
+        agent starts from the robot's true pose, as an operator would set it)."""
         o, bus, reg = self.options, self.bus, self.ref_reg
         name = f"R{number}"
         cfg = AgentConfig(robot_id=number, team_name=o.team_name, profile=o.profile, hz=o.hz)
