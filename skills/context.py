@@ -21,7 +21,7 @@ from rll_bt.clock import Clock
 from rll_bt.rules import Profile
 
 from .localisation import AmclConfig, Localiser, PoseEstimate
-from .machines import BackendTagSource, MachineMap, TagSource
+from .machines import MachineMap, TagSource
 from .maps import FieldMap
 from .navigation.costmap import Costmap
 from .navigation.laserview import LaserMemory, OdometryHistory
@@ -86,7 +86,12 @@ class SkillContext:
         self.map = field_map
         self.pose_source = pose_source
         self.machines = machines or MachineMap(field_map, profile.mps)
-        self.tags = tags or BackendTagSource(backend)
+        if tags is None:
+            # the simulator's oracle when the backend reports detections itself,
+            # otherwise the detectors on its camera frames: a setting, not a code path
+            from .perception.source import make_tag_source
+            tags = make_tag_source(backend, profile)
+        self.tags = tags
         self.settings = settings or SkillSettings(max_speed=profile.robot.max_speed)
         self.robot = profile.robot
         self._updated_at: float | None = None
