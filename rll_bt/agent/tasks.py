@@ -20,6 +20,9 @@ mount_cap        machine, machine_type, cap_color ("CAP_BLACK"/"CAP_GREY"/""), f
 deliver          machine, machine_type, gate (int, 0: none), order_id (int, 0: none),
                  face, place
 discard          machine ("" : anywhere safe), machine_type, side, face, place
+go_to            zone (int, 0: none), zone_name (str, "" : none), has_target (bool),
+                 target ({x, y, theta}, field frame; the zone's centre when only a
+                 zone is given)
 report_machines  entries (list of {name, type, zone, rotation}); run by the agent
                  itself (a MachineReport to the refbox), no tree
 ===============  ==================================================================
@@ -36,7 +39,7 @@ from .. import msgs
 from ..rules import Profile, machine_type
 
 TASK_KINDS = ("explore_zone", "get_workpiece", "put_workpiece", "retrieve_cap", "mount_ring", "mount_cap",
-              "deliver", "discard", "report_machines")
+              "deliver", "discard", "go_to", "report_machines")
 #: kinds that run a tree (report_machines is done by the agent itself)
 TREE_KINDS = TASK_KINDS[:-1]
 
@@ -91,6 +94,8 @@ def task_params(task, profile: Profile) -> dict[str, Any]:
         p.update(zone=zone, zone_name=profile.zone_name(zone),
                  viewpoints=[[v.x, v.y, v.theta] for v in body.viewpoints])
         return p
+    if kind == "go_to":
+        return _go_to_params(p, body, profile)
     if kind == "report_machines":
         p["entries"] = [{"name": e.name, "type": e.type, "zone": int(e.zone), "rotation": int(e.rotation)}
                         for e in body.entries]
@@ -131,6 +136,23 @@ def task_params(task, profile: Profile) -> dict[str, Any]:
     return p
 
 
+def _go_to_params(p: dict[str, Any], body, profile: Profile) -> dict[str, Any]:
+    zone = int(body.zone) if body.HasField("zone") else 0
+    if zone and zone not in profile.zones.all_zones:
+        raise InvalidTask(f"zone {zone} does not exist in {profile.name}")
+    if not zone and not body.HasField("target"):
+        raise InvalidTask("a go_to task needs a zone or a target pose")
+    if body.HasField("target"):
+        t = body.target
+        target = {"x": float(t.x), "y": float(t.y), "theta": float(t.theta)}
+    else:
+        cx, cy = profile.zone_centre(zone)
+        target = {"x": float(cx), "y": float(cy), "theta": 0.0}
+    p.update(zone=zone, zone_name=profile.zone_name(zone) if zone else "",
+             has_target=body.HasField("target"), target=target)
+    return p
+
+
 # -- the refbox's view of a task (rcll2025 BeaconSignal.task) ---------------------------
 
 def _agent_point(side: str) -> str:
@@ -146,7 +168,9 @@ def agent_task(ms, task, params: dict[str, Any], profile: Profile, color: str):
                       robot_id=int(task.robot_id))
     kind = params["kind"]
     machine = params.get("machine", "")
-    if kind == "explore_zone":
+    if kind == "go_to" and params["zone"]:
+        at.move.waypoint = profile.zone_name(params["zone"])
+    elif kind == "explore_zone":
         at.move.waypoint = profile.zone_name(params["zone"])
     elif kind == "get_workpiece":
         at.retrieve.machine_id = machine

@@ -80,6 +80,8 @@ def make_task(kind: str, task_id: int = 1, robot: int = 1, color: int = 0, timeo
     for k, v in fields.items():
         if isinstance(v, list):
             getattr(body, k).extend(v)
+        elif hasattr(v, "DESCRIPTOR"):
+            getattr(body, k).CopyFrom(v)
         else:
             setattr(body, k, v)
     if timeout is not None:

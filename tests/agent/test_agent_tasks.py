@@ -153,3 +153,18 @@ def test_a_silent_team_server_link_is_dropped_and_reconnected(rig):
     srv.heartbeat_every = 20
     rig.run(2.0)
     assert not rig.agent.server_silent
+
+
+def test_go_to_parameters_from_a_zone_or_a_pose():
+    from agent_testkit import make_task
+    from rll_bt import rules
+    from rll_bt.agent import InvalidTask, task_params
+    prof = rules.profile("rcll2016")
+    p = task_params(make_task("go_to", zone=7), prof)
+    cx, cy = prof.zone_centre(7)
+    assert p["has_target"] is False and p["zone_name"] == prof.zone_name(7)
+    assert (p["target"]["x"], p["target"]["y"]) == (cx, cy)
+    p = task_params(make_task("go_to", target=TM.Pose2D(x=1.0, y=2.0, theta=0.5)), prof)
+    assert p["has_target"] is True and p["zone"] == 0 and p["target"] == {"x": 1.0, "y": 2.0, "theta": 0.5}
+    with pytest.raises(InvalidTask):
+        task_params(make_task("go_to", zone=99), prof)

@@ -27,7 +27,7 @@ def test_task_holds_exactly_one_kind():
     assert not t.HasField("explore_zone")
     kinds = {f.name for f in TEAM.Task.DESCRIPTOR.oneofs_by_name["kind"].fields}
     assert kinds == {"explore_zone", "get_workpiece", "put_workpiece", "retrieve_cap",
-                     "mount_ring", "mount_cap", "deliver", "discard", "report_machines"}
+                     "mount_ring", "mount_cap", "deliver", "discard", "report_machines", "go_to"}
 
 
 def test_deliver_by_gate_or_order():

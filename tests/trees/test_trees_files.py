@@ -27,6 +27,7 @@ SAMPLES = {
     "mount_cap": dict(machine="C-CS2", cap_color=1),
     "deliver": dict(machine="C-DS", gate=3),
     "discard": dict(),
+    "go_to": dict(zone=5),
 }
 
 

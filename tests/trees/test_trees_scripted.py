@@ -63,6 +63,8 @@ def skills_called() -> list[str]:
     ("deliver", dict(machine="C-DS", gate=1), True, False),
     ("discard", dict(), True, False),
     ("discard", dict(machine="C-RS1", side=SIDE("SLIDE")), True, False),
+    ("go_to", dict(zone=7), False, False),
+    ("go_to", dict(target=TM.Pose2D(x=1.5, y=3.0, theta=0.5)), True, True),
 ])
 def test_every_task_kind_succeeds(kind, fields, holding, after):
     rig = make(holding=holding)
@@ -162,3 +164,41 @@ def test_a_pause_after_the_grab_does_not_grab_again():
     rig.server.send_phase("RUNNING")
     rig.until(lambda: rig.server.results(1, "SUCCEEDED"), what="done after the pause")
     assert skills_called().count("grab") == 1
+
+
+def test_go_to_drives_to_the_pose_it_was_given():
+    rig = make()
+    res = run(rig, "go_to", target=TM.Pose2D(x=-2.5, y=4.0, theta=1.0), zone=3)
+    assert outcome(res) == ("SUCCEEDED", "NONE")
+    assert skills_called() == ["navigate_to_pose"]
+    goal = calls("navigate_to_pose")[0][1]["goal"]
+    assert (goal.x, goal.y, goal.theta) == (-2.5, 4.0, 1.0)
+
+
+def test_go_to_a_zone_uses_the_zone_navigation():
+    rig = make()
+    res = run(rig, "go_to", zone=7)
+    assert outcome(res) == ("SUCCEEDED", "NONE")
+    assert skills_called() == ["navigate_to_zone"] and calls("navigate_to_zone")[0][1]["zone"] == 7
+
+
+def test_go_to_that_never_arrives_backs_off_relocalises_and_fails():
+    rig = make(faults=[{"method": "drive", "after": 0.0, "message": "motor fault"}])
+    res = run(rig, "go_to", zone=7)
+    assert outcome(res) == ("FAILED", "NAVIGATION_FAILED")
+    assert skills_called() == ["navigate_to_zone", "back_off", "navigate_to_zone",
+                               "relocalise", "relocalise", "navigate_to_zone"]
+
+
+def test_go_to_without_zone_or_target_is_an_invalid_task():
+    rig = make()
+    res = run(rig, "go_to")
+    assert outcome(res) == ("FAILED", "INVALID_TASK") and skills_called() == []
+
+
+def test_a_discard_without_a_station_never_drives():
+    rig = make(holding=True)
+    res = run(rig, "discard")
+    assert outcome(res) == ("SUCCEEDED", "NONE") and not res.HasField("holding")
+    assert skills_called() == []
+    assert all(d[1] == "stop" for d in rig.drives()), rig.drives()

@@ -99,6 +99,22 @@ class Explore(Double, S.ExploreZoneNode):
         return Status.SUCCESS
 
 
+class NavigatePose(Double, S.NavigateToPose):
+    """Double of navigate_to_pose: drives forward for 2 s; NAVIGATION_FAILED on a drive fault."""
+    seconds = 2.0
+
+    def act(self, backend):
+        backend.drive(0.3, 0.0, 0.0)
+
+
+class NavigateZone(Double, S.NavigateToZone):
+    """Double of navigate_to_zone: drives forward for 2 s."""
+    seconds = 2.0
+
+    def act(self, backend):
+        backend.drive(0.3, 0.0, 0.0)
+
+
 class Grab(Double, S.Grab):
     """Double of grab: closes the gripper; GRAB_FAILED when it holds nothing 1 s later."""
     fail_code = "GRIPPER_ERROR"
@@ -140,7 +156,8 @@ class Localised(S.Localised):
 
 REGISTRY = default_registry().child()
 for _cls, _name in ((Approach, "approach_station"), (BackOff, "back_off"), (Relocalise, "relocalise"),
-                    (Explore, "explore_zone"), (Grab, "grab"), (Put, "put"), (Localised, "localised")):
+                    (Explore, "explore_zone"), (NavigatePose, "navigate_to_pose"),
+                    (NavigateZone, "navigate_to_zone"), (Grab, "grab"), (Put, "put"), (Localised, "localised")):
     REGISTRY.register(_cls, _name)
 
 
