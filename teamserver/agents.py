@@ -156,6 +156,11 @@ class AgentLink:
             msg.discard.SetInParent()
             if p.get("machine"):
                 msg.discard.machine = p["machine"]
+        elif t.kind == M.GO_TO:
+            msg.go_to.target.x, msg.go_to.target.y = float(p["x"]), float(p["y"])
+            msg.go_to.target.theta = float(p.get("theta", 0.0))
+            if p.get("zone"):
+                msg.go_to.zone = int(p["zone"])
         else:
             raise ValueError(f"no team-protocol task for {t.kind!r}")
         return msg

@@ -13,6 +13,12 @@ results, and robots that drop out.
   ``prepare_distance`` metres of the station or ``prepare_lead`` seconds
   away, the station is IDLE and the game RUNNING; resent after
   ``prepare_retry`` seconds if the station did not leave IDLE.
+- An idle robot standing in front of a station (see :mod:`.parking`) is sent
+  to a free spot (a GO_TO task).  A parking robot counts as idle: real work
+  cancels its GO_TO.  A failed GO_TO waits ``park_retry`` seconds.
+- A failed discard (without a station) is not resent at once: the robot
+  waits ``discard_backoff`` seconds (doubling per failure in a row, at most
+  4x) and may be parked meanwhile, so the next try happens somewhere else.
 - A robot silent for ``heartbeat_timeout`` seconds is dropped: its task goes
   back to the pool (or, if it carried a workpiece, the product is repaired).
 
@@ -30,6 +36,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from . import model as M
+from . import parking
 from .kb import KnowledgeBase
 from .production import ProductionManager
 
@@ -52,6 +59,9 @@ class DispatchConfig:
     speed: float = 0.5
     max_attempts: int = 3
     deliver_early: float = 60.0
+    park: bool = True
+    park_retry: float = 15.0
+    discard_backoff: float = 5.0
 
 
 class Dispatcher:
@@ -62,10 +72,25 @@ class Dispatcher:
         self.clock = clock
         self.config = config
         self.outbox: list[tuple] = []
+        self.parking = parking.ParkingConfig()
+        self._park_wait: dict[int, float] = {}       # robot -> server time it may park again
+        self._discard_wait: dict[int, float] = {}    # robot -> server time it may discard again
+        self._discard_fails: dict[int, int] = {}     # robot -> failed discards in a row
 
     # -- robots ----------------------------------------------------------------------
     def idle_robots(self) -> list[M.Robot]:
+        """Robots without a task (a parking robot has one: see :meth:`available_robots`)."""
         return [r for r in self.kb.active_robots() if r.task_id is None]
+
+    def parking_task(self, robot: M.Robot) -> M.Task | None:
+        """The GO_TO task ``robot`` is driving, if it is parking."""
+        t = self.kb.tasks.get(robot.task_id) if robot.task_id is not None else None
+        return t if t is not None and t.kind == M.GO_TO and t.state == M.ASSIGNED else None
+
+    def available_robots(self) -> list[M.Robot]:
+        """Robots that may get work: idle ones and parking ones."""
+        return [r for r in self.kb.active_robots()
+                if r.task_id is None or self.parking_task(r) is not None]
 
     def check_heartbeats(self) -> list[M.Robot]:
         """Drop robots silent for too long; returns the ones dropped now."""
@@ -90,7 +115,10 @@ class Dispatcher:
                 self.production.needs_repair(wp.product, f"robot {robot.number} lost with it")
             robot.holding = None
         self.kb.save_robot(robot)
-        if task is not None and task.state == M.ASSIGNED:
+        if task is not None and task.state == M.ASSIGNED and task.kind == M.GO_TO:
+            task.state = M.CANCELLED
+            self.kb.save_task(task)
+        elif task is not None and task.state == M.ASSIGNED:
             if task.carry:
                 task.state = M.CANCELLED
                 task.error = f"robot {robot.number} lost"
@@ -139,7 +167,7 @@ class Dispatcher:
     # -- assignment ------------------------------------------------------------------------
     def assign(self, game_time: float | None) -> list[M.Task]:
         """Give ready tasks to idle robots; returns the tasks assigned now."""
-        idle = {r.number: r for r in self.idle_robots()}
+        idle = {r.number: r for r in self.available_robots()}
         if not idle:
             return []
         ready = [t for t in self.kb.open_tasks() if self.ready(t, game_time)]
@@ -177,6 +205,11 @@ class Dispatcher:
         return math.hypot(pos[0] - robot.pose[0], pos[1] - robot.pose[1])
 
     def _assign(self, task: M.Task, robot: M.Robot) -> None:
+        park = self.parking_task(robot)
+        if park is not None and park is not task:
+            park.state, park.finished_at = M.CANCELLED, self.clock.now()
+            self.kb.save_task(park)
+            self.outbox.append(("cancel", park, f"task {task.id} for this robot"))
         task.state, task.robot = M.ASSIGNED, robot.number
         task.assigned_at, task.attempts = self.clock.now(), task.attempts + 1
         task.prepared_at = None
@@ -191,6 +224,44 @@ class Dispatcher:
                    created=self.clock.now())
         self._assign(t, robot)
         return t
+
+    # -- parking -------------------------------------------------------------------------------
+    def park(self) -> list[M.Task]:
+        """Send idle robots that stand in front of a station to a free spot
+        (GO_TO tasks); returns the tasks assigned now."""
+        if not self.config.park:
+            return []
+        now = self.clock.now()
+        profile = self.kb.profile
+        approach, centres = parking.station_points(self.kb, profile)
+        if not approach:
+            return []
+        out = []
+        for r in self.idle_robots():
+            if r.pose is None or self._park_wait.get(r.number, -math.inf) > now:
+                continue
+            if not parking.in_the_way(r.pose, approach, self.parking):
+                continue
+            spot = parking.parking_spot(r.pose, profile, approach, centres,
+                                        self._other_robots(r), self.parking)
+            if spot is None:
+                self._park_wait[r.number] = now + self.config.park_retry
+                continue
+            theta = math.atan2(spot[1] - r.pose[1], spot[0] - r.pose[0])
+            t = M.Task(self.kb.next_id("task"), M.GO_TO,
+                       {"x": spot[0], "y": spot[1], "theta": theta}, created=now)
+            self._assign(t, r)
+            log.info("robot %d parks at (%.2f, %.2f), out of the stations' way", r.number, *spot)
+            out.append(t)
+        return out
+
+    def _other_robots(self, robot: M.Robot) -> list[tuple[float, float]]:
+        """Where the other robots stand and where they park."""
+        pts = [(o.pose[0], o.pose[1]) for o in self.kb.active_robots()
+               if o.number != robot.number and o.pose is not None]
+        pts += [(float(t.params["x"]), float(t.params["y"])) for t in self.kb.open_tasks()
+                if t.kind == M.GO_TO and t.robot != robot.number]
+        return pts
 
     # -- PrepareMachine timing -----------------------------------------------------------------
     def prepare(self, running_production: bool) -> list[M.Task]:
@@ -245,6 +316,16 @@ class Dispatcher:
             return
         robot.task_id = None
         task.finished_at = self.clock.now()
+        if task.kind == M.GO_TO:
+            task.state = M.DONE if status == "SUCCEEDED" else M.FAILED
+            task.error = None if status == "SUCCEEDED" else (f"{error}: {text}" if text else error)
+            self.kb.save_task(task)
+            self.kb.save_robot(robot)
+            if status != "SUCCEEDED":
+                self._park_wait[robot.number] = self.clock.now() + self.config.park_retry
+            return
+        if task.kind == M.DISCARD and status != "CANCELLED":
+            self._discard_outcome(robot, status == "SUCCEEDED")
         if status == "SUCCEEDED":
             task.state = M.DONE
             self.kb.save_task(task)
@@ -281,8 +362,8 @@ class Dispatcher:
             st = self.kb.stations.get(task.machine)
             if st is not None and st.state == "BROKEN":
                 self.production.station_broke(task.machine)
-        retry = (not lost and error in RETRY_ERRORS
-                 and task.attempts < self.config.max_attempts)
+        retry = (not lost and error in RETRY_ERRORS and task.attempts < self.config.max_attempts
+                 and not (task.kind == M.DISCARD and not task.machine))
         if retry:
             again = self.production.retry(task)
             log.info("task %d failed (%s), trying again as %d", task.id, error, again.id)
@@ -298,11 +379,25 @@ class Dispatcher:
     def discard_orphans(self) -> list[M.Task]:
         """Idle robots holding a workpiece no open task will take: discard it."""
         bound = {t.holder for t in self.kb.open_tasks() if t.carry}
+        now = self.clock.now()
         out = []
         for r in self.idle_robots():
+            if self._discard_wait.get(r.number, -math.inf) > now:
+                continue                     # a discard just failed: not again at once
             if r.holding and r.number not in bound:
                 out.append(self.production.discard_for(r))
         return out
+
+    def _discard_outcome(self, robot: M.Robot, ok: bool) -> None:
+        """Count failed discards in a row and set the robot's wait before the next."""
+        if ok:
+            self._discard_fails.pop(robot.number, None)
+            self._discard_wait.pop(robot.number, None)
+            return
+        n = self._discard_fails.get(robot.number, 0) + 1
+        self._discard_fails[robot.number] = n
+        self._discard_wait[robot.number] = self.clock.now() + \
+            self.config.discard_backoff * min(2 ** (n - 1), 4)
 
 
 def _age(task: M.Task) -> float:

@@ -28,8 +28,9 @@ MOUNT_CAP = "mount_cap"
 DELIVER = "deliver"
 DISCARD = "discard"
 REPORT_MACHINES = "report_machines"
+GO_TO = "go_to"            # params x, y, theta (field frame): park an idle robot there
 TASK_KINDS = (EXPLORE_ZONE, GET_WORKPIECE, PUT_WORKPIECE, RETRIEVE_CAP, MOUNT_RING, MOUNT_CAP,
-              DELIVER, DISCARD, REPORT_MACHINES)
+              DELIVER, DISCARD, REPORT_MACHINES, GO_TO)
 
 # -- task states --------------------------------------------------------------
 PENDING = "PENDING"        # planned, waiting for predecessors / a robot / a station

@@ -336,6 +336,7 @@ class TeamServer:
                 t.params["shelf_slot"] = (n - 1) % 3
                 self.kb.save_task(t)
         self.dispatcher.prepare(self.refbox.running())
+        self.dispatcher.park()
 
     def _flush(self) -> None:
         for item in self.dispatcher.outbox:

@@ -94,7 +94,8 @@ def test_the_team_server_resumes_from_its_database(tmp_path):
     ls.refbox.game_state("PRODUCTION", "RUNNING", 30.0)
     ls.step(n=2)
     for number, tid in assigned.items():
-        assert tid in [t.task_id for t in ls.agents[number - 1].tasks()]
+        a = ls.agents[number - 1]
+        assert tid in [t.task_id for t in a.tasks() + a.parks()]
     assert len(kb2.products) == len(before_products)
     # and the game goes on to the delivery
     answered = {a.number: 0 for a in ls.agents}

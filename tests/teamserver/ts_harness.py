@@ -90,7 +90,15 @@ class FakeAgent:
         return got
 
     def tasks(self):
-        return [m for m in self.inbox if m.DESCRIPTOR.name == "Task"]
+        """Tasks with real work (parking GO_TOs: :meth:`parks`)."""
+        return [m for m in self.inbox if m.DESCRIPTOR.name == "Task" and m.WhichOneof("kind") != "go_to"]
+
+    def parks(self):
+        """GO_TO tasks (parking) this robot got."""
+        return [m for m in self.inbox if m.DESCRIPTOR.name == "Task" and m.WhichOneof("kind") == "go_to"]
+
+    def cancels(self):
+        return [m for m in self.inbox if m.DESCRIPTOR.name == "CancelTask"]
 
     def result(self, task_id, status="SUCCEEDED", error="NONE", holding=None):
         r = self.ms.TaskResult(task_id=task_id, robot_id=self.number,
@@ -219,5 +227,5 @@ def production_setup(ls, orders, t=0.0):
 
 def task_kinds(agent):
     return [(t.task_id, t.WhichOneof("kind"), getattr(t, t.WhichOneof("kind")).machine
-             if t.WhichOneof("kind") not in ("explore_zone", "discard") else None)
+             if t.WhichOneof("kind") not in ("explore_zone", "discard", "go_to") else None)
             for t in agent.tasks()]
