@@ -99,20 +99,20 @@ class Explore(Double, S.ExploreZoneNode):
         return Status.SUCCESS
 
 
-class NavigatePose(Double, S.NavigateToPose):
-    """Double of navigate_to_pose: drives forward for 2 s; NAVIGATION_FAILED on a drive fault."""
+class Drive(Double):
+    """Mixin of the navigation doubles: drive forward for 2 s (NAVIGATION_FAILED on a drive fault)."""
     seconds = 2.0
 
     def act(self, backend):
         backend.drive(0.3, 0.0, 0.0)
 
 
-class NavigateZone(Double, S.NavigateToZone):
-    """Double of navigate_to_zone: drives forward for 2 s."""
-    seconds = 2.0
+class NavigatePose(Drive, S.NavigateToPose):
+    """Double of navigate_to_pose."""
 
-    def act(self, backend):
-        backend.drive(0.3, 0.0, 0.0)
+
+class NavigateZone(Drive, S.NavigateToZone):
+    """Double of navigate_to_zone."""
 
 
 class Grab(Double, S.Grab):
