@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 from .exploration2016 import ReportEntry
 from .ledger import Ledger, PointsEntry
+from .mockup import Mockup
 from .robots import RobotRegistry
 from .ruleset import rules_for
 from .stations import CapStation, Station, StationConfig, make_station
@@ -68,13 +69,16 @@ class RefboxGame:
     fixes placement, light codes, type strings, ring costs, orders and down
     periods.  ``timing``: phase lengths and speed (default: the profile's).
     ``config``: station durations and rules.  ``rules``: the rule set of the
-    profile (:func:`~.ruleset.rules_for`).
+    profile (:func:`~.ruleset.rules_for`).  ``mockup``: play stations without robots
+    (:mod:`.mockup`: virtual robots take products off outputs and feed prepared
+    stations; off by default, for games with robots in the world); ``game.mockup`` is
+    the :class:`~.mockup.Mockup` or None.
     """
 
     def __init__(self, profile, clock, world=None, *, seed: int = 0,
                  team_cyan: str | None = None, team_magenta: str | None = None,
                  timing: Timing | None = None, config: StationConfig | None = None,
-                 feedback_time: float = 5.0):
+                 feedback_time: float = 5.0, mockup: bool = False):
         self.profile = R.profile(profile) if isinstance(profile, str) or profile is None else profile
         self.clock = clock
         self.seed = int(seed)
@@ -102,6 +106,7 @@ class RefboxGame:
         self.orders = self.rules.make_orders(self.profile, self.rng("orders"), self.timing)
         self.pending_deliveries: list[PendingDelivery] = []
         self._delivery_ids = 0
+        self.mockup = Mockup(self) if mockup else None
         self.stations: dict[str, Station] = {
             m: make_station(m, machine_team(m), self) for m in self.profile.machines()}
         for m, period in self.rules.down_periods(self.profile, self.rng("down"),
@@ -280,7 +285,8 @@ class RefboxGame:
                 continue
             if dt <= 0:
                 break
-            stops = [t for t in self.rules.checkpoints(self) if t > self.game_time]
+            stops = [t for t in self.rules.checkpoints(self) + self._mockup_due()
+                     if t > self.game_time]
             if end is not None:
                 stops.append(end)
             stop = min(stops) if stops else None
@@ -291,6 +297,11 @@ class RefboxGame:
                 self.game_time += dt
                 dt = 0.0
             self._update()
+
+    def _mockup_due(self) -> list[float]:
+        """The mockup's next take or feed, where game time must stop exactly."""
+        due = self.mockup.next_due() if self.mockup and self.phase == PRODUCTION else None
+        return [] if due is None else [due]
 
     def phase_end(self) -> float | None:
         """Game time the current phase ends at (with overtime), None without an end."""
@@ -371,6 +382,11 @@ class RefboxGame:
             st = self.stations[name]
             st.set_lights(self.station_lights(st))
 
+    def station_state_changed(self, station: Station, previous: str) -> None:
+        """A station changed state (at its game time ``station.now``): tell the mockup."""
+        if self.mockup is not None:
+            self.mockup.on_state(station, previous)
+
     def deliver(self, station: Station, wp: Workpiece, gate: int, game_time: float) -> None:
         """The DS ``station`` consumed ``wp``: judge it now, or list it as unconfirmed for
         ``config.delivery_confirm`` game seconds first."""
@@ -414,6 +430,8 @@ class RefboxGame:
         if prev == PRODUCTION:
             for st in self.stations.values():
                 st.stop_production()
+            if self.mockup is not None:
+                self.mockup.clear()
         self.phase, self.game_time = phase, 0.0
         self.emit(E.PHASE, f"phase {prev} -> {phase}", previous=prev)
         if phase == EXPLORATION:
@@ -464,6 +482,8 @@ class RefboxGame:
             self._activate_orders()
             for name in sorted(self.stations):
                 self.stations[name].update(self.game_time)
+            if self.mockup is not None:
+                self.mockup.fire(self.game_time)
             self._confirm_deliveries()
 
     def _activate_orders(self) -> None:

@@ -138,6 +138,7 @@ class StationHost(Protocol):
     def emit(self, kind: str, text: str, *, team: str | None = None, machine: str | None = None,
              game_time: float | None = None, **data) -> None: ...
     def deliver(self, station: "Station", wp: Workpiece, gate: int, game_time: float) -> None: ...
+    def station_state_changed(self, station: "Station", previous: str) -> None: ...
 
 
 @dataclass
@@ -197,6 +198,12 @@ class Station:
         if slot == INPUT:
             self.input_wp = describe(wp)
             self._maybe_start()
+
+    def feed(self, wp: Workpiece) -> None:
+        """A workpiece fed to the input without a world (mockup mode): processed at once
+        when the station is PREPARED, else kept until it is."""
+        self.input_wp = wp
+        self._maybe_start()
 
     def on_take(self, slot: str, wp: Workpiece | None) -> None:
         if slot == INPUT:
@@ -356,6 +363,7 @@ class Station:
         self._show_lights()
         self.host.emit(E.MACHINE, f"{self.name} {prev} -> {state}: {why}", team=self.team,
                        machine=self.name, state=state, previous=prev, reason=why)
+        self.host.station_state_changed(self, prev)
 
     def _show_lights(self) -> None:
         self.set_lights(self.host.station_lights(self))
@@ -439,15 +447,20 @@ class RingStation(Station):
     def on_put(self, slot: str, wp) -> None:
         if slot == SLIDE and self.active:
             self.host.world.remove_workpiece(self.name, SLIDE, getattr(wp, "id", None))
-            self.bases_added += 1
-            if self.slide_loaded > self.host.config.slide_max:
-                if self.state != BROKEN:
-                    self.break_(f"too many additional bases loaded ({self.slide_loaded})")
-                return
-            self.host.award(self.team, self.host.profile.scoring.additional_base,
-                            f"added additional base to {self.name}", machine=self.name)
+            self.load_slide()
             return
         super().on_put(slot, wp)
+
+    def load_slide(self) -> None:
+        """One additional base fed to the slide: +``additional_base`` points, or BROKEN
+        when more than ``slide_max`` are loaded."""
+        self.bases_added += 1
+        if self.slide_loaded > self.host.config.slide_max:
+            if self.state != BROKEN:
+                self.break_(f"too many additional bases loaded ({self.slide_loaded})")
+            return
+        self.host.award(self.team, self.host.profile.scoring.additional_base,
+                        f"added additional base to {self.name}", machine=self.name)
 
     def start(self, wp: Workpiece) -> str | None:
         color = self.instruction.ring_color
