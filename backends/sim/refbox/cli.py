@@ -6,7 +6,10 @@ in the first 180 s of PRODUCTION) with its own headless PyBullet world (or the
 in-memory table world), speaks the real wire protocol on the public, cyan and
 magenta channels and its plain TCP control stream, prints one line per phase
 change with the score, and ends cleanly on SIGINT/SIGTERM (or after the game
-with ``--quit-after-game``).  Exit codes: 0 ok, 2 bad arguments, 3 a port or
+with ``--quit-after-game``).  Its world has no robots, so by default
+(``--mockup auto``) stations run in mockup mode (:mod:`.mockup`): virtual
+robots take products off outputs and feed prepared stations, and a team
+playing by PrepareMachine alone can produce and deliver.  Exit codes: 0 ok, 2 bad arguments, 3 a port or
 PyBullet could not be opened.
 """
 from __future__ import annotations
@@ -60,6 +63,11 @@ def register(cli) -> None:
                         "with rcll2025, exploration is the reporting time inside production")
     p.add_argument("--world", choices=("bullet", "table"), default="bullet",
                    help="bullet: a headless PyBullet world (default); table: in memory only")
+    p.add_argument("--mockup", choices=("auto", "on", "off"), default="auto",
+                   help="mockup stations: a prepared station is fed the team's product by a "
+                        "virtual robot and its output emptied after a while, so production "
+                        "works without robots; auto (default): on when the world has no robots "
+                        "(always so here)")
     p.add_argument("--quit-after-game", action="store_true",
                    help="exit once the game reaches POST_GAME")
     p.set_defaults(func=cmd_sim)
@@ -110,6 +118,13 @@ def _layout(args):
                   shift(base.magenta), base.stream + o)
 
 
+def mockup_wanted(choice: str, world) -> bool:
+    """``--mockup``: "on", "off", or "auto" = on when ``world`` has no robots."""
+    if choice == "auto":
+        return not getattr(world, "robots", None)
+    return choice == "on"
+
+
 def _score(game) -> str:
     c, m = game.teams["CYAN"] or "-", game.teams["MAGENTA"] or "-"
     return f"{c} {game.points('CYAN')} : {game.points('MAGENTA')} {m}"
@@ -136,7 +151,8 @@ def cmd_sim(args) -> int:
         raise Unavailable(f"cannot build the PyBullet world: {exc}",
                           hint="use --world table to run without PyBullet") from None
     game = RefboxGame(prof, clock, world, seed=args.seed, team_cyan=args.team_cyan,
-                      team_magenta=args.team_magenta, timing=timing, config=StationConfig())
+                      team_magenta=args.team_magenta, timing=timing, config=StationConfig(),
+                      mockup=mockup_wanted(args.mockup, world))
     try:
         node = RefboxNode.on_udp(game, host=args.host, layout=lay, keys=keys,
                                  stream_port=-1 if args.no_stream else lay.stream,
@@ -157,7 +173,8 @@ def cmd_sim(args) -> int:
           + (f", magenta {args.team_magenta}" if args.team_magenta else "")
           + f"; UDP to {args.host} send/listen public {pp('public')}, cyan {pp('cyan')}, "
             f"magenta {pp('magenta')}"
-          + ("" if args.no_stream else f"; TCP stream {lay.stream}"), file=out, flush=True)
+          + ("" if args.no_stream else f"; TCP stream {lay.stream}")
+          + f"; mockup stations {'on' if game.mockup else 'off'}", file=out, flush=True)
     if args.start == "now":
         game.start()
     else:
