@@ -19,7 +19,7 @@ class Harness:
     180 s by default, and production 1200 s)."""
 
     def __init__(self, seed: int = 1, teams=("Caro", "Grips"), config=None, speed: float = 1.0,
-                 rules: str = "rcll2016", **phases):
+                 rules: str = "rcll2016", mockup: bool = False, **phases):
         if rules == "rcll2016":
             lengths = {"setup": 5.0, "exploration": 30.0, "production": 900.0, **phases}
         else:
@@ -27,7 +27,8 @@ class Harness:
         self.clock = SimClock()
         self.timing = Timing.from_profile(profile(rules), speed=speed, **lengths)
         self.game = RefboxGame(rules, self.clock, seed=seed, team_cyan=teams[0],
-                               team_magenta=teams[1], timing=self.timing, config=config)
+                               team_magenta=teams[1], timing=self.timing, config=config,
+                               mockup=mockup)
         self.world = self.game.world
 
     def run(self, seconds: float, dt: float = 0.25) -> None:
