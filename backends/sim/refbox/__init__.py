@@ -12,7 +12,12 @@ Layers (each usable alone):
 - :class:`RefboxNode` (:mod:`.node`): the game behind the refbox's channels
   (public plain, cyan/magenta AES-128-CBC, TCP control stream) over UDP or the
   in-process bus.
-- ``rll-bt refbox sim`` (:mod:`.cli`): a standalone refbox process.
+- ``rll-bt refbox sim`` (:mod:`.cli`): a standalone refbox process.  Its world
+  has no robots, so it runs in mockup mode by default (``--mockup auto``):
+  ``RefboxGame(..., mockup=True)`` (:mod:`.mockup`) has virtual robots take
+  products off outputs and feed each team's prepared stations with the
+  workpiece its preparations built, so a team playing by PrepareMachine alone
+  can produce and deliver.  Off by default (games with robots).
 
 Lockstep (one process, one simulated clock, the PyBullet world)::
 
