@@ -9,20 +9,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 
 from .errors import NoCompType, RegistryConflict
+from ..msgs.messageset import comp_type_of  # one definition, shared with the message sets
 
 CompType = tuple[int, int]
-
-
-def comp_type_of(cls_or_msg) -> CompType | None:
-    """``(comp_id, msg_type)`` of a message class or instance, None without ``CompType``."""
-    desc = getattr(cls_or_msg, "DESCRIPTOR", None)
-    enum = getattr(desc, "enum_types_by_name", {}).get("CompType") if desc is not None else None
-    if enum is None:
-        return None
-    values = enum.values_by_name
-    if "COMP_ID" not in values or "MSG_TYPE" not in values:
-        return None
-    return values["COMP_ID"].number, values["MSG_TYPE"].number
 
 
 def require_comp_type(cls_or_msg) -> CompType:
