@@ -100,8 +100,7 @@ class PyBulletGame(Simulation):
                           {t: g.points(t) for t in ("CYAN", "MAGENTA")})
 
     def awards(self) -> list[Award]:
-        return [Award(e.team, e.phase, e.points, e.reason, e.game_time, e.machine, e.order)
-                for e in self.game.ledger.entries]
+        return list(self.game.ledger.entries)       # the ledger keeps Award records
 
     def deliveries(self) -> list[Delivery]:
         return [Delivery(e.team, e.game_time, int(e.points or 0), e.data.get("order"),

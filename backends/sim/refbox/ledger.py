@@ -6,21 +6,11 @@ a bad exploration never eats into production points.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from rll_bt.game.interfaces import Award
 
 
-@dataclass(frozen=True)
-class PointsEntry:
-    """One award: ``points`` (may be negative) to ``team`` ("CYAN"/"MAGENTA") in
-    ``phase`` at ``game_time`` (game seconds into that phase), with a reason."""
-
-    team: str
-    phase: str
-    points: int
-    reason: str
-    game_time: float
-    machine: str | None = None
-    order: int | None = None
+# one award: team, phase, points (may be negative), reason, game time, machine, order
+PointsEntry = Award
 
 
 class Ledger:
