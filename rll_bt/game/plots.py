@@ -16,7 +16,7 @@ TEAM_COLOR = {"CYAN": "#16b7d0", "MAGENTA": "#d0169a"}
 ROBOT_COLORS = ("#e6550d", "#31a354", "#756bb1", "#636363", "#3182bd", "#e7ba52")
 TASK_COLORS = {"explore_zone": "#9ecae1", "get_workpiece": "#fd8d3c", "put_workpiece": "#fdae6b",
                "retrieve_cap": "#74c476", "mount_cap": "#31a354", "mount_ring": "#9e9ac8",
-               "deliver": "#de2d26", "discard": "#969696", "report_machines": "#c6dbef"}
+               "deliver": "#de2d26", "discard": "#969696", "report_machines": "#c6dbef", "go_to": "#fdd0a2"}
 STATE_COLORS = {"IDLE": "#e0e0e0", "PREPARED": "#ffe082", "PROCESSING": "#ffb300",
                 "READY-AT-OUTPUT": "#66bb6a", "WAIT-IDLE": "#aed581", "BROKEN": "#e53935",
                 "DOWN": "#8e24aa"}
