@@ -40,6 +40,9 @@ def test_hello_gets_config_and_homing_and_status_every_second(emu, wait_for):
     try:
         assert Capability.GRIPPER in robot.capabilities
         assert wait_for(lambda: idle(robot), 2.0)
+        # the sketch's boot status can make the gripper idle before the configuration
+        # written in answer to HELLO has reached it: wait for the commands themselves
+        assert wait_for(lambda: len(emu.gripper.commands_seen) >= 10, 3.0)
         seen = emu.gripper.commands_seen
         assert seen[:10] == [("m", 7000), ("n", 7000), ("o", 7000), ("p", 15000), ("x", 4000),
                              ("y", 4000), ("z", 4000), ("a", 7000), ("T", 240), ("C", 0)]
@@ -54,7 +57,7 @@ def test_hello_gets_config_and_homing_and_status_every_second(emu, wait_for):
 def test_open_close_move_and_status(emu, robot, wait_for):
     robot.gripper_open()
     assert robot.gripper_status().state == GripperState.MOVING     # until confirmed
-    assert wait_for(lambda: idle(robot) and robot.gripper_status().is_open, 0.5)
+    assert wait_for(lambda: idle(robot) and robot.gripper_status().is_open, 2.0)
     robot.gripper_move(0.02, 0.01, 0.005)
     assert robot.gripper_status().state == GripperState.MOVING
     assert wait_for(lambda: idle(robot), 2.0)
@@ -62,7 +65,7 @@ def test_open_close_move_and_status(emu, robot, wait_for):
     assert status.position == pytest.approx((0.02, 0.01, 0.005), abs=2e-4)
     assert emu.gripper.target == [float(v) for v in P.StepsPerMetre().to_steps(0.02, 0.01, 0.005)]
     robot.gripper_close()
-    assert wait_for(lambda: idle(robot) and not robot.gripper_status().is_open, 0.5)
+    assert wait_for(lambda: idle(robot) and not robot.gripper_status().is_open, 2.0)
     assert status.holding is None
     with pytest.raises(BackendError):
         robot.gripper_move(-0.01, 0.0, 0.0)
@@ -71,14 +74,14 @@ def test_open_close_move_and_status(emu, robot, wait_for):
 def test_lines_with_bad_checksums_are_dropped(emu, robot, wait_for):
     before = robot.gripper_status()
     emu.inject(b"AT I 999 999 999 0 OPEN+12\r\n", which="gripper")
-    assert wait_for(lambda: robot.gripper.stats.rejected >= 1, 0.5)
+    assert wait_for(lambda: robot.gripper.stats.rejected >= 1, 2.0)
     assert robot.gripper_status().position == before.position
     assert robot.gripper_status().is_open == before.is_open
 
 
 def test_error_status_closes_and_reopens_with_hello(emu, robot, wait_for):
     emu.fail_gripper("end stop Z")
-    assert wait_for(lambda: robot.gripper_status().state == GripperState.ERROR, 0.5)
+    assert wait_for(lambda: robot.gripper_status().state == GripperState.ERROR, 2.0)
     assert robot.gripper_status().message == "end stop Z"
     assert wait_for(lambda: robot.gripper.stats.hellos == 2, 3.0)      # reopened, reset
     assert wait_for(lambda: idle(robot), 2.0)
@@ -91,11 +94,11 @@ def test_holding_from_a_configured_sensor(emu, wait_for):
     try:
         with emu.lock:
             emu.firmware.distance[2] = 2.0
-        assert wait_for(lambda: robot.holding() is True, 0.5)
+        assert wait_for(lambda: robot.holding() is True, 2.0)
         assert robot.gripper_status().holding is True
         with emu.lock:
             emu.firmware.distance[2] = 0.3
-        assert wait_for(lambda: robot.holding() is False, 0.5)
+        assert wait_for(lambda: robot.holding() is False, 2.0)
     finally:
         robot.close()
 

@@ -37,7 +37,7 @@ def test_omnidrive_is_refreshed_while_moving(standin, wait_for):
         assert max(np.diff(times)) < 0.2
         assert standin.commands[-1][1] == [0.3, 0.0, 0.5]
         # the host deadman (0.5 s) ends the refresh; one zero command follows
-        assert wait_for(lambda: not standin.moving(), 0.4)
+        assert wait_for(lambda: not standin.moving(), 0.8)
         assert standin.commands[-1][1] == [0.0, 0.0, 0.0] and standin.stops == 0
         assert robot.deadman_stops == 1
     finally:
@@ -86,7 +86,7 @@ def test_put_method_and_unreachable_server(standin, wait_for):
     robot = RobotinoRestBackend(standin.url, method="PUT")
     try:
         robot.drive(0.1, 0.1, 0.0)
-        assert wait_for(lambda: ("PUT", "/data/omnidrive") in standin.requests, 0.5)
+        assert wait_for(lambda: ("PUT", "/data/omnidrive") in standin.requests, 2.0)
     finally:
         robot.close()
     port = standin.url.rsplit(":", 1)[1]

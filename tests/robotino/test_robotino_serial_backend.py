@@ -91,9 +91,9 @@ def test_deadman_stops_the_robot_when_commands_stop(emu, robot, wait_for):
 def test_stop_is_immediate(emu, robot, wait_for):
     drive_for(robot, 0.5, (0.0, 0.0, 1.0))
     robot.stop()
-    assert wait_for(lambda: emu.setpoints()[:3] == (0, 0, 0), 0.5)
+    assert wait_for(lambda: emu.setpoints()[:3] == (0, 0, 0), 1.0)
     # zero set-points at once (no host ramp): the wheels stop within the base's 12 rpm/ms ramp
-    assert wait_for(lambda: not any(emu.wheel_speeds()[:3]), 0.6)
+    assert wait_for(lambda: not any(emu.wheel_speeds()[:3]), 1.2)
     assert robot.link_stats().deadman_stops == 0
 
 
@@ -147,7 +147,7 @@ def test_read_timeout_on_an_unfinished_frame(emu, robot, wait_for):
     emu.set_silent(True)
     time.sleep(0.05)
     emu.inject(bytes.fromhex("AA 2800 35"))             # a head and 1 of 40 payload bytes
-    assert wait_for(lambda: robot.link_stats().read_timeouts >= 1, 0.6)
+    assert wait_for(lambda: robot.link_stats().read_timeouts >= 1, 2.0)
     emu.set_silent(False)
     frames = robot.link_stats().frames
     assert wait_for(lambda: robot.link_stats().frames > frames + 5, 1.0)
@@ -165,7 +165,7 @@ def test_backend_interface_and_sensors(emu, wait_for):
         with pytest.raises(CapabilityError):
             robot.gripper_open()
         assert robot.holding() is None
-        assert wait_for(lambda: robot.readings().power is not None, 0.5)
+        assert wait_for(lambda: robot.readings().power is not None, 2.0)
         battery = robot.battery()
         assert battery.voltage == pytest.approx(24.5) and battery.soc == pytest.approx(1.0)
         assert robot.bumper() is False
@@ -173,7 +173,7 @@ def test_backend_interface_and_sensors(emu, wait_for):
             emu.firmware.bumper = True
             emu.firmware.distance[3] = 2.5
             emu.firmware.digital_inputs = 0b100
-        assert wait_for(robot.bumper, 0.3)
+        assert wait_for(robot.bumper, 2.0)
         assert robot.readings().distance_voltages[3] == pytest.approx(2.5)
         assert robot.readings().digital_inputs == 0b100
 
@@ -211,7 +211,7 @@ def test_periodic_unplugging_and_delayed_replies(wait_for):
             assert time.monotonic() - t0 >= 0.03            # the version reply came 30 ms late
             drive_for(robot, 2.0, (0.0, 0.2, 0.0))
             assert robot.link_stats().reopens >= 2 and emu.stats()["connects"] >= 3
-            assert wait_for(lambda: emu.setpoints()[:3] == expected_setpoints(0.0, 0.2, 0.0), 0.5)
+            assert wait_for(lambda: emu.setpoints()[:3] == expected_setpoints(0.0, 0.2, 0.0), 1.0)
         finally:
             robot.close()
 
