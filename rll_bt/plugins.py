@@ -5,7 +5,9 @@ it finds what they provide through these groups:
 
 - ``rll_bt.backends``: name -> a :class:`rll_bt.backend.Backend` subclass or factory
 - ``rll_bt.nodes``: name -> a module (or callable) registering tree node types
-- ``rll_bt.commands``: name -> a ``register(subparsers)`` function adding CLI commands
+- ``rll_bt.commands``: name -> a ``register(cli)`` function adding CLI commands
+- ``rll_bt.simulators``: name -> a factory of a simulated game (world, refbox, robots) for ``rll-bt sim``
+- ``rll_bt.teamservers``: name -> a factory of an in-process team server for ``rll-bt sim``
 """
 from __future__ import annotations
 
@@ -15,7 +17,8 @@ from importlib.metadata import EntryPoint, entry_points
 
 log = logging.getLogger(__name__)
 
-GROUPS = ("rll_bt.backends", "rll_bt.nodes", "rll_bt.commands")
+GROUPS = ("rll_bt.backends", "rll_bt.nodes", "rll_bt.commands", "rll_bt.simulators",
+          "rll_bt.teamservers")
 
 
 @lru_cache(maxsize=None)
