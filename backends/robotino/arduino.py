@@ -13,6 +13,11 @@ returns the bytes the sketch prints.  Behaviour as in the fact sheet:
   next space; a malformed number drops the rest of the message;
 * an error (:meth:`fail`) prints ``AT E <message>+197``.
 
+Boot: the board's bootloader runs for ``boot_time`` seconds after the reset
+before the sketch starts and prints HELLO; bytes sent to it meanwhile are
+lost (as on a real Arduino, and the host's flush of its input on open cannot
+swallow HELLO).
+
 Simplifications: axes move at constant speed (steps/s), homing drives all
 axes to 0 and takes at least ``home_time`` seconds, open/close is immediate.
 """
@@ -28,8 +33,9 @@ _BUFFER_SIZE = 256
 
 class GripperFirmware:
     def __init__(self, speed: float = 4000.0, home_time: float = 0.3,
-                 moving_report_period: float = 0.05):
+                 moving_report_period: float = 0.05, boot_time: float = 0.1):
         self.speed = float(speed)
+        self.boot_time = boot_time
         self.home_time = home_time
         self.moving_report_period = moving_report_period
         self.status = "I"
@@ -43,6 +49,7 @@ class GripperFirmware:
         self._now = 0.0
         self._homing_until: float | None = None
         self._next_report = 0.0
+        self._booting_until: float | None = None
 
     # -- output helpers -------------------------------------------------------
     def status_line(self) -> bytes:
@@ -59,10 +66,21 @@ class GripperFirmware:
 
     # -- life cycle -----------------------------------------------------------
     def reset(self, now: float) -> bytes:
-        """Power-up (the Arduino resets when the port opens)."""
+        """Power-up (the Arduino resets when the port opens): the sketch
+        starts after ``boot_time`` (see :meth:`advance`)."""
         self._now = now
         self._buf.clear()
         self.status, self.message, self.is_open = "I", "", False
+        self._homing_until = None
+        self._booting_until = now + self.boot_time
+        return self._boot() if self.boot_time <= 0 else b""
+
+    @property
+    def booting(self) -> bool:
+        return self._booting_until is not None
+
+    def _boot(self) -> bytes:
+        self._booting_until = None
         out = [P.hello_line(), self.status_line()]
         self._home(out)
         return b"".join(out)
@@ -88,6 +106,8 @@ class GripperFirmware:
         out: list[bytes] = []
         dt = max(0.0, now - self._now)
         self._now = now
+        if self._booting_until is not None:
+            return self._boot() if now >= self._booting_until else b""
         if self.status != "M":
             return b""
         step = self.speed * dt
@@ -108,6 +128,8 @@ class GripperFirmware:
         out: list[bytes] = []
         if now is not None:
             out.append(self.advance(now))
+        if self._booting_until is not None:
+            return b"".join(out)             # the bootloader ignores the sketch's protocol
         for b in data:
             if b == ord(P.TERMINATOR):
                 self._package(out)

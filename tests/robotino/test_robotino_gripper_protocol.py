@@ -83,16 +83,19 @@ def lines(data: bytes) -> list:
     return [P.parse_line(raw) for raw in P.LineSplitter().feed(data)]
 
 
-def test_power_up_says_hello_reports_and_homes():
-    fw = GripperFirmware(home_time=0.1)
-    out = lines(fw.reset(0.0))
+def test_power_up_boots_then_says_hello_reports_and_homes():
+    fw = GripperFirmware(home_time=0.1, boot_time=0.1)
+    assert fw.reset(0.0) == b""                              # the bootloader runs first
+    assert fw.receive(b"AT S0 +", 0.05) == b""               # and ignores the sketch's protocol
+    out = lines(fw.advance(0.1))
     assert out[0] == P.GripperMessage("hello")
     assert out[1].state == "I" and out[2].state == "M"
-    assert lines(fw.advance(0.2))[-1] == P.GripperMessage("status", "I", (0, 0, 0), 0, False)
+    assert lines(fw.advance(0.3))[-1] == P.GripperMessage("status", "I", (0, 0, 0), 0, False)
+    assert ("S", 0) not in fw.commands_seen
 
 
 def test_no_reply_to_moves_but_status_on_change_and_request():
-    fw = GripperFirmware(speed=1000.0, home_time=0.0)
+    fw = GripperFirmware(speed=1000.0, home_time=0.0, boot_time=0.0)
     fw.reset(0.0)
     fw.advance(0.01)
     out = lines(fw.receive(b"AT X100 +", 0.02))
@@ -106,7 +109,7 @@ def test_no_reply_to_moves_but_status_on_change_and_request():
 
 
 def test_malformed_number_drops_the_rest_of_the_message():
-    fw = GripperFirmware(home_time=0.0)
+    fw = GripperFirmware(home_time=0.0, boot_time=0.0)
     fw.reset(0.0)
     fw.advance(0.01)
     assert fw.receive(b"AT Xabc S0 +", 0.02) == b""
@@ -114,7 +117,7 @@ def test_malformed_number_drops_the_rest_of_the_message():
 
 
 def test_error_state_reports_e_lines():
-    fw = GripperFirmware(home_time=0.0)
+    fw = GripperFirmware(home_time=0.0, boot_time=0.0)
     fw.reset(0.0)
     out = lines(fw.fail("end stop", 0.1))
     assert out[0].state == "E" and out[0].text == "end stop"
