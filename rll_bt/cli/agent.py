@@ -47,6 +47,7 @@ def _pose(text: str):
 
 def register(cli) -> None:
     from ..comm import DEFAULT_HOST, LAYOUTS, TEAM_SERVER_PORT
+    from ..game.options import LOCALISATION
     p = cli.command("agent", help="run a robot agent: team-server tasks as behaviour trees on a backend")
     p.description = ("Run one robot's agent on the wall clock with real sockets. "
                      + __doc__.split("\n\n")[1].replace("\n", " "))
@@ -89,6 +90,9 @@ def register(cli) -> None:
     g = p.add_argument_group("running")
     g.add_argument("--trees", type=Path, metavar="DIR", help="directory of <task kind>.yaml (default: installed trees/)")
     g.add_argument("--hz", type=_positive_float, default=10.0, help="tree tick rate in Hz (default 10)")
+    g.add_argument("--localisation", default="standard", choices=LOCALISATION, metavar="PRESET",
+                   help="localiser preset: standard (accuracy; the default) or cheap (fewer particles and "
+                        "beams, for several simulated robots on one machine)")
     g.add_argument("--seconds", type=_positive_float, metavar="S", help="stop after S seconds")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_agent)
@@ -174,9 +178,10 @@ def cmd_agent(args) -> int:
         public, team = _open_refbox(args, config, clock)
         link = team_server_link(host, port, key=args.key, clock=clock)
         agent = RobotAgent(config, clock=clock, backend=backend, link=link, public=public, team=team,
+                           services={"localisation": args.localisation},
                            start_pose=args.start_pose, restarted=not args.first_start)
         _say(args, f"robot {config.robot_id} ({config.peer_name}) of {config.team_name}, backend {args.backend}, "
-                   f"team server {host}:{port}, trees {trees_dir}")
+                   f"team server {host}:{port}, trees {trees_dir}, localisation {args.localisation}")
         return _loop(args, agent, clock, host, port)
     finally:
         if agent is not None:

@@ -42,7 +42,7 @@ def _positive(text: str) -> float:
 
 def register(cli) -> None:
     from .. import rules
-    from ..game.options import PERCEPTION, STRATEGIES, UNTIL
+    from ..game.options import LOCALISATION, PERCEPTION, STRATEGIES, UNTIL
     cli.group("sim")
     gp = cli.group_parser("sim")
     gp.description = __doc__.split("\n\n")[2].replace("\n", " ")
@@ -77,8 +77,9 @@ def register(cli) -> None:
     g.add_argument("--hz", type=_positive, default=10.0, help="tree tick rate of the agents (default 10)")
     g.add_argument("--laser-rate", type=_positive, default=10.0, metavar="HZ",
                    help="simulated laser scans per second (default 10)")
-    g.add_argument("--localisation", default="cheap", choices=("cheap", "standard"),
-                   help="localiser preset (default cheap)")
+    g.add_argument("--localisation", default="cheap", choices=LOCALISATION,
+                   help="localiser preset of the agents (default cheap; with --processes passed to "
+                        "every rll-bt agent)")
     gp.set_defaults(func=run)
 
 

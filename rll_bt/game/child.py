@@ -34,6 +34,8 @@ def run(cfg: dict) -> int:
     from ..clock import WallClock
     from ..comm import MessageRegistry, StreamServer, UdpPeer
     from .interfaces import TeamServerOptions, load_teamserver
+    from .msglog import MessageLog
+    from .teamlog import LoggedStreamServer
 
     clock = WallClock()
     ref_reg = MessageRegistry.from_message_set(msgs.message_set(cfg["profile"]))
@@ -49,8 +51,15 @@ def run(cfg: dict) -> int:
         send, recv = ports[color.lower()]
         return UdpPeer(host, send, recv, registry=ref_reg, channel="team", clock=clock)
 
+    msglog = None
+    if cfg.get("message_log"):
+        msglog = MessageLog(cfg["message_log"], clock, {}, team_reg, line_buffered=True)
+
     def agents():
-        return StreamServer(cfg["listen"], registry=team_reg, key=cfg["key"], host="127.0.0.1", clock=clock)
+        kw = dict(registry=team_reg, key=cfg["key"], host="127.0.0.1", clock=clock)
+        if msglog is None:
+            return StreamServer(cfg["listen"], **kw)
+        return LoggedStreamServer(cfg["listen"], log=msglog, **kw)
 
     oracle = cfg.get("oracle")
     handle = load_teamserver(cfg.get("teamserver", "htn"))(
@@ -80,6 +89,8 @@ def run(cfg: dict) -> int:
             write_snapshot(snapshot, {**handle.snapshot(), "now": clock.now()})
         finally:
             handle.close()
+            if msglog is not None:
+                msglog.close()
     return 0
 
 

@@ -1,5 +1,6 @@
 """The game's message log: every frame on the bus, decoded, as JSON lines
-(with ``--processes``: every message the refbox sends or receives).
+(with ``--processes`` the refbox's and the team server's sides of their
+links, merged in time order at the end, see :mod:`.teamlog`).
 
 One line per frame carried::
 
@@ -34,18 +35,20 @@ class MessageLog:
     """Decodes tapped frames with the registry of their channel.
 
     ``registries``: channel or address -> :class:`MessageRegistry`
-    (``default`` for the rest); ``key``: the team key.
+    (``default`` for the rest); ``key``: the team key; ``line_buffered``:
+    every line reaches the file at once (a process that may be killed).
     """
 
     def __init__(self, path: str | Path, clock, registries: dict[str, MessageRegistry],
-                 default: MessageRegistry, key: str | None = None):
+                 default: MessageRegistry, key: str | None = None, line_buffered: bool = False):
         self.path = Path(path)
         self.clock = clock
         self._codecs: dict[str, tuple[FrameCodec, FrameCodec | None]] = {}
         self._registries = registries
         self._default = default
         self._key = key
-        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8")
+        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8",
+                                        buffering=1 if line_buffered else -1)
         self.lines = 0
         self.undecoded = 0
         self.types: dict[str, int] = {}

@@ -17,6 +17,8 @@ from .. import rules
 STRATEGIES = ("algorithm1", "random", "nearest", "oracle")
 PERCEPTION = ("oracle", "rendered")
 UNTIL = ("exploration", "end")
+#: presets of the localiser the skills build (the agent's ``services["localisation"]``)
+LOCALISATION = ("cheap", "standard")
 TEAM_NAME = "GRIPS"
 TEAM_KEY = "rll-bt-sim-key"
 
@@ -59,7 +61,8 @@ class GameOptions:
         if not 1 <= int(self.robots) <= 3:
             raise ValueError(f"robots must be 1, 2 or 3, not {self.robots}")
         self.robots = int(self.robots)
-        for name, allowed in (("perception", PERCEPTION), ("strategy", STRATEGIES), ("until", UNTIL)):
+        for name, allowed in (("perception", PERCEPTION), ("strategy", STRATEGIES), ("until", UNTIL),
+                              ("localisation", LOCALISATION)):
             if getattr(self, name) not in allowed:
                 raise ValueError(f"{name} must be one of {', '.join(allowed)}, not {getattr(self, name)!r}")
         for name in ("dt", "hz", "laser_rate", "world_step", "sample_period"):

@@ -1,18 +1,29 @@
 """A whole game with every part in its own process, as in a real game.
 
+    game = ProcessGame(GameOptions(seed=3, processes=True, out=Path("game")))
+    result = game.run()                 # or run_until / run_for and faults in between
+    game.close()
+
 This process holds the world and the simulated refbox: the refbox talks UDP
 (broadcast to ``127.255.255.255`` on free local ports, the ``sim`` style of
 split send/receive ports), and the world serves each robot's backend over
 TCP (:mod:`.remote`).  The team server runs as ``python -m
 rll_bt.game.child`` (TCP for the agents, UDP to the refbox) and each robot
 as a real ``rll-bt agent --backend remote`` process.  Everything runs on the
-wall clock: the world advances by the wall time that passed, so a game takes
-its real length.  The team server's view reaches this process through the
-snapshot file it rewrites every second.
+wall clock: the world advances by the wall time that passed (at most 0.1 s
+a step, so it may fall behind), so a game takes its real length.  The team
+server's view reaches this process through the snapshot file it rewrites
+every second.
 
-The message log holds what the refbox sends and receives (the team
-server's link to the agents crosses sockets between other processes and is
-not logged; the lockstep mode logs every frame).  No faults on command.
+The message log holds what the refbox sends and receives (logged here on
+the simulation clock) and every message of the team server's link to the
+agents (logged by the team server process on the wall clock, mapped onto
+the simulation clock and merged in time order at the end, :mod:`.teamlog`).
+Each robot's task intervals (busy time, timeline) are read from those team
+messages.  Faults as in lockstep: :meth:`kill_agent` (SIGKILL),
+:meth:`start_agent`, :meth:`restart_teamserver` (SIGKILL and a new process on
+the same database), :meth:`station_down`.  Times given to :meth:`run_for`
+and :meth:`run_until` are simulated seconds (about wall seconds).
 """
 from __future__ import annotations
 
@@ -21,6 +32,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import Callable
 
 from ..comm import Layout, PeerPorts
 from .interfaces import load_simulator
@@ -28,12 +40,32 @@ from .lockstep import TEAM, GameResult
 from .options import GameOptions
 from .recorder import Recorder
 from .remote import BackendServer, free_ports
+from .teamlog import WallToSim, merge_into, read_lines, task_runs
 
 BROADCAST = "127.255.255.255"
 AGENT_MAIN = "import sys; from rll_bt.cli import main; sys.exit(main())"
 
 
+def udp_sender(source: str, msg) -> str:
+    """Who sent what the refbox got over UDP, named as lockstep names them.
+
+    On loopback every robot and the team server send from the same address
+    (each binds the shared receive port), so the address tells nobody
+    apart: a beacon names its robot (``peer_name``, else ``R<number>``), and
+    everything else reaching the refbox here comes from the team server
+    (reports, machine instructions).  The refbox's own sends keep "refbox"."""
+    if source == "refbox":
+        return source
+    if msg.DESCRIPTOR.name == "BeaconSignal":
+        return msg.peer_name or f"R{msg.number}"
+    return "teamserver"
+
+
 class ProcessGame:
+    """See the module doc.  ``clock`` must be the machine's monotonic wall
+    clock (:class:`~rll_bt.clock.WallClock`): the team server's log is
+    stamped with it in another process."""
+
     def __init__(self, options: GameOptions, *, progress=None, clock=None, connect_timeout: float = 60.0):
         from ..clock import WallClock
         self.options = o = options
@@ -47,6 +79,7 @@ class ProcessGame:
             profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key, perception=o.perception,
             gui=o.gui, phases=o.phases(), world_step=o.world_step, robot_options={"laser_rate": o.laser_rate})
         self.clock = self.sim.clock
+        self.time_map = WallToSim()
         p = free_ports(6)
         self.layout = Layout("game", public=PeerPorts(send=p[0], recv=p[1]), cyan=PeerPorts(send=p[2], recv=p[3]),
                              magenta=PeerPorts(send=p[4], recv=p[5]), stream=-1)
@@ -55,7 +88,8 @@ class ProcessGame:
         if o.out is not None:
             from .msglog import MessageLog
             self.log = MessageLog(self.dir / "messages.jsonl", self.clock, {}, self.sim.refbox_registry(), key=o.key)
-            self.sim.tap(self.log.record)
+            log = self.log
+            self.sim.tap(lambda channel, source, msg: log.record(channel, udp_sender(source, msg), msg))
         self.robots = list(range(1, o.robots + 1))
         self.backends = {n: self.sim.backend(TEAM, n) for n in self.robots}
         self.server = BackendServer(lambda team, n: self.backends[int(n)] if team == TEAM else None,
@@ -65,43 +99,102 @@ class ProcessGame:
         self.procs: dict[str, subprocess.Popen] = {}
         self.recorder = Recorder(self.sim, TEAM, self.robots, o.sample_period, snapshot=self.snapshot)
         self._logs = []
+        self._team_logs: list[Path] = []
+        self._kills: list[tuple[float, int]] = []     # (sim time, robot) of killed agents
+        self.restarts = 0
         self._t0 = 0.0                  # sim time the game started (the world runs while processes start)
-        self._start_children()
+        self._started = False
+        self._result_made = False
+        try:
+            self._start_children()
+        except BaseException:
+            self.close()
+            raise
 
     # -- children ----------------------------------------------------------------------------
     def _spawn(self, name: str, cmd: list[str]) -> None:
-        log = open(self.dir / f"{name}.log", "w")
+        log = open(self.dir / f"{name}.log", "a")
         self._logs.append(log)
         self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
 
     def _start_children(self) -> None:
         o = self.options
-        ts_port = free_ports(1, tcp=True)[0]
-        robot = {ch: (self.layout.robot(ch).send, self.layout.robot(ch).recv) for ch in ("public", "cyan", "magenta")}
+        self._ts_port = free_ports(1, tcp=True)[0]
         state = self.dir / "teamserver.sqlite"
-        if state.exists():
-            state.unlink()
-        cfg = {"profile": o.profile, "team": o.team_name, "key": o.key, "refbox_host": BROADCAST,
-               "ports": {ch: [robot[ch][0], robot[ch][1]] for ch in robot}, "listen": ts_port,
-               "state": str(state), "strategy": o.strategy, "seed": o.seed, "baseline": o.baseline,
-               "map_period": o.map_period, "snapshot": str(self.snapshot_file), "teamserver": o.teamserver,
-               "oracle": ({n: s.zone for n, s in self.sim.stations().items()} if o.strategy == "oracle" else None)}
-        cfg_file = self.dir / "teamserver-config.json"
-        cfg_file.write_text(json.dumps(cfg))
-        self._spawn("teamserver", [sys.executable, "-m", "rll_bt.game.child", str(cfg_file)])
-        pub, team = self.layout.robot("public"), self.layout.robot("cyan")
+        for old in [state, *self.dir.glob("teamserver.sqlite-*"), *self.dir.glob("teamserver-messages*.jsonl")]:
+            old.unlink(missing_ok=True)
+        for name in ("teamserver", *(f"agent{n}" for n in self.robots)):
+            (self.dir / f"{name}.log").unlink(missing_ok=True)
+        robot = {ch: (self.layout.robot(ch).send, self.layout.robot(ch).recv) for ch in ("public", "cyan", "magenta")}
+        self._ts_cfg = {
+            "profile": o.profile, "team": o.team_name, "key": o.key, "refbox_host": BROADCAST,
+            "ports": {ch: [robot[ch][0], robot[ch][1]] for ch in robot}, "listen": self._ts_port,
+            "state": str(state), "strategy": o.strategy, "seed": o.seed, "baseline": o.baseline,
+            "map_period": o.map_period, "snapshot": str(self.snapshot_file), "teamserver": o.teamserver,
+            "oracle": ({n: s.zone for n, s in self.sim.stations().items()} if o.strategy == "oracle" else None)}
+        self._spawn_teamserver()
         for n in self.robots:
-            pose = self.sim.robot_pose(TEAM, n)
-            self._spawn(f"agent{n}", [
-                sys.executable, "-c", AGENT_MAIN, "agent", "--robot", str(n), "--team", o.team_name,
-                "--key", o.key, "--profile", o.profile, "--backend", "remote",
-                "--backend-opt", f"address=127.0.0.1:{self.server.port}", "--backend-opt", f"robot={n}",
-                "--teamserver", f"127.0.0.1:{ts_port}", "--refbox-host", BROADCAST, "--layout", "sim",
-                "--public-recv", str(pub.recv), "--public-send", str(pub.send),
-                "--team-recv", str(team.recv), "--team-send", str(team.send),
-                "--start-pose", f"{pose.x},{pose.y},{pose.theta}", "--hz", str(o.hz), "--first-start", "-q"])
+            self._spawn_agent(n, first_start=True)
+
+    def _spawn_teamserver(self) -> None:
+        k = len(self._team_logs)
+        log = self.dir / ("teamserver-messages.jsonl" if k == 0 else f"teamserver-messages-{k + 1}.jsonl")
+        self._team_logs.append(log)
+        cfg_file = self.dir / "teamserver-config.json"
+        cfg_file.write_text(json.dumps({**self._ts_cfg, "message_log": str(log)}))
+        self._spawn("teamserver", [sys.executable, "-m", "rll_bt.game.child", str(cfg_file)])
+
+    def _spawn_agent(self, n: int, first_start: bool) -> None:
+        o = self.options
+        pub, team = self.layout.robot("public"), self.layout.robot("cyan")
+        pose = self.sim.robot_pose(TEAM, n)
+        self._spawn(f"agent{n}", [
+            sys.executable, "-c", AGENT_MAIN, "agent", "--robot", str(n), "--team", o.team_name,
+            "--key", o.key, "--profile", o.profile, "--backend", "remote",
+            "--backend-opt", f"address=127.0.0.1:{self.server.port}", "--backend-opt", f"robot={n}",
+            "--teamserver", f"127.0.0.1:{self._ts_port}", "--refbox-host", BROADCAST, "--layout", "sim",
+            "--public-recv", str(pub.recv), "--public-send", str(pub.send),
+            "--team-recv", str(team.recv), "--team-send", str(team.send),
+            "--start-pose", f"{pose.x},{pose.y},{pose.theta}", "--hz", str(o.hz),
+            "--localisation", o.localisation, "-q"] + (["--first-start"] if first_start else []))
+
+    def _kill(self, name: str) -> None:
+        p = self.procs.pop(name, None)
+        if p is not None and p.poll() is None:
+            p.kill()
+            while p.poll() is None:          # keep the backends answered meanwhile
+                self.server.poll(0.01)
+
+    # -- faults ------------------------------------------------------------------------------
+    def kill_agent(self, number: int) -> None:
+        """The agent process dies without a goodbye (SIGKILL): its links drop,
+        its robot stops once the last drive command times out."""
+        self._kill(f"agent{number}")
+        self._kills.append((self.clock.now(), number))
+        self.recorder.note("agent killed", robot=number)
+
+    def start_agent(self, number: int) -> None:
+        """A new agent process for robot ``number`` (no memory of earlier tasks),
+        starting from the robot's true pose, as an operator would set it."""
+        if f"agent{number}" in self._alive():
+            raise RuntimeError(f"the agent of robot {number} is running")
+        self._spawn_agent(number, first_start=False)
+        self.recorder.note("agent started", robot=number)
+
+    def restart_teamserver(self) -> None:
+        """Kill the team server process (SIGKILL) and start a new one on the
+        same database and agent port; the agents reconnect to it."""
+        self._kill("teamserver")
+        self.restarts += 1
+        self._spawn_teamserver()
+        self.recorder.note("team server restarted")
+
+    def station_down(self, machine: str, seconds: float) -> None:
+        self.sim.station_down(machine, seconds)
+        self.recorder.note("station down", machine=machine, seconds=seconds)
 
     def snapshot(self) -> dict:
+        """The team server's view as it last wrote it (``now``: its wall clock)."""
         try:
             self._snap = json.loads(self.snapshot_file.read_text())
         except (OSError, ValueError):
@@ -119,6 +212,7 @@ class ProcessGame:
         dt = min(now - last, 0.1)
         if dt >= self.options.world_step * 0.5:
             self.sim.step(dt)
+            self.time_map.add(now, self.clock.now())
             self.sim.refbox_step()
             before = len(self.recorder.rec.samples)
             self.recorder.sample()
@@ -139,30 +233,58 @@ class ProcessGame:
                 return False
         return False
 
-    def run(self) -> GameResult:
-        ready = self._wait_for_robots()
-        if not ready:
+    def start(self) -> bool:
+        """Wait for every process to come up, then start the game; whether they came up."""
+        if self._started:
+            return True
+        if not self._wait_for_robots():
             self.recorder.note("not every process came up", alive=self._alive())
-            return self._result(False)
+            return False
+        self._started = True
         self.sim.start()
-        t0_sim, t0_wall = self.clock.now(), self.wall.now()
-        self._t0 = t0_sim
-        self._offset = t0_wall - t0_sim
-        o = self.options
-        limit = o.expected_duration() + o.rules.phases.overtime + 60.0
-        last = self.wall.now()
-        finished = False
-        while self.clock.now() - t0_sim < limit:
-            last = self._tick(last)
-            st = self.sim.status()
-            if st.phase == "POST_GAME" or (o.until == "exploration" and self._exploration_over(st)):
-                finished = True
-                break
-            if "teamserver" not in self._alive():
-                self.recorder.note("the team server process died")
-                break
+        self._t0 = self.clock.now()
+        self._last = self.wall.now()
         self.recorder.sample(force=True)
-        return self._result(finished)
+        return True
+
+    def run_until(self, predicate: Callable[["ProcessGame"], bool], limit: float) -> bool:
+        """Run until ``predicate(game)`` or ``limit`` more simulated seconds; whether it held."""
+        if not self.start():
+            raise RuntimeError(f"not every process came up (alive: {', '.join(self._alive())}; "
+                               f"see the logs in {self.dir})")
+        end = self.clock.now() + limit
+        while self.clock.now() < end:
+            if predicate(self):
+                return True
+            self._last = self._tick(self._last)
+        return predicate(self)
+
+    def run_for(self, seconds: float) -> None:
+        self.run_until(lambda g: False, seconds)
+
+    def finished(self) -> bool:
+        st = self.sim.status()
+        return st.phase == "POST_GAME" or (self.options.until == "exploration" and self._exploration_over(st))
+
+    def run(self, limit: float | None = None) -> GameResult:
+        """Play until the game is over, at most ``limit`` simulated seconds
+        (default: the expected length plus overtime and a margin)."""
+        if not self.start():
+            return self._result(False)
+        o = self.options
+        if limit is None:
+            limit = o.expected_duration() + o.rules.phases.overtime + 60.0
+        died = []
+
+        def stop(g) -> bool:
+            if "teamserver" not in g._alive():
+                died.append(True)
+                return True
+            return g.finished()
+        self.run_until(stop, limit)
+        if died and not self.finished():
+            self.recorder.note("the team server process died")
+        return self._result(self.finished())
 
     def _exploration_over(self, st) -> bool:
         o = self.options
@@ -171,28 +293,32 @@ class ProcessGame:
         return st.phase in ("PRODUCTION", "POST_GAME")
 
     def _result(self, finished: bool) -> GameResult:
+        self.recorder.sample(force=True)
         self._stop_children()
-        snap = self.snapshot()
-        offset = getattr(self, "_offset", 0.0)
+        snap = dict(self.snapshot())
+        snap["restarts"] = self.restarts
+        end = self.clock.now()
+        team = sorted((e for path in self._team_logs for e in read_lines(path, self.time_map)),
+                      key=lambda e: e["t"])
         rec = self.recorder.rec
-        for t in snap.get("tasks", []):
-            if t.get("robot") is None or t.get("assigned_at") is None:
-                continue
-            end = t.get("finished_at")
-            rec.tasks.setdefault(int(t["robot"]), []).append(
-                {"kind": t["kind"], "id": t["id"], "start": round(t["assigned_at"] - offset, 3),
-                 "end": round(end - offset, 3) if end is not None else None,
-                 "outcome": {"DONE": "SUCCEEDED", "FAILED": "FAILED"}.get(t["state"], t["state"])})
-        for runs in rec.tasks.values():
-            runs.sort(key=lambda r: r["start"])
-            for run, nxt in zip(runs, runs[1:]):      # cancelled without an end: until the next one
-                if run["end"] is None or run["end"] > nxt["start"]:
-                    run["end"] = nxt["start"]
+        rec.tasks = task_runs(team, end=end)
+        for t, robot in self._kills:
+            for run in rec.tasks.get(robot, []):
+                if run["start"] <= t < run["end"]:
+                    run["end"], run["outcome"] = round(t, 3), "agent killed"
+        messages = 0
+        if self.log is not None:
+            self.log.close()
+            if not self._result_made:
+                messages = merge_into(self.dir / "messages.jsonl", team)
+                for path in self._team_logs:
+                    path.unlink(missing_ok=True)
+                self._team_logs = []
+        self._result_made = True
         return GameResult(finished=finished, status=self.sim.status(), recording=rec, awards=self.sim.awards(),
                           deliveries=self.sim.deliveries(), snapshot=snap, stations=self.sim.stations(),
                           orders=self.sim.orders(), collisions=self.sim.collisions(),
-                          sim_time=self.clock.now(), messages=self.log.lines if self.log else 0,
-                          collision_log=self.sim.collision_log())
+                          sim_time=end, messages=messages, collision_log=self.sim.collision_log())
 
     def _stop_children(self, timeout: float = 10.0) -> None:
         """SIGTERM to every child; keep serving the backends while they stop their robots."""
@@ -216,3 +342,9 @@ class ProcessGame:
             self.log.close()
         self.sim.close()
         self._tmp.cleanup()
+
+    def __enter__(self) -> "ProcessGame":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -83,7 +83,7 @@ def test_a_robot_the_world_does_not_have_is_an_error_not_a_hang(served):
         open_backend("remote", address=f"127.0.0.1:{server.port}", robot=3)
 
 
-def test_a_short_game_in_processes_scores_exploration_over_udp(tmp_path, capsys):
+def test_a_short_game_in_processes_scores_exploration_and_logs_both_links(tmp_path, capsys):
     out = tmp_path / "game"
     rc = main(["sim", "--processes", "--robots", "1", "--setup", "1", "--exploration", "15", "--production", "2",
                "--out", str(out), "-q"])
@@ -96,6 +96,21 @@ def test_a_short_game_in_processes_scores_exploration_over_udp(tmp_path, capsys)
     assert rep["robot_stats"]["1"]["distance"] > 1.0                    # and drove through the remote backend
     assert (out / "timeline.png").stat().st_size > 0
     log = [json.loads(x) for x in (out / "messages.jsonl").read_text().splitlines()]
-    got = {(x["channel"], x["type"]) for x in log}
+    assert rep["messages"] == len(log)
+    got = {(x["channel"], x["from"], x["type"]) for x in log}
     # the team server's reports and the agent's beacons arrived over UDP on the encrypted team channel
-    assert {("cyan", "MachineReport"), ("cyan", "BeaconSignal"), ("public", "GameState")} <= got
+    assert {("cyan", "teamserver", "MachineReport"), ("cyan", "R1", "BeaconSignal"),
+            ("public", "refbox", "GameState")} <= got
+    assert {f for _, f, _ in got} == {"refbox", "teamserver", "R1"}     # senders named as in lockstep
+    # and the team server's TCP link to the agent, both ways, in the lockstep schema
+    assert {("teamserver", "R1", "RobotHello"), ("teamserver", "R1", "TaskResult"),
+            ("teamserver", "teamserver", "Task"), ("teamserver", "teamserver", "GamePhase")} <= got
+    assert all(x["type"] is not None and set(x) == {"t", "channel", "from", "type", "msg"} for x in log)
+    assert [x["t"] for x in log] == sorted(x["t"] for x in log)
+    # the robot's task intervals come from those messages, on the game's clock
+    sent = [x for x in log if x["type"] == "Task"]
+    assert rep["robot_stats"]["1"]["tasks"] == len({x["msg"]["task_id"] for x in sent}) > 0
+    assert 0 < rep["robot_stats"]["1"]["busy_time"] <= rep["sim_time"]
+    assert sent[0]["t"] >= next(x["t"] for x in log if x["type"] == "GameState"
+                                and x["msg"]["phase"] == "EXPLORATION" and x["msg"]["state"] == "RUNNING")
+    assert not list(out.glob("teamserver-messages*.jsonl"))           # merged into messages.jsonl

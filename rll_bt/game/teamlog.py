@@ -1,0 +1,195 @@
+"""The team protocol in a ``--processes`` game: logged, put on the game's clock, merged.
+
+In lockstep every frame crosses one in-process bus and one tap logs them
+all.  With ``--processes`` the team server's TCP link to the agents runs
+between two other processes, so the team server logs its side of it
+(:class:`LoggedStreamServer`: what it sends to each agent, what it gets
+from them), stamped with its wall clock (monotonic seconds, the same
+clock in every process of the machine).  At the end the runner maps those
+stamps onto the simulation clock (:class:`WallToSim`, pairs it recorded
+while stepping the world), merges them with the refbox's lines into one
+``messages.jsonl`` in time order (:func:`merge_into`), and reads every
+robot's task intervals from them (:func:`task_runs`) as lockstep records
+them from its agents.
+
+Lines have the lockstep schema: ``{"t", "channel": "teamserver", "from":
+"teamserver" or "R<robot>", "type", "msg"}``.
+"""
+from __future__ import annotations
+
+import bisect
+import heapq
+import json
+import os
+from pathlib import Path
+from typing import Iterable, Iterator
+
+from ..comm import StreamServer
+
+CHANNEL = "teamserver"
+SERVER = "teamserver"
+FINAL = ("SUCCEEDED", "FAILED", "CANCELLED")
+
+
+class LoggedStreamServer(StreamServer):
+    """A :class:`~rll_bt.comm.StreamServer` that records every message it
+    sends (one line per client it reaches, as the bus carries them) and
+    receives into ``log`` (a :class:`~rll_bt.game.msglog.MessageLog`).
+    A client is named ``R<robot_id>`` after the first message naming its robot."""
+
+    def __init__(self, *args, log, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.log = log
+        self._names: dict[int, str] = {}
+
+    def send(self, msg, to: int | None = None) -> bool:
+        targets = self.clients() if to is None else [to]
+        sent = False
+        for cid in targets:
+            if super().send(msg, to=cid):
+                sent = True
+                self.log.record(CHANNEL, SERVER, msg)
+        return sent
+
+    def receive(self):
+        items = super().receive()
+        for rx in items:
+            self.log.record(CHANNEL, self._name(rx), rx.msg)
+        return items
+
+    def _name(self, rx) -> str:
+        fields = rx.msg.DESCRIPTOR.fields_by_name
+        if "robot_id" in fields and rx.msg.HasField("robot_id"):
+            self._names[rx.source] = f"R{int(rx.msg.robot_id)}"
+        return self._names.get(rx.source, f"client{rx.source}")
+
+    def _drop(self, cid: int) -> None:
+        self._names.pop(cid, None)
+        super()._drop(cid)
+
+
+class WallToSim:
+    """Wall-clock seconds -> simulation seconds, from (wall, sim) pairs taken
+    as the world stepped.  The world may fall behind the wall clock (it steps
+    at most 0.1 s at a time); the pairs are kept where that gap changed, and
+    times between them are interpolated, before the first or after the last
+    carried on at the wall clock's rate."""
+
+    def __init__(self, tolerance: float = 1e-3):
+        self.tolerance = tolerance
+        self._wall: list[float] = []
+        self._sim: list[float] = []
+        self._pending: tuple[float, float] | None = None
+
+    def add(self, wall: float, sim: float) -> None:
+        if self._wall and wall <= self._wall[-1]:
+            return
+        if self._wall and abs((wall - sim) - (self._wall[-1] - self._sim[-1])) <= self.tolerance:
+            self._pending = (wall, sim)         # same gap: only needed as the end of this stretch
+            return
+        if self._pending is not None:
+            self._append(*self._pending)
+        self._pending = None
+        self._append(wall, sim)
+
+    def _append(self, wall: float, sim: float) -> None:
+        self._wall.append(wall)
+        self._sim.append(sim)
+
+    def __len__(self) -> int:
+        return len(self._wall) + (self._pending is not None)
+
+    def __call__(self, wall: float) -> float:
+        walls, sims = self._wall, self._sim
+        if self._pending is not None:
+            walls, sims = walls + [self._pending[0]], sims + [self._pending[1]]
+        if not walls:
+            raise ValueError("no (wall, sim) pairs yet")
+        i = bisect.bisect_right(walls, wall)
+        if i == 0:
+            return sims[0] + (wall - walls[0])
+        if i == len(walls):
+            return sims[-1] + (wall - walls[-1])
+        w0, w1, s0, s1 = walls[i - 1], walls[i], sims[i - 1], sims[i]
+        return s0 + (s1 - s0) * (wall - w0) / (w1 - w0)
+
+
+def read_lines(path: str | Path, to_sim=None) -> list[dict]:
+    """The JSON lines of ``path`` (a line cut off by a killed writer is left out);
+    with ``to_sim`` every ``t`` is mapped through it."""
+    out = []
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return out
+    for raw in text.splitlines():
+        try:
+            entry = json.loads(raw)
+        except ValueError:
+            continue
+        if to_sim is not None:
+            entry["t"] = round(to_sim(entry["t"]), 4)
+        out.append(entry)
+    return out
+
+
+def merge_into(path: str | Path, *streams: Iterable[dict]) -> int:
+    """Add ``streams`` (each in time order) to the JSON-lines log at ``path``
+    (in time order), keeping the lines in time order; returns the lines written."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".merging")
+    n = 0
+    with open(tmp, "w", encoding="utf-8") as fh:
+        for entry in heapq.merge(_iter_file(path), *streams, key=lambda e: e["t"]):
+            fh.write(json.dumps(entry, separators=(",", ":")) + "\n")
+            n += 1
+    os.replace(tmp, path)
+    return n
+
+
+def _iter_file(path: Path) -> Iterator[dict]:
+    if not path.exists():
+        return
+    with open(path, encoding="utf-8") as fh:
+        for raw in fh:
+            if raw.strip():
+                yield json.loads(raw)
+
+
+def _kinds() -> frozenset[str]:
+    """The task kinds: the fields of the team protocol's ``Task.kind`` oneof."""
+    from .. import msgs
+    task = msgs.message_set("team").get("Task")
+    return frozenset(f.name for f in task.DESCRIPTOR.oneofs_by_name["kind"].fields)
+
+
+def task_runs(lines: Iterable[dict], end: float | None = None) -> dict[int, list[dict]]:
+    """Each robot's task intervals from team-protocol lines in time order:
+    ``{robot: [{"kind", "id", "start", "end", "outcome"}]}``.  A Task sent
+    to a robot starts a run (a repeat of its open task changes nothing, a
+    different one ends the open run as CANCELLED); the robot's TaskResult
+    SUCCEEDED, FAILED or CANCELLED ends it.  Runs still open are closed at
+    ``end`` ("running at the end"), or left with ``end`` None."""
+    kinds = _kinds()
+    runs: dict[int, list[dict]] = {}
+    for e in lines:
+        if e.get("channel") != CHANNEL or e.get("type") not in ("Task", "TaskResult"):
+            continue
+        m = e["msg"]
+        robot, tid, t = int(m["robot_id"]), int(m["task_id"]), e["t"]
+        mine = runs.setdefault(robot, [])
+        cur = mine[-1] if mine and mine[-1]["end"] is None else None
+        if e["type"] == "Task" and e["from"] == SERVER:
+            if cur is not None and cur["id"] == tid:
+                continue
+            if cur is not None:
+                cur["end"], cur["outcome"] = t, "CANCELLED"
+            mine.append({"kind": next((k for k in m if k in kinds), None), "id": tid, "start": t, "end": None, "outcome": None})
+        elif e["type"] == "TaskResult" and m.get("status") in FINAL and cur is not None and cur["id"] == tid:
+            cur["end"], cur["outcome"] = t, m["status"]
+    if end is not None:
+        for mine in runs.values():
+            for run in mine:
+                if run["end"] is None:
+                    run["end"], run["outcome"] = max(end, run["start"]), "running at the end"
+    return {r: v for r, v in runs.items() if v}
