@@ -130,6 +130,8 @@ class AgentLink:
         side = ms.enum("MachineSide")
         if t.kind == M.EXPLORE_ZONE:
             msg.explore_zone.zone = int(p["zone"])
+            for x, y, theta in p.get("viewpoints", ()):
+                msg.explore_zone.viewpoints.add(x=float(x), y=float(y), theta=float(theta))
         elif t.kind == M.GET_WORKPIECE:
             msg.get_workpiece.machine = p["machine"]
             msg.get_workpiece.side = side.Value(p.get("side", M.OUTPUT))

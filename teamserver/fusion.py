@@ -14,8 +14,13 @@ corrected): within one visit, i.e. until the robot has been silent about
 the property for ``revisit_gap`` seconds, it has one vote, its latest value
 at the highest confidence it gave for it.  A later visit is new evidence and
 votes again.  Agreement between robots or visits raises the confidence,
-disagreement lowers it.  Poses are fused as a confidence-weighted mean (orientation as a
-circular mean) with a noisy-OR confidence.
+disagreement lowers it.  A confidence below 1/K is read as 1/K, i.e. as no
+evidence: a glimpse (a robot's first sighting of a tag, before its tracker
+trusts it) says v weakly, and taken literally the formula would count it as
+evidence *against* v (c < (1 - c)/(K - 1)), so that one far-off glimpse could
+outweigh a later close look at the same value.  Poses are fused as a
+confidence-weighted mean (orientation as a circular mean) with a noisy-OR
+confidence.
 """
 from __future__ import annotations
 
@@ -72,12 +77,17 @@ class DiscreteBelief:
     def empty(self) -> bool:
         return not self._votes
 
+    def sources(self, min_confidence: float = 0.0) -> set[str]:
+        """Robots (sources) with a vote of at least ``min_confidence``."""
+        return {v[0] for v in self._votes if v[2] >= min_confidence}
+
     def log_scores(self) -> tuple[dict[Hashable, float], float, int]:
         """(log score per observed value, log score of any unobserved value, #unobserved)."""
         seen: dict[Hashable, float] = {}
         base = 0.0
+        floor = max(_C_MIN, 1.0 / self.k)
         for _robot, value, c, _t in self._votes:
-            c = min(max(c, _C_MIN), _C_MAX)
+            c = min(max(c, floor), _C_MAX)
             miss = math.log((1.0 - c) / (self.k - 1))
             base += miss
             seen[value] = seen.get(value, 0.0) + math.log(c) - miss

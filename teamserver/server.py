@@ -30,6 +30,7 @@ from rll_bt.rules import CYAN, MAGENTA, PREFIX, Profile
 from . import model as M
 from .agents import AgentLink
 from .dispatch import DispatchConfig, Dispatcher
+from .exploration.lookout import LOOK, Lookout, is_look
 from .exploration.report import Reporter
 from .exploration.strategies import DEFAULT_THRESH, make_strategy
 from .exploration.symmetry import consistent_set
@@ -106,6 +107,7 @@ class TeamServer:
         self.production: ProductionManager | None = None
         self.dispatcher: Dispatcher | None = None
         self.reporter: Reporter | None = None
+        self.lookout: Lookout | None = None
         self._replan = True
         self._last = {"plan": -1e9, "report": -1e9, "phase": -1e9, "map": -1e9, "beacon": -1e9}
         self._map_bytes = b""
@@ -134,6 +136,7 @@ class TeamServer:
         self.dispatcher = Dispatcher(self.kb, self.production, self.clock, self.config.dispatch)
         self.reporter = Reporter(self.profile, prefix, thresh=self.config.explore_thresh,
                                  margin=self.config.report_margin)
+        self.lookout = Lookout(self.profile, prefix, thresh=self.config.explore_thresh)
         if self.refbox_link is not None:
             self.refbox_link.set_team(color, self.key)
 
@@ -306,19 +309,46 @@ class TeamServer:
     def _end_exploration(self) -> None:
         for t in self.kb.open_tasks():
             if t.kind == M.EXPLORE_ZONE:
-                if t.state == M.ASSIGNED:
-                    self.dispatcher.outbox.append(("cancel", t, "exploration is over"))
-                r = self.kb.robots.get(t.robot) if t.robot is not None else None
-                if r is not None and r.task_id == t.id:
-                    r.task_id = None
-                    self.kb.save_robot(r)
-                t.state = M.CANCELLED
-                self.kb.save_task(t)
+                self._cancel_explore(t, "exploration is over")
         self._last["map"] = -1e9
+
+    def _cancel_explore(self, t: M.Task, reason: str) -> None:
+        if t.state == M.ASSIGNED:
+            self.dispatcher.outbox.append(("cancel", t, reason))
+        r = self.kb.robots.get(t.robot) if t.robot is not None else None
+        if r is not None and r.task_id == t.id:
+            r.task_id = None
+            self.kb.save_robot(r)
+        t.state = M.CANCELLED
+        self.kb.save_task(t)
+
+    def _look_for_rotations(self) -> None:
+        """2017+, in the exploration window after every zone is reported: keep
+        reporting, and send a robot to look at a station whose rotation is
+        still lacking (see :mod:`teamserver.exploration.lookout`)."""
+        if not self.refbox.exploring():
+            if any(is_look(t) for t in self.kb.open_tasks()):
+                self._end_exploration()
+            return
+        now = self.clock.now()
+        if now - self._last["report"] >= self.config.report_period:
+            self._last["report"] = now
+            self.report()
+        cs = self.lookout.consistent(self.kb)
+        for t in self.lookout.done_looks(self.kb, cs):
+            self._cancel_explore(t, f"the rotation of {t.params[LOOK]} is known")
+        for target in self.lookout.targets(self.kb, cs, self.refbox.exploration_left()):
+            r = self.lookout.pick_robot(self.dispatcher.available_robots(), target, self.kb)
+            if r is None:
+                break
+            t = self.dispatcher.assign_explore(r, target.zone)
+            t.params.update({LOOK: target.machine, "branch": "look",
+                             "viewpoints": [list(v) for v in target.viewpoints]})
+            self.kb.save_task(t)
 
     # -- production -----------------------------------------------------------------------------
     def _produce(self) -> None:
-        if any(t.kind == M.EXPLORE_ZONE for t in self.kb.open_tasks()):
+        if any(t.kind == M.EXPLORE_ZONE and not is_look(t) for t in self.kb.open_tasks()):
             self._end_exploration()
         now = self.clock.now()
         gt = self.refbox.game_time()
@@ -330,6 +360,7 @@ class TeamServer:
             self.last_choice = choice
             self._replan, self._last["plan"] = False, now
         self.dispatcher.discard_orphans()
+        self._look_for_rotations()
         for t in self.dispatcher.assign(gt):
             if t.kind == M.RETRIEVE_CAP:
                 n = self.kb.next_id(f"shelf:{t.machine}")
