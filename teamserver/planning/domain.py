@@ -61,7 +61,8 @@ class ProductionContext:
 
     ``rs_colors``: RS machine name -> the ring colours it mounts;
     ``ring_costs``: ring colour -> additional bases; ``cs_caps``: CS machine
-    name -> cap colour on its shelf; ``unusable``: stations not to plan with;
+    name -> cap colour on its shelf; ``unusable``: stations not to plan with
+    (``"<RS>:SLIDE"``: only that ring station's slide);
     ``ds_by_order``: True from 2017 on (DS prepared with the order id).
     """
 
@@ -84,8 +85,10 @@ class ProductionContext:
         return f"{self.team_prefix}-DS"
 
     def rs_for(self, color: str) -> str | None:
+        """The usable RS mounting ``color`` (its slide too when the colour costs bases)."""
         for rs in sorted(self.rs_colors):
-            if color in self.rs_colors[rs] and rs not in self.unusable:
+            if color in self.rs_colors[rs] and rs not in self.unusable and not (
+                    self.ring_costs.get(color, 0) > 0 and f"{rs}:{M.SLIDE}" in self.unusable):
                 return rs
         return None
 
