@@ -2,6 +2,7 @@
 
     rll-bt teamserver --profile rcll2016 --team Carologistics --key randomkey \\
         [--listen 0.0.0.0:4460] [--state teamserver.sqlite] [--strategy algorithm1] \\
+        [--planner htn|greedy] \\
         [--refbox-host 127.0.0.1] [--ports sim|competition]
     rll-bt teamserver status [--state teamserver.sqlite]
 """
@@ -15,6 +16,7 @@ from rll_bt.errors import Unavailable, UserError
 
 DEFAULT_STATE = "teamserver.sqlite"
 STRATEGIES = ("algorithm1", "random", "nearest")
+PLANNER_NAMES = ("htn", "greedy")         # teamserver.planning.planner.PLANNERS
 
 
 def register(cli) -> None:
@@ -34,6 +36,10 @@ def register(cli) -> None:
                          "(default %(default)s)")
     gp.add_argument("--strategy", default="algorithm1", choices=STRATEGIES,
                     help="exploration strategy (default %(default)s)")
+    gp.add_argument("--planner", default="htn", choices=PLANNER_NAMES,
+                    help="production planning: htn (several products at once, orders chosen "
+                         "by simulating the plan) or greedy (one order at a time, earliest "
+                         "deadline first; the benchmarks' baseline) (default %(default)s)")
     gp.add_argument("--seed", type=int, default=0, help="seed of the random choices")
     gp.add_argument("--refbox-host", default="127.0.0.1",
                     help="refbox address or broadcast address (default %(default)s)")
@@ -92,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
 
     host, port = _host_port(args.listen)
     clock = WallClock()
-    config = ServerConfig(strategy=args.strategy, seed=args.seed)
+    config = ServerConfig(strategy=args.strategy, seed=args.seed, planner=args.planner)
     config.dispatch.heartbeat_timeout = args.heartbeat_timeout
     if args.beacon is not None:
         config.beacon, config.beacon_number = True, args.beacon

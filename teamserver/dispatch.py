@@ -37,6 +37,7 @@ from scipy.optimize import linear_sum_assignment
 
 from . import model as M
 from . import parking
+from .feeding import FeedMonitor
 from .kb import KnowledgeBase
 from .production import ProductionManager
 
@@ -58,7 +59,11 @@ class DispatchConfig:
     prepare_retry: float = 6.0
     speed: float = 0.5
     max_attempts: int = 3
-    deliver_early: float = 60.0
+    deliver_early: float = 60.0     # at most this long before the window a delivery starts
+    deliver_margin: float = 5.0     # ... and this long more than the drive to the DS takes
+    window_margin: float = 1.0      # the DS is prepared this long after the window opened
+    feed_confirm: float = 10.0      # a fed station reports the workpiece within this time
+    pickup_time: float = 30.0       # a pickup's drive and grab, for "ready once held"
     park: bool = True
     park_retry: float = 15.0
     discard_backoff: float = 5.0
@@ -72,6 +77,7 @@ class Dispatcher:
         self.clock = clock
         self.config = config
         self.outbox: list[tuple] = []
+        self.feeds = FeedMonitor(kb, production, clock, config.feed_confirm)
         self.parking = parking.ParkingConfig()
         self._park_wait: dict[int, float] = {}       # robot -> server time it may park again
         self._discard_wait: dict[int, float] = {}    # robot -> server time it may discard again
@@ -159,10 +165,20 @@ class Dispatcher:
             return False
         if not self.station_usable(task.machine):
             return False
-        if task.kind == M.DELIVER and game_time < float(
-                task.params.get("not_before", 0.0)) - self.config.deliver_early:
+        if not self.feeds.accepts(task):
+            return False
+        if task.kind == M.DELIVER and game_time < self.deliver_from(task):
             return False
         return True
+
+    def deliver_from(self, task: M.Task) -> float:
+        """Game time from which a delivery may start: its robot reaches the DS when
+        the order's window opens (never more than ``deliver_early`` s before it)."""
+        nb = float(task.params.get("not_before", 0.0))
+        robot = self.kb.robots.get(task.holder) if task.holder is not None else None
+        pos = self.production.positions().get(task.machine)
+        drive = self.travel(robot, pos) / self.config.speed if robot is not None else 0.0
+        return nb - min(drive + self.config.deliver_margin, self.config.deliver_early)
 
     # -- assignment ------------------------------------------------------------------------
     def assign(self, game_time: float | None) -> list[M.Task]:
@@ -184,6 +200,13 @@ class Dispatcher:
         pool = [t for t in ready if not t.carry]
         if not free or not pool:
             return assigned
+        # at least one robot must stay able to fetch what the held workpieces wait for
+        stuck, limit = self.stuck(game_time), len(self.kb.active_robots()) - 1
+        blocking = {t.id for t in pool if self.blocks(t, game_time)}
+        if stuck >= limit:
+            pool = [t for t in pool if t.id not in blocking]
+            if not pool:
+                return assigned
         positions = self.production.positions()
         cost = np.zeros((len(free), len(pool)))
         for i, r in enumerate(free):
@@ -194,9 +217,53 @@ class Dispatcher:
             t, r = pool[j], free[i]
             if not self.production.lock_free(t):
                 continue                    # another assignment just took the station
+            if t.id in blocking:
+                if stuck >= limit:
+                    continue                # the next tick matches this robot anew
+                stuck += 1
             self._assign(t, r)
             assigned.append(t)
         return assigned
+
+    # -- robots left holding what they cannot use yet ----------------------------------------
+    def blocks(self, task: M.Task, game_time: float | None) -> bool:
+        """Would the robot that picks up ``task``'s workpiece be left holding it, its
+        next step not ready (other parts missing, the order's window not open)?"""
+        if task.kind != M.GET_WORKPIECE or task.carry or task.product is None:
+            return False
+        product = self.kb.products.get(task.product)
+        nxt = [t for t in self.kb.tasks_of(product.tasks if product else ())
+               if t.state == M.PENDING and t.carry and t.params.get("carry_from") == task.id]
+        return bool(nxt) and not self._ready_once_held(nxt[0], game_time, task.id)
+
+    def _ready_once_held(self, task: M.Task, game_time: float | None, pickup: int) -> bool:
+        """Would carry ``task`` be ready right after its ``pickup`` (a task id)?"""
+        if game_time is None:
+            return False
+        for d in task.deps:
+            dep = self.kb.tasks.get(d)
+            if d != pickup and (dep is None or dep.state != M.DONE):
+                return False
+        if not (self.production.lock_free(task) and self.station_usable(task.machine)
+                and self.feeds.accepts(task)):
+            return False
+        if task.kind == M.DELIVER:
+            return game_time + self.config.pickup_time >= self.deliver_from(task)
+        return True
+
+    def stuck(self, game_time: float | None) -> int:
+        """Robots holding a workpiece whose next step is not ready, or on their way to
+        pick up one (see :meth:`blocks`)."""
+        bound = {t.holder: t for t in self.kb.open_tasks()
+                 if t.carry and t.state == M.PENDING and t.holder is not None}
+        n = 0
+        for r in self.kb.active_robots():
+            t = self.kb.tasks.get(r.task_id) if r.task_id is not None else None
+            if t is not None and t.state == M.ASSIGNED and t.kind != M.GO_TO:
+                n += self.blocks(t, game_time)
+            elif r.holding and r.number in bound:
+                n += not self.ready(bound[r.number], game_time)
+        return n
 
     def travel(self, robot: M.Robot, pos) -> float:
         """Metres from the robot to ``pos`` (0 when either is unknown)."""
@@ -264,8 +331,13 @@ class Dispatcher:
         return pts
 
     # -- PrepareMachine timing -----------------------------------------------------------------
-    def prepare(self, running_production: bool) -> list[M.Task]:
-        """Send the PrepareMachine of assigned tasks whose robot is about to arrive."""
+    def prepare(self, running_production: bool, game_time: float | None = None
+                ) -> list[M.Task]:
+        """Send the PrepareMachine of assigned tasks whose robot is about to arrive
+        (a station already waiting with the same instruction is adopted, see
+        :mod:`.feeding`); a DS only once the order's window is open (``game_time``,
+        None: not checked).  Also the late prepares of feeds finished before theirs
+        could go out."""
         if not running_production:
             return []
         sent = []
@@ -281,7 +353,15 @@ class Dispatcher:
                 if st is None or st.since >= t.prepared_at or state != "IDLE" or \
                         now - t.prepared_at < self.config.prepare_retry:
                     continue
+            elif state == "PREPARED" and self.feeds.adoptable(t):
+                t.prepared_at = now             # it waits with our instruction already
+                self.kb.save_task(t)
+                self.feeds.sent(t)
+                log.info("task %d adopts %s waiting with %s", t.id, st.name, t.prepare)
+                continue
             elif state != "IDLE":
+                continue
+            if not self._window_open(t, game_time):
                 continue
             robot = self.kb.robots.get(t.robot)
             if robot is None:
@@ -292,11 +372,27 @@ class Dispatcher:
                 if d > self.config.prepare_distance and d / self.config.speed > \
                         self.config.prepare_lead:
                     continue
-            t.prepared_at = now
-            self.kb.save_task(t)
-            self.outbox.append(("prepare", t))
+            self._send_prepare(t, now)
             sent.append(t)
+        for t in self.feeds.late():
+            st = self.kb.stations.get(t.prepare["machine"])
+            if st is not None and st.state == "IDLE" and self._window_open(t, game_time):
+                self._send_prepare(t, now)
+                self.feeds.late_sent(t)
+                sent.append(t)
         return sent
+
+    def _window_open(self, task: M.Task, game_time: float | None) -> bool:
+        """A delivery's DS is prepared only inside the order's window."""
+        if task.kind != M.DELIVER or game_time is None:
+            return True
+        return game_time >= float(task.params.get("not_before", 0.0)) + self.config.window_margin
+
+    def _send_prepare(self, task: M.Task, now: float) -> None:
+        task.prepared_at = now
+        self.kb.save_task(task)
+        self.feeds.sent(task)
+        self.outbox.append(("prepare", task))
 
     # -- results -------------------------------------------------------------------------
     def on_result(self, robot_number: int, task_id: int, status: str, error: str = "NONE",
@@ -326,6 +422,8 @@ class Dispatcher:
             return
         if task.kind == M.DISCARD and status != "CANCELLED":
             self._discard_outcome(robot, status == "SUCCEEDED")
+        if status != "CANCELLED":
+            self.production.health.outcome(task, status == "SUCCEEDED", error, self.clock.now())
         if status == "SUCCEEDED":
             task.state = M.DONE
             self.kb.save_task(task)
@@ -333,6 +431,7 @@ class Dispatcher:
                 self.kb.mark_visited(int(task.params["zone"]), self.clock.now())
             else:
                 self.production.task_done(task, robot)
+                self.feeds.finished(task)
             self.kb.save_robot(robot)
             return
         task.error = f"{error}: {text}" if text else error
@@ -363,7 +462,8 @@ class Dispatcher:
             if st is not None and st.state == "BROKEN":
                 self.production.station_broke(task.machine)
         retry = (not lost and error in RETRY_ERRORS and task.attempts < self.config.max_attempts
-                 and not (task.kind == M.DISCARD and not task.machine))
+                 and not (task.kind == M.DISCARD and not task.machine)
+                 and self.production.health.usable(task, self.clock.now()))
         if retry:
             again = self.production.retry(task)
             log.info("task %d failed (%s), trying again as %d", task.id, error, again.id)

@@ -6,9 +6,10 @@ returns an :class:`InProcessTeamServer` implementing
 the transports the game hands it, that can be killed and restarted from its
 state database mid-game, and that reports its view for the game report.
 
-``options.baseline`` replaces the HTN production choice by the greedy
-baseline of the benchmarks: one order at a time, the one with the earliest
-deadline that can be planned, no look-ahead (:class:`GreedyPlanner`).
+``options.baseline`` plays the greedy baseline of the benchmarks instead of
+the HTN production choice (``ServerConfig.planner = "greedy"``: one order at
+a time, the one with the earliest deadline that can be planned, no
+look-ahead; see :class:`~teamserver.planning.planner.GreedyPlanner`).
 """
 from __future__ import annotations
 
@@ -17,18 +18,7 @@ from rll_bt.game.interfaces import TeamServerHandle, TeamServerOptions
 from . import model as M
 from .exploration.symmetry import consistent_set
 from .links import RefboxLink
-from .planning.planner import Choice, ProductionPlanner
 from .server import ServerConfig, TeamServer
-
-
-class GreedyPlanner(ProductionPlanner):
-    """One product at a time: the plannable order with the earliest deadline."""
-
-    def choose(self, world) -> Choice:
-        if sum(world.in_progress.values()) > 0:
-            return Choice([], 0, 0, 0, 0)
-        cands = self.candidates(world)
-        return Choice(cands[:1], 0, 0, 0, len(cands))
 
 
 class InProcessTeamServer(TeamServerHandle):
@@ -43,7 +33,8 @@ class InProcessTeamServer(TeamServerHandle):
         self._args = dict(profile=profile, team_name=team_name, key=key, clock=clock)
         self._public, self._team, self._agents = refbox_public, refbox_team, agents
         self.state = state
-        cfg = ServerConfig(strategy=strategy, seed=seed, map_period=self.options.map_period)
+        cfg = ServerConfig(strategy=strategy, seed=seed, map_period=self.options.map_period,
+                           planner="greedy" if self.options.baseline else "htn")
         if self.options.baseline:
             cfg.max_products = 1
         for k, v in self.options.extra.items():
@@ -56,17 +47,9 @@ class InProcessTeamServer(TeamServerHandle):
     def _make(self) -> TeamServer:
         a = self._args
         link = RefboxLink(self._public(), self._team)
-        srv = TeamServer(a["profile"], a["team_name"], clock=a["clock"], refbox=link,
-                         agents=self._agents(), key=a["key"], state=self.state,
-                         config=self.config, oracle=self.oracle)
-        if self.options.baseline:
-            greedy = GreedyPlanner(srv.profile, srv.planner.prefix, durations=self.config.durations,
-                                   clock=a["clock"])
-            srv.planner = greedy
-            if srv.production is not None:
-                srv.production.planner = greedy
-            srv._colour_known = _with_planner(srv, greedy)
-        return srv
+        return TeamServer(a["profile"], a["team_name"], clock=a["clock"], refbox=link,
+                          agents=self._agents(), key=a["key"], state=self.state,
+                          config=self.config, oracle=self.oracle)
 
     def tick(self) -> None:
         self.server.tick()
@@ -109,17 +92,6 @@ class InProcessTeamServer(TeamServerHandle):
         if srv.refbox_link is not None:
             srv.refbox_link.close()
         srv.close()
-
-
-def _with_planner(srv: TeamServer, planner: ProductionPlanner):
-    """``srv._colour_known`` that keeps ``planner`` in the production manager it makes."""
-    original = srv._colour_known
-
-    def colour_known(color: str) -> None:
-        original(color)
-        planner.prefix = srv.planner.prefix
-        srv.production.planner = planner
-    return colour_known
 
 
 def open_teamserver(**options) -> InProcessTeamServer:

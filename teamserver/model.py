@@ -146,6 +146,7 @@ class Station(Record):
     rotation: int | None = None
     cap_buffered: bool = False          # a CS holds a retrieved cap (our bookkeeping)
     since: float = 0.0                  # server time of the last state change
+    fed_at: float = 0.0                 # server time it last took a workpiece (left PREPARED)
     _tuples = ("ring_colors",)
 
 
@@ -215,4 +216,5 @@ class Product(Record):
     created: float = 0.0
     repair: str | None = None           # why it must be re-planned (None: it need not)
     repairs: int = 0
+    delivered_at: float | None = None   # game time of our delivery (the refbox confirms it)
     _tuples = ("tasks",)

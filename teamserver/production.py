@@ -18,6 +18,7 @@ import logging
 from rll_bt.rules import Profile
 
 from . import model as M
+from .health import StationHealth
 from .kb import KnowledgeBase
 from .planning.domain import CAP_LOCK, CAPLESS, EXTRA, MAIN, Progress
 from .planning.estimate import SimRobot, SimTask
@@ -35,7 +36,7 @@ class ProductionManager:
 
     def __init__(self, kb: KnowledgeBase, planner: ProductionPlanner, prefix: str, *,
                  cs_caps: dict[str, str], max_products: int | None = None,
-                 max_repairs: int = 3):
+                 max_repairs: int = 3, clock=None, confirm_time: float = 20.0):
         self.kb = kb
         self.profile: Profile = kb.profile
         self.planner = planner
@@ -44,6 +45,13 @@ class ProductionManager:
                         for k, v in cs_caps.items()}
         self.max_products = max_products
         self.max_repairs = max_repairs
+        self.clock = clock
+        self.health = StationHealth(kb)
+        self.confirm_time = confirm_time
+
+    def unusable(self) -> frozenset[str]:
+        """Places the robots keep failing at (see :mod:`teamserver.health`)."""
+        return self.health.unusable(self.clock.now()) if self.clock is not None else frozenset()
 
     # -- locks and buffers (persisted in the knowledge base) ------------------------
     @property
@@ -112,20 +120,32 @@ class ProductionManager:
     def active_products(self) -> list[M.Product]:
         return [p for p in self.kb.products.values() if p.state == ACTIVE]
 
+    def unconfirmed(self, game_time: float) -> dict[int, int]:
+        """Order id -> our deliveries the refbox has not counted yet, of those made less
+        than ``confirm_time`` game seconds ago.  An older one it never counted did not
+        reach it (the workpiece was lost, or judged for no order): its unit is open again."""
+        delivered: dict[int, int] = {}
+        recent: dict[int, int] = {}
+        for p in self.kb.products.values():
+            if p.state == DELIVERED and p.order_id != CLEANUP_ORDER:
+                delivered[p.order_id] = delivered.get(p.order_id, 0) + 1
+                if p.delivered_at is None or game_time - p.delivered_at <= self.confirm_time:
+                    recent[p.order_id] = recent.get(p.order_id, 0) + 1
+        out = {}
+        for oid, n in recent.items():
+            o = self.kb.orders.get(oid)
+            if o is not None and delivered[oid] > o.delivered:
+                out[oid] = min(n, delivered[oid] - o.delivered)
+        return out
+
     def world(self, game_time: float, horizon: float) -> World:
         orders = [o for o in self.kb.orders.values() if o.open > 0]
-        in_progress: dict[int, int] = {}
-        delivered: dict[int, int] = {}
-        for p in self.kb.products.values():
-            if p.state == DELIVERED:
-                delivered[p.order_id] = delivered.get(p.order_id, 0) + 1
-        for oid, n in delivered.items():      # ours, not yet counted by the refbox
-            o = self.kb.orders.get(oid)
-            if o is not None and n > o.delivered:
-                in_progress[oid] = n - o.delivered
+        in_progress = self.unconfirmed(game_time)
+        making = 0
         active, done = [], set()
         for p in self.active_products():
             in_progress[p.order_id] = in_progress.get(p.order_id, 0) + 1
+            making += p.order_id != CLEANUP_ORDER
             order = self.kb.orders.get(p.order_id)
             for t in self.kb.tasks_of(p.tasks):
                 if t.state == M.CANCELLED or t.state == M.FAILED:
@@ -147,7 +167,7 @@ class ProductionManager:
         return World(orders, robots, self.positions(), self.rs_colors(),
                      dict(self.kb.get("ring_costs") or {}), self.cs_caps, game_time, horizon,
                      active=active, done=done, owned=self.locks, in_progress=in_progress,
-                     max_products=n)
+                     unusable=self.unusable(), max_products=n, making=making)
 
     def _start_position(self) -> tuple[float, float]:
         from rll_bt.rules import CYAN, MAGENTA
@@ -291,6 +311,7 @@ class ProductionManager:
             robot.holding = None
             if kind == M.DELIVER and product is not None:
                 product.state = DELIVERED
+                product.delivered_at = float(self.kb.get("game_time", 0.0))
                 self.kb.save_product(product)
                 self.release(product.id)
         if task.releases and product is not None:
@@ -440,6 +461,71 @@ class ProductionManager:
         net = self.planner.htn.plan(ctx, Seq(("pickup", machine, False, CAPLESS),
                                              ("discard",)))
         self.add_network(product, net)
+        return product
+
+    def feed_lost(self, task: M.Task) -> None:
+        """``task`` was reported done, but its station never took the workpiece: undo
+        what :meth:`task_done` booked and repair the product."""
+        task.state, task.error = M.FAILED, "the station never took the workpiece"
+        self.kb.save_task(task)
+        machine = task.machine
+        for wp in self.kb.workpieces.values():
+            if wp.product == task.product and wp.location.startswith(machine + ":"):
+                wp.location = "gone"
+                self.kb.save_workpiece(wp)
+        product = self.kb.products.get(task.product or "")
+        buf = self.cap_buffer
+        if task.kind == M.MOUNT_CAP and product is not None:
+            buf[machine] = product.id               # the cap is still in the station
+        elif task.kind == M.RETRIEVE_CAP and buf.get(machine) == task.product:
+            del buf[machine]                        # the carrier never got there
+        self._set_cap_buffer(buf)
+        if product is None or product.order_id == CLEANUP_ORDER:
+            return
+        if product.state == DELIVERED:
+            product.state, product.delivered_at = ACTIVE, None
+            self.kb.save_product(product)
+        self.needs_repair(product.id, f"{machine} never took the workpiece of task {task.id}")
+
+    def flush(self, machine: str, instruction: dict) -> M.Product | None:
+        """A small product that feeds a spare base to ``machine``, PREPARED with
+        ``instruction`` that nothing needs, so that it processes it and becomes IDLE
+        again (a ring or cap station's result is taken away and discarded)."""
+        kind = machine[2:4]
+        bs = f"{self.prefix}-BS"
+        base = "BASE_RED"
+        if kind == "DS":
+            feed = (M.DELIVER, {"machine": machine, **instruction.get("ds", {})})
+        elif kind == "RS" and "rs" in instruction:
+            feed = (M.MOUNT_RING, {"machine": machine, "cost": 0, **instruction["rs"]})
+        elif kind == "CS":
+            feed = (M.MOUNT_CAP, {"machine": machine, "cap_color": self.cs_caps.get(machine)})
+        else:
+            return None
+        pid = f"X{self.kb.next_id('product')}"
+        product = M.Product(pid, CLEANUP_ORDER, created=self.kb.get("game_time", 0.0))
+        self.kb.save_product(product)
+        now = self.kb.get("game_time", 0.0)
+        ids = [self.kb.next_id("task") for _ in range(2 if kind == "DS" else 4)]
+        tasks = [M.Task(ids[0], M.GET_WORKPIECE, {"machine": bs, "side": M.OUTPUT, "base": base,
+                                                  "role": EXTRA},
+                        product=pid, prepare={"machine": bs, "bs": {"side": M.OUTPUT,
+                                                                    "color": base}},
+                        locks=(bs,), releases=(bs,), created=now),
+                 M.Task(ids[1], feed[0], {**feed[1], "carry_from": ids[0]}, product=pid,
+                        deps=(ids[0],), locks=(machine,),
+                        releases=(machine,) if kind == "DS" else (), carry=True, created=now)]
+        if kind != "DS":
+            tasks += [M.Task(ids[2], M.GET_WORKPIECE, {"machine": machine, "side": M.OUTPUT,
+                                                       "role": EXTRA},
+                             product=pid, deps=(ids[1],), locks=(machine,),
+                             releases=(machine,), created=now),
+                      M.Task(ids[3], M.DISCARD, {"carry_from": ids[2]}, product=pid,
+                             deps=(ids[2],), carry=True, created=now)]
+        for t in tasks:
+            self.kb.save_task(t)
+        product.tasks = tuple(ids)
+        self.kb.save_product(product)
         return product
 
     def discard_for(self, robot: M.Robot) -> M.Task:

@@ -31,6 +31,9 @@ TEAM_VALUE = {CYAN: 0, MAGENTA: 1}
 TEAM_NAME = {0: CYAN, 1: MAGENTA}
 #: longest stretch (s) the game time is carried forward without a GameState
 MAX_EXTRAPOLATION = 5.0
+#: states a station is in only after it took a workpiece at its input (PREPARED ->
+#: IDLE too: a DS whose PROCESSING report was lost)
+FED_STATES = ("PROCESSING", "PROCESSED", "READY-AT-OUTPUT")
 
 
 @dataclass(frozen=True)
@@ -179,6 +182,9 @@ class RefboxClient:
                 st.rotation = int(m.rotation)
             if old is not None and old.state != st.state:
                 st.since = now
+                if st.state in FED_STATES or (old.state == "PREPARED" and st.state in (
+                        "IDLE", "WAIT-IDLE")):
+                    st.fed_at = now
                 ev.append(Event("station", (m.name, old.state, st.state)))
             elif old is None:
                 st.since = now

@@ -37,7 +37,7 @@ from .exploration.symmetry import consistent_set
 from .exploration.view import ExplorationView
 from .kb import KnowledgeBase
 from .planning.estimate import Durations
-from .planning.planner import ProductionPlanner
+from .planning.planner import make_planner
 from .production import ProductionManager
 from .refbox import RefboxClient
 from .store import Store
@@ -54,6 +54,7 @@ class ServerConfig:
     """Tuning of the team server.  Times in seconds of its clock."""
 
     strategy: str = "algorithm1"
+    planner: str = "htn"                        # production: "htn", or the "greedy" baseline
     seed: int = 0
     explore_thresh: float = DEFAULT_THRESH      # Algorithm 1's thresh, and report confidence
     report_margin: float = 20.0                 # report whatever pays this long before the end
@@ -100,10 +101,11 @@ class TeamServer:
         self.link = AgentLink(self.kb, clock)
         self.strategy = make_strategy(self.config.strategy, self.config.seed,
                                       self.config.explore_thresh, oracle)
-        self.planner = ProductionPlanner(self.profile, "C", durations=self.config.durations,
-                                         budget=self.config.plan_budget,
-                                         max_evaluations=self.config.plan_max_evaluations,
-                                         clock=clock)
+        self.planner = make_planner(self.config.planner, self.profile, "C",
+                                    durations=self.config.durations,
+                                    budget=self.config.plan_budget,
+                                    max_evaluations=self.config.plan_max_evaluations,
+                                    clock=clock)
         self.production: ProductionManager | None = None
         self.dispatcher: Dispatcher | None = None
         self.reporter: Reporter | None = None
@@ -132,7 +134,8 @@ class TeamServer:
         self.planner.prefix = prefix
         self.production = ProductionManager(self.kb, self.planner, prefix,
                                             cs_caps=self.config.cs_caps,
-                                            max_products=self.config.max_products)
+                                            max_products=self.config.max_products,
+                                            clock=self.clock)
         self.dispatcher = Dispatcher(self.kb, self.production, self.clock, self.config.dispatch)
         self.reporter = Reporter(self.profile, prefix, thresh=self.config.explore_thresh,
                                  margin=self.config.report_margin)
@@ -359,6 +362,12 @@ class TeamServer:
                 self.dispatcher.outbox.append(("cancel", t, "plan repaired"))
             self.last_choice = choice
             self._replan, self._last["plan"] = False, now
+        if self.dispatcher.feeds.verify():
+            cancels, _ = self.production.plan(gt, self.profile.phases.production)
+            for t in cancels:
+                self.dispatcher.outbox.append(("cancel", t, "its workpiece was lost"))
+            self._last["plan"] = now
+        self.dispatcher.feeds.unstick()
         self.dispatcher.discard_orphans()
         self._look_for_rotations()
         for t in self.dispatcher.assign(gt):
@@ -366,7 +375,7 @@ class TeamServer:
                 n = self.kb.next_id(f"shelf:{t.machine}")
                 t.params["shelf_slot"] = (n - 1) % 3
                 self.kb.save_task(t)
-        self.dispatcher.prepare(self.refbox.running())
+        self.dispatcher.prepare(self.refbox.running(), gt)
         self.dispatcher.park()
 
     def _flush(self) -> None:

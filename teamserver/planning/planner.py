@@ -38,7 +38,10 @@ class World:
 
     ``active``: steps of products in progress (done ones listed in ``done``);
     ``positions``: machine name -> (x, y); ``now``/``horizon``: production
-    game time now and at its end; ``owned``: station locks held now.
+    game time now and at its end; ``owned``: station locks held now;
+    ``in_progress``: order id -> units being made or delivered but not yet
+    counted by the refbox; ``making``: products being made (what
+    ``max_products`` limits; a delivered product no longer takes a slot).
     """
 
     orders: list[M.Order]
@@ -55,6 +58,13 @@ class World:
     in_progress: dict[int, int] = field(default_factory=dict)   # order id -> products
     unusable: frozenset[str] = frozenset()
     max_products: int = 3
+    making: int | None = None       # products being made (None: the sum of in_progress)
+
+    @property
+    def slots(self) -> int:
+        """How many more products may be started now."""
+        making = sum(self.in_progress.values()) if self.making is None else self.making
+        return max(self.max_products - making, 0)
 
 
 @dataclass
@@ -110,7 +120,7 @@ class ProductionPlanner:
         """The candidate orders to start now (see the module doc)."""
         t0 = self.clock.now()
         cands = self.candidates(world)
-        slots = max(world.max_products - sum(world.in_progress.values()), 0)
+        slots = world.slots
         evals = 0
 
         def score(chosen: tuple[int, ...]) -> tuple[int, float]:
@@ -170,3 +180,27 @@ def sim_tasks(net: Network, product: str, order: M.Order | None,
             locks=f["locks"], releases=f["releases"], carry=f["carry"], holder=f["holder"],
             not_before=float(f["params"].get("not_before", 0.0)), order=order))
     return out
+
+
+class GreedyPlanner(ProductionPlanner):
+    """The baseline: one product at a time, for the plannable order with the earliest
+    deadline, no look-ahead."""
+
+    def choose(self, world: World) -> Choice:
+        if sum(world.in_progress.values()) > 0 or not world.slots:
+            return Choice([], 0, 0, 0, 0)
+        cands = self.candidates(world)
+        return Choice(cands[:1], 0, 0, 0, len(cands))
+
+
+#: the team server's production planners by name (``ServerConfig.planner``)
+PLANNERS = {"htn": ProductionPlanner, "greedy": GreedyPlanner}
+
+
+def make_planner(name: str, profile: Profile, team_prefix: str, **options) -> ProductionPlanner:
+    """The planner called ``name`` (one of :data:`PLANNERS`)."""
+    try:
+        cls = PLANNERS[name]
+    except KeyError:
+        raise ValueError(f"unknown planner {name!r} (one of {', '.join(PLANNERS)})") from None
+    return cls(profile, team_prefix, **options)

@@ -1,0 +1,187 @@
+"""Did the station take the workpiece?  Feeds, the instruction a station waits
+with, and stations left waiting for a workpiece that never came.
+
+A *feed* is a task whose robot puts a workpiece into a station's input for
+an instruction the server sent (MountRing, MountCap, RetrieveCap,
+Deliver).  A robot can report such a task done while the workpiece never
+reached the conveyor (it fell beside it).  The station then stays
+PREPARED with our instruction: the refbox accepts no new PrepareMachine
+for it until it is fed, so the next robot's workpiece is processed with the
+*old* instruction (at the DS: delivered at the old gate).
+
+:class:`FeedMonitor`
+
+- remembers the instruction last sent to each station
+  (:meth:`~FeedMonitor.sent`) and tells whether a station is PREPARED with
+  it, not yet fed (:meth:`~FeedMonitor.instruction`);
+- lets a task use a station only when it can take the workpiece: IDLE or
+  about to be (WAIT-IDLE), or already PREPARED with this task's very
+  instruction and no other robot on its way to feed it
+  (:meth:`~FeedMonitor.accepts`); such a task *adopts* the waiting
+  instruction instead of sending it again (:meth:`~FeedMonitor.adoptable`);
+- checks every finished feed: the station must report that it took a
+  workpiece (:attr:`teamserver.model.Station.fed_at`) within ``confirm``
+  seconds, else the workpiece is lost and its product repaired
+  (:meth:`~FeedMonitor.verify`);
+- keeps feeds finished before their PrepareMachine could go out (a robot at
+  the DS before the order's window) so the dispatcher sends it later
+  (:meth:`~FeedMonitor.late`);
+- feeds a spare base to a station PREPARED with an instruction no task
+  needs while a task needs another one (:meth:`~FeedMonitor.unstick`),
+  which brings it back to IDLE.
+
+Times are seconds of the server's clock; the state lives in the knowledge
+base (``prepared``, ``feeds``, ``late_prepares``, ``flushing``).
+"""
+from __future__ import annotations
+
+import logging
+
+from . import model as M
+from .kb import KnowledgeBase
+
+log = logging.getLogger("teamserver.feeding")
+
+FEED_KINDS = (M.MOUNT_RING, M.MOUNT_CAP, M.RETRIEVE_CAP, M.DELIVER)
+#: station states in which it takes a new PrepareMachine now or in a moment
+ACCEPTING = ("IDLE", "WAIT-IDLE")
+
+
+def is_feed(task: M.Task) -> bool:
+    return task.kind in FEED_KINDS and bool(task.prepare)
+
+
+class FeedMonitor:
+    """See the module doc.  ``production``: the
+    :class:`~teamserver.production.ProductionManager` (repairs, flush products)."""
+
+    def __init__(self, kb: KnowledgeBase, production, clock, confirm: float = 10.0):
+        self.kb = kb
+        self.production = production
+        self.clock = clock
+        self.confirm = confirm
+
+    # -- the instruction a station waits with ------------------------------------------
+    def sent(self, task: M.Task) -> None:
+        """``task``'s PrepareMachine went out (or was adopted) now."""
+        prepared = dict(self.kb.get("prepared") or {})
+        prepared[task.prepare["machine"]] = {"prepare": task.prepare, "at": self.clock.now(),
+                                             "task": task.id}
+        self.kb.set("prepared", prepared)
+
+    def instruction(self, machine: str) -> dict | None:
+        """The instruction ``machine`` is PREPARED with and not yet fed, if we sent it."""
+        st = self.kb.stations.get(machine)
+        rec = (self.kb.get("prepared") or {}).get(machine)
+        if st is None or rec is None or st.state != "PREPARED" or st.fed_at >= rec["at"]:
+            return None
+        return rec["prepare"]
+
+    def _owner(self, machine: str) -> M.Task | None:
+        """The assigned task on its way to feed ``machine``'s waiting instruction."""
+        rec = (self.kb.get("prepared") or {}).get(machine)
+        t = self.kb.tasks.get(rec["task"]) if rec else None
+        if t is not None and t.state == M.ASSIGNED and t.prepared_at is not None:
+            return t
+        return None
+
+    def adoptable(self, task: M.Task) -> bool:
+        """The station waits with exactly ``task``'s instruction and nobody else feeds it."""
+        machine = task.prepare["machine"]
+        owner = self._owner(machine)
+        return (self.instruction(machine) == task.prepare
+                and (owner is None or owner.id == task.id))
+
+    def accepts(self, task: M.Task) -> bool:
+        """Can ``task``'s station take its workpiece (see the module doc)?  True for
+        tasks that feed nothing."""
+        if not is_feed(task):
+            return True
+        machine = task.prepare["machine"]
+        if any(t.prepare["machine"] == machine for t in self.late() if t.id != task.id):
+            return False                # a workpiece waits in its input for a prepare
+        st = self.kb.stations.get(machine)
+        if st is None or st.state in ACCEPTING:
+            return True
+        return st.state == "PREPARED" and self.adoptable(task)
+
+    # -- finished feeds --------------------------------------------------------------
+    def finished(self, task: M.Task) -> None:
+        """A feed task succeeded: check the station took it, or send its prepare later."""
+        if not is_feed(task):
+            return
+        if task.prepared_at is not None:
+            feeds = dict(self.kb.get("feeds") or {})
+            feeds[str(task.id)] = self.clock.now() + self.confirm
+            self.kb.set("feeds", feeds)
+        else:
+            late = list(self.kb.get("late_prepares") or [])
+            late.append(task.id)
+            self.kb.set("late_prepares", late)
+
+    def late(self) -> list[M.Task]:
+        """Finished feeds whose PrepareMachine is still to be sent."""
+        out = []
+        for tid in self.kb.get("late_prepares") or []:
+            t = self.kb.tasks.get(tid)
+            if t is not None and t.state == M.DONE and t.prepared_at is None:
+                out.append(t)
+        return out
+
+    def late_sent(self, task: M.Task) -> None:
+        """The late PrepareMachine of ``task`` went out: verify the feed from now."""
+        self.kb.set("late_prepares", [i for i in self.kb.get("late_prepares") or []
+                                      if i != task.id])
+        self.finished(task)
+
+    def verify(self) -> list[M.Task]:
+        """Feeds the station never took within ``confirm`` s; their products are
+        repaired (:meth:`ProductionManager.feed_lost`).  Returns those tasks."""
+        feeds = dict(self.kb.get("feeds") or {})
+        if not feeds:
+            return []
+        now = self.clock.now()
+        lost = []
+        for key, deadline in list(feeds.items()):
+            t = self.kb.tasks.get(int(key))
+            st = self.kb.stations.get(t.machine) if t is not None else None
+            if t is None or st is None or t.prepared_at is None:
+                del feeds[key]
+            elif st.fed_at >= t.prepared_at:
+                del feeds[key]
+            elif now >= deadline:
+                del feeds[key]
+                if st.state not in ("BROKEN", "DOWN"):
+                    log.warning("%s never took the workpiece of task %d (%s)", st.name, t.id,
+                                t.kind)
+                    self.production.feed_lost(t)
+                    lost.append(t)
+        self.kb.set("feeds", feeds)
+        return lost
+
+    # -- stations waiting for nothing ----------------------------------------------------
+    def unstick(self) -> list[M.Product]:
+        """Feed a spare base to each station PREPARED with an instruction no open task
+        needs while one needs another instruction; returns the products made now."""
+        flushing = dict(self.kb.get("flushing") or {})
+        made = []
+        wanted: dict[str, list[dict]] = {}
+        for t in self.kb.open_tasks():
+            if is_feed(t):
+                wanted.setdefault(t.prepare["machine"], []).append(t.prepare)
+        for machine, wants in wanted.items():
+            instr = self.instruction(machine)
+            if instr is None or instr in wants or self._owner(machine) is not None:
+                continue
+            p = self.kb.products.get(flushing.get(machine, ""))
+            if p is not None and p.state == "ACTIVE":
+                continue
+            p = self.production.flush(machine, instr)
+            if p is not None:
+                flushing[machine] = p.id
+                made.append(p)
+                log.info("%s waits with %s that nothing needs: %s feeds it a spare base",
+                         machine, instr, p.id)
+        if made:
+            self.kb.set("flushing", flushing)
+        return made
