@@ -189,12 +189,14 @@ def m_product(ctx: ProductionContext):
 
 @DOMAIN.method("product_with", "reuse_capless_base")
 def m_product_reuse(ctx: ProductionContext, cs: str):
-    """The cap-less base from the cap retrieval serves as an additional base."""
+    """The cap-less base from the cap retrieval serves as an additional base: for the
+    last ring that needs one, so that the cap is retrieved as late as possible (the
+    retrieved cap keeps the cap station from other products until it is mounted)."""
     pr = ctx.progress
     if not ctx.reuse_capless_base or pr.cap_ready is not None:
         return None
     remaining = ctx.order.rings[len(pr.rings):]
-    for i, _color in enumerate(remaining):
+    for i in reversed(range(len(remaining))):
         if _bases_needed(ctx, remaining, i) > 0:
             return _product_spec(ctx, cs, reuse_for=i)
     return None
