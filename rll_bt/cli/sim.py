@@ -111,7 +111,8 @@ def run(args) -> int:
         summary = play(options, progress=not args.quiet, clock=wall)
     except BackendUnavailable as exc:
         raise Unavailable(str(exc), where="--gui" if options.gui else None,
-                          hint="run without --gui (headless) or set DISPLAY") from None
+                          hint="leave out --gui to play headless, or run where DISPLAY (X11) or "
+                               "WAYLAND_DISPLAY names a display") from None
     print(summary["table"])
     if options.out is not None:
         print(f"\nwrote {', '.join(summary['files'])} to {options.out}", file=sys.stderr)

@@ -6,7 +6,8 @@ One line per frame carried::
 
     {"t": 312.45, "channel": "cyan", "from": "R2", "type": "BeaconSignal", "msg": {...}}
 
-``t`` is the simulation clock (s); ``channel`` the bus channel or stream
+``t`` is the simulation clock (s; with ``--processes`` seconds since the
+game started, negative while the processes came up); ``channel`` the bus channel or stream
 address; ``msg`` the protobuf JSON mapping (original field names, enums by
 name).  Frames of the team channels and the team-server link are decrypted
 with the team key; a frame that cannot be decoded is logged with ``type``

@@ -46,6 +46,25 @@ BROADCAST = "127.255.255.255"
 AGENT_MAIN = "import sys; from rll_bt.cli import main; sys.exit(main())"
 
 
+def shift_recording(rec, t0: float) -> None:
+    """Every time of the recording ``rec`` made ``t0`` seconds earlier (in place)."""
+    def s(t):
+        return None if t is None else round(t - t0, 3)
+    rec.samples = [{**x, "t": s(x["t"])} for x in rec.samples]
+    rec.paths = {n: [(s(t), x, y) for t, x, y in pts] for n, pts in rec.paths.items()}
+    rec.stations = {n: [(s(t), st) for t, st in hist] for n, hist in rec.stations.items()}
+    rec.phases = [(s(t), p) for t, p in rec.phases]
+    rec.events = [{**e, "t": s(e["t"])} for e in rec.events]
+    rec.tasks = {n: [{**r, "start": s(r["start"]), "end": s(r["end"])} for r in runs]
+                 for n, runs in rec.tasks.items()}
+    rec.known_all_at = s(rec.known_all_at)
+    rec.exploration_started = s(rec.exploration_started)
+
+
+class ChildExited(RuntimeError):
+    """A process of the game ended on its own (or never came up)."""
+
+
 def udp_sender(source: str, msg) -> str:
     """Who sent what the refbox got over UDP, named as lockstep names them.
 
@@ -214,10 +233,11 @@ class ProcessGame:
             self.sim.step(dt)
             self.time_map.add(now, self.clock.now())
             self.sim.refbox_step()
-            before = len(self.recorder.rec.samples)
-            self.recorder.sample()
-            if self.progress is not None and len(self.recorder.rec.samples) != before:
-                self.progress(self.clock.now() - self._t0, self.sim.status())
+            if self._started:
+                before = len(self.recorder.rec.samples)
+                self.recorder.sample()
+                if self.progress is not None and len(self.recorder.rec.samples) != before:
+                    self.progress(self.clock.now() - self._t0, self.sim.status())
             return now
         return last
 
@@ -248,16 +268,23 @@ class ProcessGame:
         return True
 
     def run_until(self, predicate: Callable[["ProcessGame"], bool], limit: float) -> bool:
-        """Run until ``predicate(game)`` or ``limit`` more simulated seconds; whether it held."""
+        """Run until ``predicate(game)`` or ``limit`` more simulated seconds; whether it held.
+        :class:`ChildExited` if a process ended that no fault method stopped."""
         if not self.start():
-            raise RuntimeError(f"not every process came up (alive: {', '.join(self._alive())}; "
-                               f"see the logs in {self.dir})")
+            raise ChildExited(f"not every process came up (alive: {', '.join(self._alive()) or 'none'}; "
+                              f"see the logs in {self.dir})")
         end = self.clock.now() + limit
         while self.clock.now() < end:
             if predicate(self):
                 return True
             self._last = self._tick(self._last)
+            self._check_children()
         return predicate(self)
+
+    def _check_children(self) -> None:
+        for name, p in self.procs.items():
+            if p.poll() is not None:
+                raise ChildExited(f"the {name} process exited ({p.returncode}); see {self.dir / (name + '.log')}")
 
     def run_for(self, seconds: float) -> None:
         self.run_until(lambda g: False, seconds)
@@ -270,21 +297,17 @@ class ProcessGame:
         """Play until the game is over, at most ``limit`` simulated seconds
         (default: the expected length plus overtime and a margin)."""
         if not self.start():
-            return self._result(False)
+            return self.result(False)
         o = self.options
         if limit is None:
             limit = o.expected_duration() + o.rules.phases.overtime + 60.0
-        died = []
-
-        def stop(g) -> bool:
-            if "teamserver" not in g._alive():
-                died.append(True)
-                return True
-            return g.finished()
-        self.run_until(stop, limit)
-        if died and not self.finished():
-            self.recorder.note("the team server process died")
-        return self._result(self.finished())
+        end = self.clock.now() + limit
+        while self.clock.now() < end and not self.finished():
+            if "teamserver" not in self._alive():
+                self.recorder.note("the team server process died", log=str(self.dir / "teamserver.log"))
+                break
+            self._last = self._tick(self._last)
+        return self.result(self.finished())
 
     def _exploration_over(self, st) -> bool:
         o = self.options
@@ -292,12 +315,18 @@ class ProcessGame:
             return st.phase == "PRODUCTION" and st.game_time >= o.exploration_window()
         return st.phase in ("PRODUCTION", "POST_GAME")
 
-    def _result(self, finished: bool) -> GameResult:
-        self.recorder.sample(force=True)
+    def result(self, finished: bool) -> GameResult:
+        """The game as lockstep reports it: times in simulated seconds since the
+        game started (the world ran while the processes came up)."""
+        if self._result_made:
+            raise RuntimeError("the result of this game was already made")
+        self._result_made = True
+        if self._started:
+            self.recorder.sample(force=True)
         self._stop_children()
         snap = dict(self.snapshot())
         snap["restarts"] = self.restarts
-        end = self.clock.now()
+        t0, end = self._t0, self.clock.now()
         team = sorted((e for path in self._team_logs for e in read_lines(path, self.time_map)),
                       key=lambda e: e["t"])
         rec = self.recorder.rec
@@ -305,20 +334,19 @@ class ProcessGame:
         for t, robot in self._kills:
             for run in rec.tasks.get(robot, []):
                 if run["start"] <= t < run["end"]:
-                    run["end"], run["outcome"] = round(t, 3), "agent killed"
+                    run["end"], run["outcome"] = t, "agent killed"
+        shift_recording(rec, t0)
         messages = 0
         if self.log is not None:
             self.log.close()
-            if not self._result_made:
-                messages = merge_into(self.dir / "messages.jsonl", team)
-                for path in self._team_logs:
-                    path.unlink(missing_ok=True)
-                self._team_logs = []
-        self._result_made = True
+            messages = merge_into(self.dir / "messages.jsonl", team, shift=t0)
+            for path in self._team_logs:
+                path.unlink(missing_ok=True)
         return GameResult(finished=finished, status=self.sim.status(), recording=rec, awards=self.sim.awards(),
                           deliveries=self.sim.deliveries(), snapshot=snap, stations=self.sim.stations(),
                           orders=self.sim.orders(), collisions=self.sim.collisions(),
-                          sim_time=end, messages=messages, collision_log=self.sim.collision_log())
+                          sim_time=end - t0, messages=messages,
+                          collision_log=[(round(t - t0, 3), *rest) for t, *rest in self.sim.collision_log()])
 
     def _stop_children(self, timeout: float = 10.0) -> None:
         """SIGTERM to every child; keep serving the backends while they stop their robots."""

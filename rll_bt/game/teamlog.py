@@ -133,14 +133,17 @@ def read_lines(path: str | Path, to_sim=None) -> list[dict]:
     return out
 
 
-def merge_into(path: str | Path, *streams: Iterable[dict]) -> int:
+def merge_into(path: str | Path, *streams: Iterable[dict], shift: float = 0.0) -> int:
     """Add ``streams`` (each in time order) to the JSON-lines log at ``path``
-    (in time order), keeping the lines in time order; returns the lines written."""
+    (in time order), keeping the lines in time order and making every ``t``
+    ``shift`` seconds earlier; returns the lines written."""
     path = Path(path)
     tmp = path.with_name(path.name + ".merging")
     n = 0
     with open(tmp, "w", encoding="utf-8") as fh:
         for entry in heapq.merge(_iter_file(path), *streams, key=lambda e: e["t"]):
+            if shift:
+                entry = {**entry, "t": round(entry["t"] - shift, 4)}
             fh.write(json.dumps(entry, separators=(",", ":")) + "\n")
             n += 1
     os.replace(tmp, path)

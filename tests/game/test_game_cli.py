@@ -56,3 +56,13 @@ def test_bad_arguments_exit_2_and_sim_world_still_works(tmp_path, capsys):
     assert "--out" in capsys.readouterr().err
     assert main(["sim", "world", "--seed", "3", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["seed"] == 3
+
+
+@pytest.mark.parametrize("mode", [[], ["--processes"]])
+def test_gui_without_a_display_is_one_clear_line_and_exit_3(tmp_path, capsys, monkeypatch, mode):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["sim", "--gui", *mode, "-q", "--out", str(tmp_path)]) == 3
+    err = capsys.readouterr().err
+    assert "--gui" in err and "display" in err and "Traceback" not in err
+    assert not list(tmp_path.glob("*.log"))          # no process was started

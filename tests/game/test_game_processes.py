@@ -90,6 +90,7 @@ def test_a_short_game_in_processes_scores_exploration_and_logs_both_links(tmp_pa
     assert rc == 0, (out / "teamserver.log").read_text() if (out / "teamserver.log").exists() else ""
     rep = json.loads((out / "report.json").read_text())
     assert rep["finished"] and rep["points"]["exploration"] > 0       # reports reached the refbox
+    assert 18.0 <= rep["sim_time"] < 25.0             # the game's own length, not the processes' start-up
     snap = json.loads((out / "teamserver.json").read_text())
     assert snap["robots"]["1"]["status"] == "ACTIVE"                   # the agent joined over TCP
     assert any(t["kind"] == "explore_zone" and t["robot"] == 1 for t in snap["tasks"])

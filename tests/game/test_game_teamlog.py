@@ -106,8 +106,8 @@ def test_merging_keeps_one_log_in_time_order(tmp_path):
     m = WallToSim()
     m.add(999.0, 0.0)
     m.add(1003.0, 4.0)
-    assert merge_into(path, read_lines(team, m)) == 6
+    assert merge_into(path, read_lines(team, m), shift=0.5) == 6      # the game started at 0.5
     lines = [json.loads(x) for x in path.read_text().splitlines()]
     assert [(x["t"], x["channel"]) for x in lines] == [
-        (0.5, "public"), (1.0, "teamserver"), (2.0, "public"), (2.0, "teamserver"), (3.0, "public"),
-        (3.9, "teamserver")]
+        (0.0, "public"), (0.5, "teamserver"), (1.5, "public"), (1.5, "teamserver"), (2.5, "public"),
+        (3.4, "teamserver")]
