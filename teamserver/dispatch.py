@@ -3,10 +3,17 @@ results, and robots that drop out.
 
 - A production task is *ready* when its predecessors are DONE, its station
   locks are free (or held by its own product), its station is neither
-  BROKEN nor DOWN, the game is RUNNING in PRODUCTION, and (deliveries) its
-  order's window opens within ``deliver_early`` seconds.
+  BROKEN nor DOWN, the game is RUNNING in PRODUCTION, the station can take
+  its workpiece (:mod:`.feeding`), a delivery's robot would reach the DS
+  when the order's window opens, and a cap retrieval's product has started
+  its last ring mount that does not need the cap-less base.
+- A robot left holding a workpiece whose next step is not ready is *stuck*;
+  pickups that would leave one more robot stuck wait while ``robots - 1``
+  are (``robots - 2``, but one of two, for a new base from the BS), so that a
+  robot stays free to fetch what the held workpieces wait for.
 - Carry tasks go to the robot holding the workpiece; the others are matched
-  to idle robots with empty grippers by travel distance (an optimal
+  to idle robots with empty grippers by travel distance plus ``urgency``
+  times the seconds left until the order's window closes (an optimal
   assignment, ``scipy.optimize.linear_sum_assignment``), earlier products
   first on ties.  Locks are taken at assignment.
 - PrepareMachine is sent for an assigned task once its robot is within
@@ -64,6 +71,7 @@ class DispatchConfig:
     window_margin: float = 1.0      # the DS is prepared this long after the window opened
     feed_confirm: float = 10.0      # a fed station reports the workpiece within this time
     pickup_time: float = 30.0       # a pickup's drive and grab, for "ready once held"
+    urgency: float = 0.01           # metres of drive a second of an order's slack is worth
     park: bool = True
     park_retry: float = 15.0
     discard_backoff: float = 5.0
@@ -169,7 +177,27 @@ class Dispatcher:
             return False
         if task.kind == M.DELIVER and game_time < self.deliver_from(task):
             return False
+        if task.kind == M.RETRIEVE_CAP and not self.cap_due(task):
+            return False
         return True
+
+    def cap_due(self, task: M.Task) -> bool:
+        """A cap is retrieved only once every ring mount of its product that does not
+        wait for it is under way: a retrieved cap keeps its cap station from every
+        other product until it is mounted."""
+        product = self.kb.products.get(task.product or "")
+        if product is None:
+            return True
+        tasks = self.kb.tasks_of(product.tasks)
+        after, grew = {task.id}, True
+        while grew:                              # the steps that wait for the cap
+            grew = False
+            for t in tasks:
+                if t.id not in after and any(d in after for d in t.deps):
+                    after.add(t.id)
+                    grew = True
+        return not any(t.kind == M.MOUNT_RING and t.state == M.PENDING and t.id not in after
+                       for t in tasks)
 
     def deliver_from(self, task: M.Task) -> float:
         """Game time from which a delivery may start: its robot reaches the DS when
@@ -200,25 +228,25 @@ class Dispatcher:
         pool = [t for t in ready if not t.carry]
         if not free or not pool:
             return assigned
-        # at least one robot must stay able to fetch what the held workpieces wait for
-        stuck, limit = self.stuck(game_time), len(self.kb.active_robots()) - 1
-        blocking = {t.id for t in pool if self.blocks(t, game_time)}
-        if stuck >= limit:
-            pool = [t for t in pool if t.id not in blocking]
-            if not pool:
-                return assigned
+        # robots must stay able to fetch what the held workpieces wait for
+        stuck, n = self.stuck(game_time), len(self.kb.active_robots())
+        blocking = {t.id: self.hold_limit(t, n) for t in pool if self.blocks(t, game_time)}
+        pool = [t for t in pool if stuck < blocking.get(t.id, n)]
+        if not pool:
+            return assigned
         positions = self.production.positions()
         cost = np.zeros((len(free), len(pool)))
         for i, r in enumerate(free):
             for j, t in enumerate(pool):
-                cost[i, j] = self.travel(r, positions.get(t.machine)) + 1e-3 * _age(t)
+                cost[i, j] = (self.travel(r, positions.get(t.machine)) + 1e-3 * _age(t)
+                              + self.config.urgency * self._slack(t, game_time))
         rows, cols = linear_sum_assignment(cost)
         for i, j in sorted(zip(rows, cols), key=lambda ij: cost[ij[0], ij[1]]):
             t, r = pool[j], free[i]
             if not self.production.lock_free(t):
                 continue                    # another assignment just took the station
             if t.id in blocking:
-                if stuck >= limit:
+                if stuck >= blocking[t.id]:
                     continue                # the next tick matches this robot anew
                 stuck += 1
             self._assign(t, r)
@@ -226,6 +254,17 @@ class Dispatcher:
         return assigned
 
     # -- robots left holding what they cannot use yet ----------------------------------------
+    @staticmethod
+    def hold_limit(task: M.Task, robots: int) -> int:
+        """How many robots may be left holding what they cannot use yet, counting the
+        one taking ``task``: one fewer than the robots for a pickup that clears a
+        station's output; two fewer (but one of two) for a new base from the BS:
+        it only starts work, and a robot fetching parts must stay free besides
+        the one clearing outputs."""
+        if (task.machine or "").endswith("-BS"):
+            return max(robots - 2, min(robots - 1, 1))
+        return robots - 1
+
     def blocks(self, task: M.Task, game_time: float | None) -> bool:
         """Would the robot that picks up ``task``'s workpiece be left holding it, its
         next step not ready (other parts missing, the order's window not open)?"""
@@ -264,6 +303,15 @@ class Dispatcher:
             elif r.holding and r.number in bound:
                 n += not self.ready(bound[r.number], game_time)
         return n
+
+    def _slack(self, task: M.Task, game_time: float | None) -> float:
+        """Game seconds until the end of the window of ``task``'s order (0 for work
+        that only clears a station: it goes first)."""
+        p = self.kb.products.get(task.product or "")
+        o = self.kb.orders.get(p.order_id) if p is not None else None
+        if o is None or game_time is None:
+            return 0.0
+        return min(max(o.end - game_time, 0.0), 900.0)
 
     def travel(self, robot: M.Robot, pos) -> float:
         """Metres from the robot to ``pos`` (0 when either is unknown)."""

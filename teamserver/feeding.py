@@ -70,12 +70,22 @@ class FeedMonitor:
         self.kb.set("prepared", prepared)
 
     def instruction(self, machine: str) -> dict | None:
-        """The instruction ``machine`` is PREPARED with and not yet fed, if we sent it."""
+        """The instruction ``machine`` is PREPARED with and not yet fed, if we sent it
+        (None while a robot's feed there is still being checked: it may yet arrive)."""
         st = self.kb.stations.get(machine)
         rec = (self.kb.get("prepared") or {}).get(machine)
         if st is None or rec is None or st.state != "PREPARED" or st.fed_at >= rec["at"]:
             return None
+        if self._checking(machine):
+            return None
         return rec["prepare"]
+
+    def _checking(self, machine: str) -> bool:
+        for key in self.kb.get("feeds") or {}:
+            t = self.kb.tasks.get(int(key))
+            if t is not None and t.machine == machine:
+                return True
+        return False
 
     def _owner(self, machine: str) -> M.Task | None:
         """The assigned task on its way to feed ``machine``'s waiting instruction."""
@@ -147,7 +157,7 @@ class FeedMonitor:
             st = self.kb.stations.get(t.machine) if t is not None else None
             if t is None or st is None or t.prepared_at is None:
                 del feeds[key]
-            elif st.fed_at >= t.prepared_at:
+            elif st.fed_at >= t.prepared_at or self._counted(t):
                 del feeds[key]
             elif now >= deadline:
                 del feeds[key]
@@ -158,6 +168,18 @@ class FeedMonitor:
                     lost.append(t)
         self.kb.set("feeds", feeds)
         return lost
+
+    def _counted(self, task: M.Task) -> bool:
+        """A delivery the refbox counted for its order (whatever the station said)."""
+        if task.kind != M.DELIVER:
+            return False
+        p = self.kb.products.get(task.product or "")
+        o = self.kb.orders.get(p.order_id) if p is not None else None
+        if o is None:
+            return False
+        ours = sum(1 for q in self.kb.products.values()
+                   if q.order_id == o.id and q.state == "DELIVERED")
+        return ours <= o.delivered
 
     # -- stations waiting for nothing ----------------------------------------------------
     def unstick(self) -> list[M.Product]:

@@ -61,9 +61,10 @@ def test_prepare_machine_waits_until_the_robot_is_about_to_arrive(tcp):
     assert len([p for p in prepares(ls) if p.machine == "C-BS"]) == 2         # it reacted
 
 
-def test_one_robot_at_a_station_at_a_time(tcp):
-    ls = tcp
-    place(ls, [(5.0, 1.6, 0.0), (4.8, 1.7, 0.0), (5.2, 1.7, 0.0)])
+def test_one_robot_at_a_station_at_a_time():
+    # four robots: one may hold its base until the cap is ready, and two stay free
+    ls = Lockstep(robots=4)
+    place(ls, [(5.0, 1.6, 0.0), (4.8, 1.7, 0.0), (5.2, 1.7, 0.0), (4.6, 1.6, 0.0)])
     production_setup(ls, [dict(id=1), dict(id=2, delivery_gate=2)])
     ls.step(n=5)
     bs = [(a, k) for a in ls.agents for k in task_kinds(a) if k[2] == "C-BS"]

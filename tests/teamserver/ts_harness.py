@@ -222,6 +222,7 @@ def production_setup(ls, orders, t=0.0):
             o["ring_colors"] = [rc.Value(r) for r in o.pop("rings")]
         full.append(o)
     ls.refbox.orders(full)
+    ls.order_msgs = full
     ls.step(n=2)
 
 
@@ -229,3 +230,127 @@ def task_kinds(agent):
     return [(t.task_id, t.WhichOneof("kind"), getattr(t, t.WhichOneof("kind")).machine
              if t.WhichOneof("kind") not in ("explore_zone", "discard", "go_to") else None)
             for t in agent.tasks()]
+
+
+FEEDS = ("mount_ring", "mount_cap", "retrieve_cap", "deliver")
+
+
+class Stations:
+    """The refbox's side of our stations, scripted: a PrepareMachine makes a station
+    PREPARED (the BS dispenses at once), a workpiece fed to a PREPARED station is
+    processed (DS: delivered, the gate recorded; others: ready at the output), one fed
+    to a station not yet prepared waits on its input, and a pickup empties the output.
+    States go out in MachineInfo whenever they change."""
+
+    def __init__(self, ls):
+        self.ls = ls
+        self.states = ls.station_states
+        self.instr: dict = {}
+        self.waiting: set = set()
+        self.deliveries: list = []          # (game time, gate)
+        self.waiting_order: dict = {}       # DS -> order of the workpiece on its input
+        self.seen = 0
+
+    def _send(self):
+        self.ls.refbox.machines(self.states, RS_2016)
+
+    def take_prepares(self, gt):
+        got = self.ls.refbox.received[self.seen:]
+        self.seen = len(self.ls.refbox.received)
+        changed = False
+        for m in got:
+            if m.DESCRIPTOR.name != "PrepareMachine" or self.states.get(m.machine) != "IDLE":
+                continue
+            self.instr[m.machine] = m
+            self.states[m.machine] = "READY-AT-OUTPUT" if m.machine.endswith("BS") else "PREPARED"
+            changed = True
+            if m.machine in self.waiting:
+                self._send()                # every state change goes out
+                self.waiting.discard(m.machine)
+                self._process(m.machine, gt)
+        if changed:
+            self._send()
+
+    def _process(self, machine, gt):
+        if machine.endswith("DS"):
+            gate = self.instr[machine].instruction_ds.gate
+            self.deliveries.append((gt, gate))
+            self.states[machine] = "IDLE"
+            self._count(self.waiting_order.pop(machine, None), gate, gt)
+        else:
+            self.states[machine] = "READY-AT-OUTPUT"
+
+    def _count(self, order_id, gate, gt):
+        """The refbox counts a product for its order at the order's gate in the window."""
+        for o in self.ls.order_msgs:
+            if o["id"] == order_id and o["delivery_gate"] == gate and \
+                    o["delivery_period_begin"] <= gt <= o["delivery_period_end"]:
+                o["quantity_delivered_cyan"] += 1
+                self.ls.refbox.orders(self.ls.order_msgs)
+
+    def fed(self, machine, gt, task_id=None):
+        """A workpiece reached ``machine``'s input (``task_id``: the server's task)."""
+        if machine.endswith("DS"):
+            t = self.ls.server.kb.tasks.get(task_id)
+            p = self.ls.server.kb.products.get(t.product) if t is not None else None
+            self.waiting_order[machine] = p.order_id if p is not None else None
+        if self.states.get(machine) == "PREPARED":
+            self._process(machine, gt)
+            self._send()
+        else:
+            self.waiting.add(machine)
+
+    def taken(self, machine):
+        if self.states.get(machine) == "READY-AT-OUTPUT":
+            self.states[machine] = "IDLE"
+            self._send()
+
+
+def play(ls, until, *, t0=0.0, dt=0.5, steps=800, fail=None, drop=None, drive=3):
+    """Run the game from production time ``t0``: each robot drives to the station of a
+    task it gets (``drive`` steps), then reports it done; ``fail(agent, task)`` may
+    return a failure (TaskResult fields), ``drop(agent, task)`` True makes a feed's
+    workpiece fall beside the station (reported done all the same).  True once
+    ``until(gt)`` holds.  ``ls.stations`` is the scripted :class:`Stations`."""
+    st = ls.stations = getattr(ls, "stations", None) or Stations(ls)
+    answered = {a.number: 0 for a in ls.agents}
+    doing: dict[int, list] = {a.number: [] for a in ls.agents}
+    gt = t0
+    pos = ls.server.production.positions
+    for _ in range(steps):
+        gt += dt
+        ls.refbox.game_state("PRODUCTION", "RUNNING", gt)
+        st.take_prepares(gt)
+        for a in ls.agents:
+            a.beat()
+            tasks = a.tasks()
+            new, answered[a.number] = tasks[answered[a.number]:], len(tasks)
+            for t in new:
+                kind = t.WhichOneof("kind")
+                machine = getattr(t, kind).machine if kind not in ("discard", "go_to") else None
+                if machine and machine in pos():
+                    x, y = pos()[machine]
+                    a.pose = (x + 0.3, y, 0.0)
+                    a.status()
+                doing[a.number].append([t, drive])
+            for item in list(doing[a.number]):
+                item[1] -= 1
+                if item[1] > 0:
+                    continue
+                doing[a.number].remove(item)
+                t = item[0]
+                kind = t.WhichOneof("kind")
+                outcome = fail(a, t) if fail else None
+                if outcome:
+                    a.result(t.task_id, "FAILED", **outcome)
+                    continue
+                machine = getattr(t, kind).machine if kind not in ("discard", "go_to") else None
+                if kind in FEEDS and not (drop and drop(a, t)):
+                    st.fed(machine, gt, t.task_id)
+                elif kind == "get_workpiece":
+                    st.taken(machine)
+                a.result(t.task_id, holding=kind == "get_workpiece")
+        ls.step(dt=dt)
+        if until(gt):
+            return True
+    return False

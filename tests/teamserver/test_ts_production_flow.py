@@ -1,0 +1,165 @@
+"""Production against scripted stations: deliveries inside the order's window, lost
+workpieces a station never took, stations left PREPARED with a stale instruction,
+robots left holding what they cannot use yet, places the robots keep failing at."""
+from teamserver import model as M
+from ts_harness import Lockstep, play, production_setup
+
+
+def ds_gates(ls):
+    return [m.instruction_ds.gate for m in ls.refbox.received
+            if m.DESCRIPTOR.name == "PrepareMachine" and m.machine == "C-DS"]
+
+
+def delivered(ls, *orders):
+    """Until our products for ``orders`` are delivered and the DS processed as many."""
+    kb = ls.server.kb
+    return lambda gt: all(any(p.state == "DELIVERED" and p.order_id == o
+                              for p in kb.products.values()) for o in orders) and len(
+        ls.stations.deliveries) >= len(orders)
+
+
+def test_a_delivery_waits_for_the_orders_window():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=2, delivery_period_begin=200, delivery_period_end=400,
+                               delivery_gate=2)])
+    starts = {}
+
+    def note(agent, t):
+        if t.WhichOneof("kind") == "deliver":
+            starts[t.task_id] = ls.server.refbox.game_time()
+        return None
+    assert play(ls, delivered(ls, 2), fail=note)
+    [(gt, gate)] = ls.stations.deliveries
+    assert gate == 2 and 200 <= gt <= 400                   # not "too soon"
+    assert all(t >= 200 - 60 for t in starts.values())       # robots do not wait at the DS
+    [p] = [p for p in ls.server.kb.products.values() if p.order_id == 2]
+    done = {ls.server.kb.tasks[i].kind: ls.server.kb.tasks[i] for i in p.tasks}
+    assert done[M.MOUNT_CAP].finished_at < 150               # built ahead of the window
+
+
+def test_a_delivery_the_station_never_took_is_made_again_at_the_same_gate():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=1, delivery_gate=3)])
+    dropped = []
+
+    def drop(agent, t):
+        if t.WhichOneof("kind") == "deliver" and not dropped:
+            dropped.append(t.task_id)
+            return True
+        return False
+    assert play(ls, lambda gt: ls.stations.deliveries, drop=drop)
+    kb = ls.server.kb
+    [p] = [p for p in kb.products.values() if p.order_id == 1]
+    assert kb.tasks[dropped[0]].state == M.FAILED and p.repairs == 1
+    assert p.state == "DELIVERED"
+    assert [g for _, g in ls.stations.deliveries] == [3]
+    # the DS still waited with gate 3: the second delivery adopted that, no new prepare
+    assert ds_gates(ls) == [3]
+
+
+def test_a_station_waiting_with_another_gate_is_fed_a_spare_base_first():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=1, delivery_gate=1), dict(id=2, delivery_gate=2)])
+    srv = ls.server
+    kb, feeds = srv.kb, srv.dispatcher.feeds
+    ls.step(n=3)
+    # the DS waits with gate 1 of a delivery that is over; order 2 needs gate 2
+    for p in list(kb.products.values()):
+        srv.production.cancel_open(p)
+        p.state = "ABANDONED"
+        kb.save_product(p)
+    old = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
+                 state=M.DONE, prepare={"machine": "C-DS", "ds": {"gate": 1}})
+    kb.save_task(old)
+    feeds.sent(old)
+    ls.station_states["C-DS"] = "PREPARED"
+    ls.refbox.machines(ls.station_states)
+    ls.step()
+    want2 = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 2},
+                   prepare={"machine": "C-DS", "ds": {"gate": 2}}, carry=True, holder=1)
+    want1 = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
+                   prepare={"machine": "C-DS", "ds": {"gate": 1}}, carry=True, holder=2)
+    assert not feeds.accepts(want2)          # it would be delivered at gate 1
+    assert feeds.accepts(want1) and feeds.adoptable(want1)
+    kb.save_task(want2)
+    [flush] = feeds.unstick()
+    assert feeds.unstick() == []             # one at a time
+    steps = kb.tasks_of(flush.tasks)
+    assert [t.kind for t in steps] == [M.GET_WORKPIECE, M.DELIVER]
+    assert steps[0].machine == "C-BS" and steps[0].prepare["bs"]["side"] == M.OUTPUT
+    assert steps[1].prepare is None and steps[1].carry and steps[1].deps == (steps[0].id,)
+    assert steps[1].params["gate"] == 1 and steps[1].locks == ("C-DS",)
+    # once the spare base went through, the DS is IDLE and takes gate 2
+    ls.station_states["C-DS"] = "PROCESSING"
+    ls.refbox.machines(ls.station_states)
+    ls.station_states["C-DS"] = "IDLE"
+    ls.refbox.machines(ls.station_states)
+    ls.step()
+    assert feeds.instruction("C-DS") is None and feeds.accepts(want2)
+
+
+def test_a_feed_still_being_checked_is_neither_adopted_nor_flushed():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=1, delivery_gate=1)])
+    kb, feeds = ls.server.kb, ls.server.dispatcher.feeds
+    t = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1}, state=M.DONE,
+               prepare={"machine": "C-DS", "ds": {"gate": 1}}, prepared_at=ls.clock.now())
+    kb.save_task(t)
+    feeds.sent(t)
+    ls.station_states["C-DS"] = "PREPARED"
+    ls.refbox.machines(ls.station_states)
+    ls.step()
+    feeds.finished(t)                        # done, the DS has not reported it yet
+    again = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
+                   prepare={"machine": "C-DS", "ds": {"gate": 1}})
+    assert feeds.instruction("C-DS") is None and not feeds.accepts(again)
+    ls.station_states["C-DS"] = "IDLE"       # it processed the workpiece after all
+    ls.refbox.machines(ls.station_states)
+    ls.step()
+    assert feeds.verify() == [] and kb.get("feeds") == {}
+
+
+def test_one_robot_stays_free_while_the_others_hold_products_for_later_windows():
+    ls = Lockstep()
+    late = dict(delivery_period_begin=500, delivery_period_end=800)
+    production_setup(ls, [dict(id=2, **late), dict(id=3, delivery_gate=2, **late),
+                          dict(id=4, delivery_gate=3, **late)])
+    kb = ls.server.kb
+    most = []
+
+    def waiting(gt):
+        """Robots holding a product whose delivery is not ready."""
+        deliver = {t.holder for t in kb.open_tasks() if t.kind == M.DELIVER
+                   and t.holder is not None}
+        most.append(sum(1 for r in kb.robots.values() if r.holding and r.number in deliver))
+        return False
+    play(ls, waiting, steps=700)                       # up to production time 350
+    assert max(most) == 2 and most[-1] == 2
+    [third] = [p for p in kb.products.values() if not any(
+        t.kind == M.DELIVER and t.holder is not None for t in kb.tasks_of(p.tasks))]
+    [pickup] = [t for t in kb.tasks_of(third.tasks) if t.state == M.PENDING
+                and t.kind == M.GET_WORKPIECE]
+    assert pickup.machine[2:4] == "CS"                 # the third waits at the CS output
+    assert ls.server.dispatcher.stuck(350.0) == 2
+    assert play(ls, delivered(ls, 2, 3, 4), t0=350, steps=1200)
+    assert all(500 <= gt for gt, _ in ls.stations.deliveries)
+
+
+def test_a_slide_the_robots_keep_failing_at_is_planned_around():
+    ls = Lockstep()
+    # ORANGE costs one base on C-RS2's slide; the robots never manage to put it there
+    production_setup(ls, [dict(id=5, complexity=1, rings=["RING_ORANGE"]), dict(id=1)])
+    kb = ls.server.kb
+    tries = []
+
+    def fail(agent, t):
+        if t.WhichOneof("kind") == "put_workpiece" and t.put_workpiece.machine == "C-RS2":
+            tries.append(t.task_id)
+            return dict(error="NAVIGATION_FAILED", holding=True)
+        return None
+    assert play(ls, delivered(ls, 1), fail=fail)
+    play(ls, lambda gt: False, fail=fail, steps=100, t0=ls.server.refbox.game_time())
+    assert len(tries) == 4                                   # then the slide is left alone
+    assert "C-RS2:SLIDE" in ls.server.production.unusable()
+    [c1] = [p for p in kb.products.values() if p.order_id == 5]
+    assert c1.state == "ABANDONED"
