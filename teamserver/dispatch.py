@@ -177,8 +177,9 @@ class Dispatcher:
             return False
         if task.kind == M.DELIVER and game_time < self.deliver_from(task):
             return False
-        if task.kind == M.RETRIEVE_CAP and not self.cap_due(task):
-            return False
+        if task.kind == M.RETRIEVE_CAP and (self.production.cap_buffer.get(task.machine)
+                                            or not self.cap_due(task)):
+            return False                # a CS holding a cap cannot retrieve another
         return True
 
     def cap_due(self, task: M.Task) -> bool:

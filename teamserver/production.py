@@ -20,15 +20,16 @@ from rll_bt.rules import Profile
 from . import model as M
 from .health import StationHealth
 from .kb import KnowledgeBase
-from .planning.domain import CAP_LOCK, CAPLESS, EXTRA, MAIN, Progress
+from .planning.domain import CAP_LOCK, CAPLESS, EXTRA, MAIN, ProductionContext, Progress
 from .planning.estimate import SimRobot, SimTask
-from .planning.htn import Network, PlanningFailed
+from .planning.htn import Network, PlanningFailed, Seq
 from .planning.planner import Candidate, ProductionPlanner, World
 
 log = logging.getLogger("teamserver.production")
 
 DELIVERED, ABANDONED, ACTIVE = "DELIVERED", "ABANDONED", "ACTIVE"
 CLEANUP_ORDER = 0          # order id of products that only clear a station
+FREE = "free"              # owner of a retrieved cap no product owns yet (cap_buffer)
 
 
 class ProductionManager:
@@ -48,6 +49,8 @@ class ProductionManager:
         self.clock = clock
         self.health = StationHealth(kb)
         self.confirm_time = confirm_time
+        self.prefill_stop = 120.0       # no caps retrieved ahead this close to the end (s)
+        self.prefill_unknown = 600.0    # until then a cap colour no order wants yet may come
 
     def unusable(self) -> frozenset[str]:
         """Places the robots keep failing at (see :mod:`teamserver.health`)."""
@@ -192,22 +195,29 @@ class ProductionManager:
         choice = self.planner.choose(self.world(game_time, horizon))
         for cand in choice.start:
             self.start(cand)
+        if self.spare_robots() > 0:
+            self.prefill(game_time, horizon)
         return cancels, choice
+
+    def spare_robots(self) -> int:
+        """Idle robots with empty grippers beyond the steps that could start now."""
+        idle = sum(1 for r in self.kb.active_robots() if r.task_id is None and not r.holding)
+        startable = sum(1 for t in self.kb.open_tasks() if t.state == M.PENDING and not t.carry
+                        and all(self.kb.tasks.get(d) is not None
+                                and self.kb.tasks[d].state == M.DONE for d in t.deps))
+        return idle - startable
 
     def start(self, cand: Candidate) -> M.Product:
         pid = f"P{self.kb.next_id('product')}"
         product = M.Product(pid, cand.order.id, created=self.kb.get("game_time", 0.0))
         net = cand.network
-        buf = self.cap_buffer
-        free = [cs for cs, owner in buf.items() if owner == "free" and self.cs_caps.get(cs)
-                == cand.order.cap]
-        if free:        # a cap an abandoned product left in a CS: mount that one
-            buf[free[0]] = pid
+        free = self.free_cap(cand.order.cap)
+        if free:        # a cap retrieved ahead, or left by an abandoned product: mount that
             try:
                 world = self.world(float(self.kb.get("game_time", 0.0)), 0.0)
                 net = self.planner.decompose(self.planner.context(
-                    world, cand.order, Progress(cap_ready=free[0])))
-                self._set_cap_buffer(buf)
+                    world, cand.order, Progress(cap_ready=free)))
+                self._take_cap(free, pid)
             except PlanningFailed:
                 net = cand.network
         self.kb.save_product(product)
@@ -215,6 +225,48 @@ class ProductionManager:
         log.info("started %s for order %d (%d tasks)", pid, cand.order.id,
                  len(cand.network.steps))
         return product
+
+    def free_cap(self, cap: str) -> str | None:
+        """A CS holding a retrieved ``cap`` no product owns."""
+        for cs, owner in sorted(self.cap_buffer.items()):
+            if owner == FREE and self.cs_caps.get(cs) == cap:
+                return cs
+        return None
+
+    def _take_cap(self, cs: str, product_id: str) -> None:
+        buf = self.cap_buffer
+        buf[cs] = product_id
+        self._set_cap_buffer(buf)
+
+    def prefill(self, game_time: float, horizon: float) -> list[M.Product]:
+        """Retrieve a cap ahead into each idle cap station that holds none and that no
+        product plans to use now, while an order may still want its colour: a later
+        product mounts it at once (:meth:`free_cap`).  The cap-less base is
+        discarded.  Returns the cleanup products made now."""
+        if game_time > horizon - self.prefill_stop or not self.kb.orders:
+            return []
+        buf, made = self.cap_buffer, []
+        busy = {t.machine for t in self.kb.open_tasks() if t.machine}
+        prefilling = {t.machine for p in self.active_products() if p.order_id == CLEANUP_ORDER
+                      for t in self.kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP}
+        for cs, cap in sorted(self.cs_caps.items()):
+            st = self.kb.stations.get(cs)
+            if buf.get(cs) is not None or cs in busy or cs in prefilling or st is None or \
+                    st.state != "IDLE" or cs in self.unusable() or cs in self.locks:
+                continue
+            wanted = any(o.cap == cap and o.open > 0 for o in self.kb.orders.values())
+            if not wanted and game_time > self.prefill_unknown:
+                continue
+            pid = f"X{self.kb.next_id('product')}"
+            product = M.Product(pid, CLEANUP_ORDER, created=game_time)
+            self.kb.save_product(product)
+            ctx = ProductionContext(self.prefix, {}, {}, self.cs_caps, None)
+            net = self.planner.htn.plan(ctx, Seq(("retrieve_cap", cs), ("pickup", cs, True,
+                                                                          CAPLESS), ("discard",)))
+            self.add_network(product, net)
+            made.append(product)
+            log.info("%s retrieves a cap into %s ahead", pid, cs)
+        return made
 
     def add_network(self, product: M.Product, net: Network) -> list[M.Task]:
         ids = [self.kb.next_id("task") for _ in net.steps]
@@ -287,9 +339,8 @@ class ProductionManager:
             wp = M.Workpiece(f"{task.product}/capless{task.id}", base="?", cap=None,
                              location=f"{machine}:{M.OUTPUT}", product=task.product)
             self.kb.save_workpiece(wp)
-            buf = self.cap_buffer
-            buf[machine] = task.product
-            self._set_cap_buffer(buf)
+            ahead = product is not None and product.order_id == CLEANUP_ORDER
+            self._take_cap(machine, FREE if ahead else task.product)
         elif kind in (M.MOUNT_RING, M.MOUNT_CAP):
             wp = self.kb.workpieces.get(robot.holding or "")
             if wp is not None:
@@ -410,6 +461,11 @@ class ProductionManager:
             self._set_locks(locks)
         product.repair, product.repairs = None, product.repairs + 1
         order = self.kb.orders.get(product.order_id)
+        if order is not None and pr.cap_ready is None and self.free_cap(order.cap):
+            pr.cap_ready = self.free_cap(order.cap)      # mount a cap retrieved ahead
+            self._take_cap(pr.cap_ready, product.id)
+            owned[pr.cap_ready + CAP_LOCK] = product.id
+            self._set_locks({**self.locks, **owned})
         net = None
         if order is not None and order.open > 0 and product.repairs <= self.max_repairs:
             world = self.world(float(self.kb.get("game_time", 0.0)), 0.0)
@@ -445,7 +501,7 @@ class ProductionManager:
         self.release(product.id)
         buf = self.cap_buffer
         for cs in [cs for cs, owner in buf.items() if owner == product.id]:
-            buf[cs] = "free"            # a retrieved cap another product can mount
+            buf[cs] = FREE              # a retrieved cap another product can mount
         self._set_cap_buffer(buf)
         if pr.location and not pr.location.startswith("robot:"):
             self.clear_output(pr.location.split(":")[0])
@@ -453,7 +509,6 @@ class ProductionManager:
 
     def clear_output(self, machine: str) -> M.Product:
         """A small product that takes a workpiece from ``machine``'s output and discards it."""
-        from .planning.htn import Seq
         pid = f"X{self.kb.next_id('product')}"
         product = M.Product(pid, CLEANUP_ORDER)
         self.kb.save_product(product)
