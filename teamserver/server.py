@@ -283,6 +283,7 @@ class TeamServer:
     def _explore(self) -> None:
         busy = {int(t.params["zone"]) for t in self.kb.open_tasks()
                 if t.kind == M.EXPLORE_ZONE and t.state == M.ASSIGNED}
+        self._redirect_blind(busy)
         for r in self.dispatcher.idle_robots():
             view = ExplorationView.from_kb(self.kb, self.color, self.exploration_zones(), busy)
             d = self.strategy.next_zone(view, r.pose)
@@ -296,6 +297,28 @@ class TeamServer:
         if now - self._last["report"] >= self.config.report_period:
             self._last["report"] = now
             self.report()
+
+    def _redirect_blind(self, busy: set[int]) -> None:
+        """Turn robots away from zones their strategy chose blindly once it has
+        a better one for them (``Strategy.redirect``); looked at whenever an
+        observation came in.  The freed robots get their new zone at once."""
+        blind = [t for t in self.kb.open_tasks() if t.kind == M.EXPLORE_ZONE
+                 and t.state == M.ASSIGNED and not is_look(t)]
+        if not blind or self._last.get("redirect") == self.kb.observation_count:
+            return
+        self._last["redirect"] = self.kb.observation_count
+        cs = consistent_set(self.profile, self.kb.machines)
+        claimed: set[int] = set()
+        for t in blind:
+            zone = int(t.params["zone"])
+            r = self.kb.robots.get(t.robot) if t.robot is not None else None
+            view = ExplorationView.from_kb(self.kb, self.color, self.exploration_zones(),
+                                           (busy | claimed) - {zone}, cs)
+            d = self.strategy.redirect(view, t.params.get("branch"), r.pose if r else None)
+            if d is not None:
+                self._cancel_explore(t, f"{self.profile.zone_name(d.zone)} was observed")
+                busy.discard(zone)
+                claimed.add(d.zone)
 
     def report(self) -> list[dict]:
         """Report what is due (see :mod:`teamserver.exploration.report`); returns the entries."""

@@ -8,7 +8,13 @@ faces), turns to face the zone and sweeps the camera across it, feeding
 machine observations).  It stops early once a station in the zone is known
 with ``min_confidence`` and, when ``want_light``, its light state has been
 read; if the light is still missing it looks from in front of the
-station's output face, then its input face.  The zone is explored when the activity succeeds:
+station's output face, then its input face.  When ``want_sure`` (by
+default in profiles that score a station's rotation, 2017+), a station seen
+in the zone must also be known with ``sure_confidence``: a station believed
+in the zone (seen in this search, or placed there by the robot's machine
+map, i.e. the team server's) is looked at from in front of its tag faces
+(the nearer one first) before any ring viewpoint, since a far or oblique
+view of a tag leaves its pose, and with it the rotation, weak.  The zone is explored when the activity succeeds:
 ``found`` lists the stations seen in it (possibly none).  It fails with
 NAVIGATION_FAILED only when no viewpoint could be reached.
 """
@@ -80,12 +86,16 @@ class ExploreZone(Activity):
     def __init__(self, ctx, zone: int, viewpoints: list[Pose2D] | None = None,
                  want_light: bool | None = None, max_viewpoints: int = 3, sweep: float = math.radians(100),
                  min_confidence: float = 0.5, collector: SightingCollector | None = None,
-                 timeout: float | None = 240.0):
+                 timeout: float | None = 240.0, want_sure: bool | None = None,
+                 sure_confidence: float = 0.97, face_distance: float = 1.0):
         super().__init__(ctx, timeout)
         self.zone = zone
         self.given = list(viewpoints) if viewpoints else None
         prof = ctx.profile
         self.want_light = (prof.exploration_reports == "type+zone") if want_light is None else want_light
+        self.want_sure = (prof.exploration_reports != "type+zone") if want_sure is None else want_sure
+        self.sure_confidence = sure_confidence
+        self.face_distance = face_distance
         self.max_viewpoints = max_viewpoints
         self.sweep = sweep
         self.min_confidence = min_confidence
@@ -105,6 +115,7 @@ class ExploreZone(Activity):
             raise SkillFailure(SkillError.NAVIGATION_FAILED, f"no free viewpoint around {self.name[8:]}")
         self.plan = order_viewpoints(points, self.ctx.pose(), centre, self.max_viewpoints)
         self.light_sides = ["OUTPUT", "INPUT"]       # where to read a light not yet seen
+        self.tag_sides: dict[str, list[str]] = {}     # station -> faces not yet looked at
         self.child: Activity | None = None
         self.phase = "next"
         self.visited = 0
@@ -115,9 +126,55 @@ class ExploreZone(Activity):
         found = self.collector.machines_in_zone(self.zone, self.min_confidence)
         if not found:
             return False
+        if self.want_sure and any(self._unsure(m) for m in found):
+            return False
         return not self.want_light or all(self.collector.light_state(m) is not None for m in found)
 
+    def _unsure(self, machine: str) -> bool:
+        est = self.collector.tracker.estimate(machine)
+        return est is None or est.confidence < self.sure_confidence
+
+    def _believed_in_zone(self) -> dict[str, Pose2D]:
+        """Stations believed in the zone and their poses: on the robot's machine
+        map, or (overriding the map) seen in the zone in this search."""
+        prof = self.ctx.profile
+        out = {}
+        for m in self.ctx.machines.names():
+            pose = self.ctx.machines.get(m)
+            if pose is not None and prof.zone_at(pose.x, pose.y) == self.zone:
+                out[m] = pose
+        for m in self._seen_in_zone():
+            out[m] = self.collector.tracker.estimate(m).pose
+        return out
+
+    def _face_goal(self) -> Activity | None:
+        """Navigate in front of a tag face of a station believed in the zone
+        whose pose is not sure yet (None when there is no such face left)."""
+        mps = self.ctx.profile.mps
+        for m, pose in sorted(self._believed_in_zone().items()):
+            if not self._unsure(m):
+                continue
+            if m not in self.tag_sides:
+                here = self.ctx.pose()
+                self.tag_sides[m] = sorted(
+                    ("INPUT", "OUTPUT"), key=lambda side: approach_pose(
+                        pose, side, self.face_distance, mps=mps).distance_to(here))
+            while self.tag_sides[m]:
+                side = self.tag_sides[m].pop(0)
+                d = feasible_distance(self.ctx, pose, side, self.face_distance, mps.belt_offset_y,
+                                      minimum=0.6)
+                if d is None:
+                    continue
+                self.phase = "go"
+                return Navigate(self.ctx, PoseGoal(approach_pose(pose, side, d, mps=mps)),
+                                position_tolerance=0.1, heading_tolerance=0.1, timeout=60.0, max_blocked=8.0)
+        return None
+
     def _next_child(self) -> Activity | None:
+        if self.want_sure:
+            face = self._face_goal()
+            if face is not None:
+                return face
         if self.plan:
             vp = self.plan.pop(0)
             self.phase = "go"

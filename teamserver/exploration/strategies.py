@@ -25,6 +25,10 @@ class Decision:
     branch: str
 
 
+#: Algorithm 1's branches that choose a zone without any observation in it
+BLIND_BRANCHES = ("opposite", "random-start", "random-fallback")
+
+
 class Strategy:
     name = "base"
 
@@ -34,6 +38,11 @@ class Strategy:
 
     def next_zone(self, view: ExplorationView, pose=None) -> Decision | None:
         raise NotImplementedError
+
+    def redirect(self, view: ExplorationView, branch: str | None, pose=None) -> Decision | None:
+        """A zone to send a robot to instead of the one it explores (chosen by
+        ``branch``), or None to let it go on (the default)."""
+        return None
 
     def _choose_random(self, zones: list[int]) -> int:
         return self.rng.choice(sorted(zones))
@@ -60,12 +69,21 @@ class Algorithm1(Strategy):
         19   return exploreZone(getZoneWithLowestConfidence(...))
 
     ``observations`` are the zones where one of our machines is believed
-    (:meth:`ExplorationView.hypotheses`).  At line 18 no observed zone is
+    (:meth:`ExplorationView.hypotheses`) and not yet identified (confidence
+    below ``thresh``): a machine known well enough from afar (2017+, where a
+    far tag sighting gives zone and rotation) needs no visit.  Before line
+    14 searches unvisited zones at random, a machine that is placed but not
+    identified is looked at again when every machine is placed (an
+    unvisited zone cannot hold anything new then; branch "weak-revisit").  At line 18 no observed zone is
     unvisited any more (line 9 returned otherwise), so, as the paper's text
     says ("if all zones are visited, the zone with the lowest confidence is
     chosen"), the lowest-confidence observed zone is revisited.  Zones another
     robot is already heading for count as being visited.  When line 15 finds
     no unvisited zone left, it too falls back to the lowest confidence.
+
+    :meth:`redirect` lets the team server turn a robot away from a zone it
+    chose blindly (no observation yet: "opposite", "random-start",
+    "random-fallback") as soon as line 9 has an observed zone for it.
     """
 
     name = "algorithm1"
@@ -80,13 +98,31 @@ class Algorithm1(Strategy):
             if not_visited:                                             # line 5
                 return Decision(self._choose_random(not_visited), "random-start")
             return None
-        unvisited_obs = [z for z in hyp if z not in view.visited and z not in view.busy]
-        if unvisited_obs:                                               # line 9
-            return Decision(lowest_confidence(hyp, unvisited_obs), "observed-unvisited")
+        observed = self._observed_unvisited(view, hyp)
+        if observed is not None:                                        # line 9
+            return observed
+        weak = [z for z, c in hyp.items() if c < self.thresh and z not in view.busy]
+        if view.m_found(self.thresh) < view.n_mps and weak and view.all_observed():
+            return Decision(lowest_confidence(hyp, weak), "weak-revisit")
         if view.m_found(self.thresh) < view.n_mps and not_visited:      # line 14
             return Decision(self._choose_random(not_visited), "random-fallback")
         zones = [z for z in hyp if z not in view.busy] or list(hyp)     # line 18
         return Decision(lowest_confidence(hyp, zones), "lowest-confidence")
+
+
+    def _observed_unvisited(self, view: ExplorationView, hyp: dict[int, float]) -> Decision | None:
+        zones = [z for z, c in hyp.items()
+                 if z not in view.visited and z not in view.busy and c < self.thresh]
+        if not zones:
+            return None
+        return Decision(lowest_confidence(hyp, zones), "observed-unvisited")
+
+    def redirect(self, view: ExplorationView, branch: str | None, pose=None) -> Decision | None:
+        """A better zone for a robot exploring one it chose by ``branch``, or None."""
+        if branch not in BLIND_BRANCHES:
+            return None
+        hyp = view.hypotheses()
+        return self._observed_unvisited(view, hyp) if hyp else None
 
 
 class RandomStrategy(Strategy):

@@ -61,9 +61,10 @@ class ExplorationView:
     observed: set[str] = field(default_factory=set)   # machines some robot reported
 
     @classmethod
-    def from_kb(cls, kb, team: str, zones: list[int], busy: set[int] = frozenset()
-                ) -> "ExplorationView":
-        cs = consistent_set(kb.profile, kb.machines)
+    def from_kb(cls, kb, team: str, zones: list[int], busy: set[int] = frozenset(),
+                cs: ConsistentSet | None = None) -> "ExplorationView":
+        """The view of ``kb``; ``cs``: its consistent set when already made."""
+        cs = consistent_set(kb.profile, kb.machines) if cs is None else cs
         prefix = PREFIX[team] + "-"
         raw = {}
         for name, mb in kb.machines.items():
@@ -92,6 +93,13 @@ class ExplorationView:
         for name, z in self.raw_zones.items():
             hyp.setdefault(z, 0.0)
         return hyp
+
+    def all_observed(self) -> bool:
+        """Is every one of our machines placed by an observation (of itself or
+        of its twin)?  Then a search of unvisited zones can find nothing new."""
+        return len(self.guesses) == self.n_mps and all(
+            g.zone is not None and (name in self.observed or mirror_machine_name(name) in self.observed)
+            for name, g in self.guesses.items())
 
     def m_found(self, thresh: float) -> int:
         """mFound: our machines identified with confidence >= ``thresh``."""
