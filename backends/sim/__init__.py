@@ -93,7 +93,7 @@ _EXPORTS = {
     "draw_layout": "topview",
 }
 
-__all__ = sorted([*_EXPORTS, "open_sim"])
+__all__ = sorted([*_EXPORTS, "open_sim", "open_world"])
 
 
 def __getattr__(name: str):
@@ -103,6 +103,14 @@ def __getattr__(name: str):
         globals()[name] = value
         return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def open_world(profile=None, seed: int = 0, **options):
+    """Entry point ``rll_bt.worlds: pybullet``: a headless :class:`World` of
+    ``profile`` (name or Profile) for ``seed``; ``options`` as ``World``'s
+    (e.g. ``perception="rendered"``).  Camera views: :mod:`backends.sim.camera`."""
+    from .world import World
+    return World(profile, seed=seed, **options)
 
 
 def open_sim(world, robot=1, **options):

@@ -3,9 +3,12 @@ stations really in view of a robot's camera, without rendering.
 
 A tag is seen when its centre is within ``camera_range``, all four corners
 project inside the image, the marker faces the camera (angle between its
-normal and the ray to the camera below ``tag_max_angle``) and a ray from the
-camera to it hits nothing first.  A tower is seen when its middle light is in
-range, inside the image and unoccluded.  Each detection is then dropped with
+normal and the ray to the camera below ``tag_max_angle``) and rays from the
+camera to its centre and to its four corners (a little inside the edge) hit
+nothing first: a marker half hidden cannot be decoded.  A tower is seen when
+its middle light is in range and inside the image, and the rays to the
+middle light and to at least one of its ends (bottom light, top of the
+housing) are free.  Each detection is then dropped with
 probability ``dropout``.  Tag poses get Gaussian noise: position sigma
 ``tag_noise_pos`` per metre of range, rotation sigma ``tag_noise_rot``.
 
@@ -32,6 +35,7 @@ from .sensors import camera_model, camera_pose, project, ray_mask
 from .stations import Station
 
 RAY_STOP = 0.03            # stop occlusion rays this far before the target
+CORNER_INSET = 0.85        # corner rays aim at this fraction of the way from the tag centre
 SIDE_VIEW_COS = math.cos(math.radians(80.0))
 SIDES = ("input", "output")
 
@@ -73,6 +77,10 @@ class OracleScene:
         self.tower_bottom = np.array([st.tower_point(0) for st in stations]).reshape(n, 3) - [0, 0, seg / 2]
         self.tower_radius = stations[0].profile.mps.tower_radius if stations else 0.0
 
+    def _tag_targets(self, i: int) -> list[np.ndarray]:
+        c = self.tag_centre[i]
+        return [c] + [c + CORNER_INSET * (k - c) for k in self.tag_corners[i]]
+
     def detect(self, cid: int, robot: SimRobot, now: float, blink_hz: float,
                camera: str = "front") -> Detections:
         cfg, rng = robot.config, robot.rng
@@ -101,10 +109,15 @@ class OracleScene:
         towers = [int(s) for s in np.flatnonzero(mid_in)]
         side_facing = facing.reshape(n, 2)
 
-        targets = [self.tag_centre[i] for i, _ in tags] + [self.tower_mid[s] for s in towers]
-        free = _clear(cid, robot, eye, targets)
+        # five rays per tag (centre, corners), three per tower (middle, bottom, top)
+        targets = [p for i, _ in tags for p in self._tag_targets(i)]
+        targets += [p for s in towers for p in (self.tower_mid[s], self.tower_bottom[s], self.tower_top[s])]
+        free = np.asarray(_clear(cid, robot, eye, targets), bool)
+        tag_free = free[:5 * len(tags)].reshape(-1, 5).all(axis=1)
+        tower_rays = free[5 * len(tags):].reshape(-1, 3)
+        tower_free = tower_rays[:, 0] & tower_rays[:, 1:].any(axis=1)
         out_tags, out_lights = [], []
-        for (i, corners), ok in zip(tags, free[:len(tags)]):
+        for (i, corners), ok in zip(tags, tag_free):
             if not ok or (cfg.dropout > 0 and rng.random() < cfg.dropout):
                 continue
             t_cam = (self.tag_centre[i] - eye) @ rot
@@ -112,7 +125,7 @@ class OracleScene:
                                      cfg.tag_noise_pos * float(np.linalg.norm(t_cam)), cfg.tag_noise_rot)
             out_tags.append(TagDetection(self.tag_ids[i], tvec, rvec,
                                          tuple((float(u), float(v)) for u, v in corners), camera))
-        for s, ok in zip(towers, free[len(tags):]):
+        for s, ok in zip(towers, tower_free):
             if not ok or (cfg.dropout > 0 and rng.random() < cfg.dropout):
                 continue
             st = self.stations[s]

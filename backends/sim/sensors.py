@@ -8,8 +8,9 @@ other robots (the robot's own body is masked out); Gaussian noise of
 ``laser_noise`` on every hit, ``inf`` where nothing is hit.
 
 Camera: pinhole with ``CameraIntrinsics.from_fov(width, height, hfov)``,
-optical frame at ``ROBOT.camera_mount`` pitched by ``camera_pitch``; images
-are BGR uint8.
+optical frame at ``ROBOT.camera_mount`` pitched by ``camera_pitch``
+(:func:`camera_model`, :func:`camera_pose`); the views themselves are
+rendered by :mod:`backends.sim.camera`.
 """
 from __future__ import annotations
 
@@ -17,13 +18,12 @@ import math
 
 import numpy as np
 
-from rll_bt.backend import CameraExtrinsics, CameraImage, CameraIntrinsics, LaserScan, Pose2D
+from rll_bt.backend import CameraExtrinsics, CameraIntrinsics, LaserScan, Pose2D
 
 from .bullet import pybullet
 from .robot import SimRobot
 
 ALL_GROUPS = 0x7FFFFFFF
-NEAR, FAR = 0.02, 20.0
 
 
 def ray_mask(robot: SimRobot | None) -> int:
@@ -84,18 +84,3 @@ def project(points: np.ndarray, eye: np.ndarray, rot: np.ndarray,
         u = intr.fx * cam[:, 0] / z + intr.cx
         v = intr.fy * cam[:, 1] / z + intr.cy
     return np.column_stack([u, v]), z
-
-
-def render(cid: int, robot: SimRobot, stamp: float, camera: str = "front") -> CameraImage:
-    p = pybullet()
-    intr, extr = camera_model(robot)
-    eye, rot = camera_pose(robot, extr)
-    view = p.computeViewMatrix(eye.tolist(), (eye + rot[:, 2]).tolist(), (-rot[:, 1]).tolist(),
-                               physicsClientId=cid)
-    vfov = math.degrees(2.0 * math.atan(intr.height / (2.0 * intr.fy)))
-    proj = p.computeProjectionMatrixFOV(vfov, intr.width / intr.height, NEAR, FAR, physicsClientId=cid)
-    _, _, rgba, _, _ = p.getCameraImage(intr.width, intr.height, view, proj, shadow=0,
-                                        renderer=p.ER_TINY_RENDERER,
-                                        flags=p.ER_NO_SEGMENTATION_MASK, physicsClientId=cid)
-    rgb = np.reshape(np.asarray(rgba, dtype=np.uint8), (intr.height, intr.width, 4))[:, :, :3]
-    return CameraImage(stamp, np.ascontiguousarray(rgb[:, :, ::-1]), intr, extr, camera)

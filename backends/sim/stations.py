@@ -16,7 +16,11 @@ CS also ``shelf0``..``shelf2`` (y = ``shelf_y``), on an RS ``slide``
 
 Lights: ``GREEN`` (bottom), ``YELLOW``, ``RED`` (top), each ``OFF``, ``ON``
 or ``BLINK``; a blinking light is on during the first half of each period of
-the world's blink frequency (2 Hz by default).
+the world's blink frequency (2 Hz by default).  The tower is a grey core
+cylinder (visible in the 5 mm unlit borders between the segments) carrying
+three translucent coloured segments and the housing on top; an unlit
+segment keeps its colour (tinted plastic), a lit one is drawn by the
+camera renderer as an emitter (:mod:`backends.sim.render`, ``EMISSION``).
 """
 from __future__ import annotations
 
@@ -39,7 +43,11 @@ LIGHT_STATES = ("OFF", "ON", "BLINK")
 SLOT_INSET = 0.03                                # slot centre inside the face, metres
 SLIDE_CAPACITY = 10
 RGBA_ON = {"GREEN": (0.05, 1.0, 0.05, 1.0), "YELLOW": (1.0, 0.85, 0.0, 1.0), "RED": (1.0, 0.05, 0.05, 1.0)}
-RGBA_OFF = {"GREEN": (0.04, 0.16, 0.04, 1.0), "YELLOW": (0.18, 0.16, 0.03, 1.0), "RED": (0.18, 0.04, 0.04, 1.0)}
+# unlit: coloured translucent plastic, darker and less saturated than the lit light
+RGBA_OFF = {"GREEN": (0.14, 0.42, 0.19, 1.0), "YELLOW": (0.62, 0.50, 0.12, 1.0), "RED": (0.55, 0.13, 0.11, 1.0)}
+CORE_RGBA = (0.42, 0.42, 0.44, 1.0)             # the tower's core, seen in the unlit borders
+HOUSING_RGBA = (0.16, 0.16, 0.17, 1.0)
+CORE_RADIUS = 0.85                              # of the tower radius
 TEAM_RGBA = {CYAN: (0.0, 0.75, 0.85, 1.0), "MAGENTA": (0.85, 0.0, 0.6, 1.0)}
 CABINET_RGBA = (0.72, 0.72, 0.74, 1.0)
 TAG_OFFSET = 0.002                               # quad in front of the face
@@ -79,6 +87,8 @@ class Station:
         self.slots = self._slots()
         self.body: int | None = None
         self._light_links: dict[str, int] = {}
+        self.tower_links: set[int] = set()           # links of the signal tower (segments, core, housing)
+        self.unlit_rgba = dict(RGBA_OFF)             # colour of each segment while unlit
         self._shown: dict[str, bool] = {}
         self._c, self._s = math.cos(self.pose.theta), math.sin(self.pose.theta)
 
@@ -160,6 +170,10 @@ class Station:
         on = {c: blink_on(s, t, blink_hz) for c, s in self.lights.items()}
         return light_state_code(on["GREEN"], on["YELLOW"], on["RED"])
 
+    def lit_links(self) -> dict[int, str]:
+        """Links of the segments shown lit now -> light colour (``GREEN``...)."""
+        return {self._light_links[c]: c for c, on in self._shown.items() if on}
+
     def show_lights(self, cid: int, t: float, blink_hz: float) -> None:
         """Colour the tower segments for time ``t`` (only segments that change)."""
         if self.body is None:
@@ -169,9 +183,19 @@ class Station:
             on = blink_on(state, t, blink_hz)
             if self._shown.get(c) != on:
                 p.changeVisualShape(self.body, self._light_links[c],
-                                    rgbaColor=list(RGBA_ON[c] if on else RGBA_OFF[c]),
+                                    rgbaColor=list(RGBA_ON[c] if on else self.unlit_rgba[c]),
                                     physicsClientId=cid)
                 self._shown[c] = on
+
+    def set_unlit_colours(self, cid: int, rgba: dict[str, tuple]) -> None:
+        """Recolour unlit segments (``{"GREEN": (r, g, b, a), ...}``, 0..1)."""
+        self.unlit_rgba.update({c.upper(): tuple(v) for c, v in rgba.items()})
+        if self.body is None:
+            return
+        for c, on in self._shown.items():
+            if not on:
+                pybullet().changeVisualShape(self.body, self._light_links[c], rgbaColor=list(self.unlit_rgba[c]),
+                                             physicsClientId=cid)
 
     # -- body ---------------------------------------------------------------
     def build(self, cid: int, shapes: ShapeCache, texture_dir: str | None = None) -> int:
@@ -206,13 +230,19 @@ class Station:
             box((m.depth / 4.0, m.slide_y, belt_top - 0.01),
                 (m.depth / 4.0, 0.04, 0.01), (0.45, 0.45, 0.5, 1.0))
         seg_len = m.tower_segment - m.tower_segment_border
+        core_len = 3 * m.tower_segment
+        parts.append(Part(shapes.cylinder(m.tower_radius * CORE_RADIUS, core_len, CORE_RGBA),
+                          (m.tower_x, m.tower_y, m.tower_base + core_len / 2.0 - zc)))
+        self.tower_links = {len(parts) - 1}
         for i, c in enumerate(LIGHT_COLORS):
             parts.append(Part(shapes.cylinder(m.tower_radius, seg_len, RGBA_OFF[c]),
                               (m.tower_x, m.tower_y, m.segment_centre_z(i) - zc)))
             self._light_links[c] = len(parts) - 1
-        parts.append(Part(shapes.cylinder(m.tower_radius, m.tower_cap, (0.2, 0.2, 0.2, 1.0)),
+            self.tower_links.add(len(parts) - 1)
+        parts.append(Part(shapes.cylinder(m.tower_radius, m.tower_cap, HOUSING_RGBA),
                           (m.tower_x, m.tower_y, m.tower_base + 3 * m.tower_segment
                            + m.tower_cap / 2.0 - zc)))
+        self.tower_links.add(len(parts) - 1)
         tag_links = {}
         half_quad = quad_size(self.profile.tag_size) / 2.0
         quad = p.createVisualShape(p.GEOM_MESH, rgbaColor=[1, 1, 1, 1], physicsClientId=cid,

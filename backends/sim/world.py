@@ -20,6 +20,7 @@ from rll_bt.rules import TEAMS, Profile
 from rll_bt import rules
 
 from . import oracle, sensors
+from .camera import CameraViews
 from .bullet import (ShapeCache, box_polygon, circle_polygon, connect, prism_mesh, pybullet, trimesh_shape,
                      yaw_quaternion)
 from .collide import Box2D, ObstacleGrid
@@ -39,7 +40,7 @@ CONTACT_GAP = 0.005          # a bumper feels anything closer than this, metres
 GRID_PAD = 0.5               # largest robot radius the collision grid serves, metres
 
 
-class World(StationAPI, GripperHandling):
+class World(StationAPI, GripperHandling, CameraViews):
     """See the module and package docstrings."""
 
     def __init__(self, profile: str | Profile | None = None, seed: int = 0, *,
@@ -312,16 +313,6 @@ class World(StationAPI, GripperHandling):
         self._sync_bodies()
         robot.last_scan = sensors.laser_scan(self.cid, robot, self.time)
         return robot.last_scan
-
-    def camera_image(self, robot: SimRobot, camera: str = "front"):
-        """A rendered image (one render per robot per sim instant)."""
-        last = robot.last_image
-        if last is not None and last.stamp == self.time and last.camera == camera:
-            return last
-        self._sync_bodies()
-        self._show_lights()
-        robot.last_image = sensors.render(self.cid, robot, self.time, camera)
-        return robot.last_image
 
     def detections(self, robot: SimRobot, camera: str = "front"):
         """Oracle detections (works in either mode; the backend exposes it only in oracle mode)."""
