@@ -37,7 +37,8 @@ class ProductionManager:
 
     def __init__(self, kb: KnowledgeBase, planner: ProductionPlanner, prefix: str, *,
                  cs_caps: dict[str, str], max_products: int | None = None,
-                 max_repairs: int = 3, clock=None, confirm_time: float = 20.0):
+                 max_repairs: int = 3, clock=None, confirm_time: float = 20.0,
+                 prefill: bool = True):
         self.kb = kb
         self.profile: Profile = kb.profile
         self.planner = planner
@@ -49,6 +50,7 @@ class ProductionManager:
         self.clock = clock
         self.health = StationHealth(kb)
         self.confirm_time = confirm_time
+        self.prefill_caps = prefill
         self.prefill_stop = 120.0       # no caps retrieved ahead this close to the end (s)
         self.prefill_unknown = 600.0    # until then a cap colour no order wants yet may come
 
@@ -195,13 +197,16 @@ class ProductionManager:
         choice = self.planner.choose(self.world(game_time, horizon))
         for cand in choice.start:
             self.start(cand)
-        if self.spare_robots() > 0:
+        if self.prefill_caps and self.spare_robots() > 0:
             self.prefill(game_time, horizon)
         return cancels, choice
 
     def spare_robots(self) -> int:
         """Idle robots with empty grippers beyond the steps that could start now."""
-        idle = sum(1 for r in self.kb.active_robots() if r.task_id is None and not r.holding)
+        def idle(r: M.Robot) -> bool:
+            t = self.kb.tasks.get(r.task_id) if r.task_id is not None else None
+            return not r.holding and (t is None or t.kind == M.GO_TO)     # parking is idle
+        idle = sum(1 for r in self.kb.active_robots() if idle(r))
         startable = sum(1 for t in self.kb.open_tasks() if t.state == M.PENDING and not t.carry
                         and all(self.kb.tasks.get(d) is not None
                                 and self.kb.tasks[d].state == M.DONE for d in t.deps))

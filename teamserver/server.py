@@ -63,6 +63,7 @@ class ServerConfig:
     plan_budget: float = 0.04                   # s of wall time per planning round
     plan_max_evaluations: int = 60
     max_products: int | None = None             # default: one per robot
+    prefill_caps: bool = True                   # retrieve caps ahead into idle cap stations
     cs_caps: dict[str, str] = field(default_factory=lambda: dict(DEFAULT_CS_CAPS))
     durations: Durations = field(default_factory=Durations)
     dispatch: DispatchConfig = field(default_factory=DispatchConfig)
@@ -135,7 +136,7 @@ class TeamServer:
         self.production = ProductionManager(self.kb, self.planner, prefix,
                                             cs_caps=self.config.cs_caps,
                                             max_products=self.config.max_products,
-                                            clock=self.clock)
+                                            clock=self.clock, prefill=self.config.prefill_caps)
         self.dispatcher = Dispatcher(self.kb, self.production, self.clock, self.config.dispatch)
         self.reporter = Reporter(self.profile, prefix, thresh=self.config.explore_thresh,
                                  margin=self.config.report_margin)

@@ -1,5 +1,6 @@
 """Faults: robots that drop out and come back, a team server killed and restarted."""
 from teamserver import model as M
+from teamserver.server import ServerConfig
 from ts_harness import Lockstep, production_setup, task_kinds
 
 
@@ -12,7 +13,7 @@ def beat_all_but(ls, silent, seconds, dt=0.5):
 
 
 def test_a_silent_robot_is_dropped_and_its_task_reassigned():
-    ls = Lockstep()
+    ls = Lockstep(config=ServerConfig(prefill_caps=False))
     ls.server.config.dispatch.heartbeat_timeout = 4.0
     for a, pose in zip(ls.agents, [(5.0, 1.6, 0.0), (0.5, 5.5, 0.0), (1.0, 5.0, 0.0)]):
         a.pose = pose

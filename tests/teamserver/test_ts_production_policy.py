@@ -1,0 +1,155 @@
+"""Production policy of the team server, step by step: deliveries the refbox never
+counted, caps retrieved ahead and when a cap is due, places the robots keep failing
+at, and the planner option (HTN or the greedy baseline)."""
+import pytest
+
+from rll_bt import msgs
+from rll_bt.cli import main
+from rll_bt.comm import MessageRegistry
+from rll_bt.clock import SimClock
+from rll_bt.game.interfaces import TeamServerOptions
+from teamserver import model as M
+from teamserver.cli import PLANNER_NAMES
+from teamserver.game import InProcessTeamServer
+from teamserver.health import StationHealth
+from teamserver.kb import KnowledgeBase
+from teamserver.planning.planner import PLANNERS, GreedyPlanner, ProductionPlanner, make_planner
+from teamserver.production import FREE
+from teamserver.server import ServerConfig
+from ts_harness import Lockstep, play, production_setup
+
+
+def test_a_delivery_the_refbox_never_counted_opens_its_order_again():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=1), dict(id=3, quantity_requested=2)])
+    pm, kb = ls.server.production, ls.server.kb
+    for p in list(kb.products.values()):
+        pm.cancel_open(p)
+        p.state = "ABANDONED"
+        kb.save_product(p)
+    kb.save_product(M.Product("D1", 1, state="DELIVERED", delivered_at=100.0))
+    kb.save_product(M.Product("D2", 3, state="DELIVERED", delivered_at=100.0))
+    kb.save_product(M.Product("A1", 3))
+    w = pm.world(110.0, 900.0)
+    assert w.in_progress == {1: 1, 3: 2} and w.making == 1 and w.slots == 2
+    w = pm.world(130.0, 900.0)            # 30 s on, the refbox counted neither
+    assert w.in_progress == {3: 1} and w.slots == 2
+    assert {c.order.id for c in pm.planner.candidates(w)} == {1, 3}
+
+
+def test_caps_are_retrieved_ahead_and_mounted_by_the_next_product():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=1)])                       # black caps (C-CS2) only
+    pm, kb = ls.server.production, ls.server.kb
+    [ahead] = [p for p in kb.products.values() if p.order_id == 0]
+    kinds = [(t.kind, t.machine) for t in kb.tasks_of(ahead.tasks)]
+    assert kinds == [(M.RETRIEVE_CAP, "C-CS1"), (M.GET_WORKPIECE, "C-CS1"), (M.DISCARD, None)]
+    assert pm.prefill(5.0, 900.0) == []                       # one at a time
+    assert play(ls, lambda gt: pm.cap_buffer.get("C-CS1") == FREE and ahead.state != "ACTIVE"
+                and kb.products[ahead.id].state == "DELIVERED")
+    assert not pm.locks.get("C-CS1") and not pm.locks.get("C-CS1#cap")
+    # a grey order comes: its product mounts the cap that waits, it retrieves none
+    bc, cc = ls.refbox.ms.enum("BaseColor"), ls.refbox.ms.enum("CapColor")
+    ls.order_msgs.append(dict(ls.order_msgs[0], id=2, delivery_gate=2,
+                              base_color=bc.Value("BASE_BLACK"), cap_color=cc.Value("CAP_GREY")))
+    ls.refbox.orders(ls.order_msgs)
+    ls.step(n=3)
+    [grey] = [p for p in kb.products.values() if p.order_id == 2]
+    steps = kb.tasks_of(grey.tasks)
+    assert not [t for t in steps if t.kind == M.RETRIEVE_CAP]
+    assert [t.machine for t in steps if t.kind == M.MOUNT_CAP] == ["C-CS1"]
+    assert pm.cap_buffer["C-CS1"] == grey.id
+
+
+def test_no_cap_is_retrieved_ahead_without_orders_or_near_the_end():
+    ls = Lockstep()
+    production_setup(ls, [])
+    pm = ls.server.production
+    assert pm.prefill(10.0, 900.0) == []                      # nothing to make yet
+    production_setup(ls, [dict(id=1)])
+    assert pm.prefill(850.0, 900.0) == []
+
+
+def test_a_cap_is_retrieved_once_the_ring_mounts_before_it_are_under_way():
+    ls = Lockstep()
+    # two rings that cost nothing: no cap-less base is needed, so the cap comes last
+    production_setup(ls, [dict(id=6, complexity=2, rings=["RING_GREEN", "RING_YELLOW"])])
+    kb, disp = ls.server.kb, ls.server.dispatcher
+    [p] = [p for p in kb.products.values() if p.order_id == 6]
+    steps = {t.kind + str(i): t for i, t in enumerate(kb.tasks_of(p.tasks))}
+    [retrieve] = [t for t in steps.values() if t.kind == M.RETRIEVE_CAP]
+    mounts = [t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_RING]
+    assert not disp.cap_due(retrieve)
+    mounts[0].state = M.DONE
+    kb.save_task(mounts[0])
+    assert not disp.cap_due(retrieve)
+    mounts[1].state = M.ASSIGNED
+    kb.save_task(mounts[1])
+    assert disp.cap_due(retrieve)
+
+
+def test_a_cap_that_feeds_a_slide_is_retrieved_at_once():
+    ls = Lockstep()
+    # BLUE costs two bases: one of them is the cap-less base of the cap retrieval
+    production_setup(ls, [dict(id=5, complexity=1, rings=["RING_BLUE"])])
+    kb, disp = ls.server.kb, ls.server.dispatcher
+    [p] = [p for p in kb.products.values() if p.order_id == 5]
+    [retrieve] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP]
+    assert disp.cap_due(retrieve)
+
+
+def test_a_place_that_keeps_failing_is_paused_and_a_success_clears_the_count():
+    clock = SimClock()
+    kb = KnowledgeBase(__import__("rll_bt").rules.profile("rcll2016"))
+    h = StationHealth(kb, max_failures=3, pause=100.0)
+    slide = M.Task(1, M.PUT_WORKPIECE, {"machine": "C-RS2", "side": M.SLIDE})
+    out = M.Task(2, M.GET_WORKPIECE, {"machine": "C-RS2", "side": M.OUTPUT})
+    bs = M.Task(3, M.GET_WORKPIECE, {"machine": "C-BS", "side": M.OUTPUT})
+    assert not h.outcome(slide, False, "NAVIGATION_FAILED", clock.now())
+    assert not h.outcome(slide, False, "CANCELLED", clock.now())      # says nothing
+    assert not h.outcome(slide, True, "NONE", clock.now())            # count cleared
+    assert not h.outcome(slide, False, "TIMEOUT", clock.now())
+    assert not h.outcome(slide, False, "TIMEOUT", clock.now())
+    assert h.outcome(slide, False, "ALIGN_FAILED", clock.now())
+    assert h.unusable(clock.now()) == {"C-RS2:SLIDE"}
+    assert h.usable(out, clock.now()) and not h.usable(slide, clock.now())
+    for _ in range(5):
+        h.outcome(bs, False, "GRAB_FAILED", clock.now())              # never the BS
+    assert h.usable(bs, clock.now())
+    clock.advance(101.0)
+    assert h.unusable(clock.now()) == frozenset()
+
+
+def test_the_planner_is_an_option_of_the_server():
+    assert PLANNER_NAMES == tuple(PLANNERS)
+    ls = Lockstep(config=ServerConfig(planner="greedy"))
+    production_setup(ls, [dict(id=1), dict(id=2, delivery_gate=2)])
+    assert isinstance(ls.server.planner, GreedyPlanner)
+    assert ls.server.production.planner is ls.server.planner
+    assert {p.order_id for p in ls.server.kb.products.values() if p.order_id} == {1}
+    with pytest.raises(ValueError, match="unknown planner"):
+        make_planner("astar", ls.server.profile, "C")
+    assert type(make_planner("htn", ls.server.profile, "C")) is ProductionPlanner
+
+
+def test_the_simulated_game_plays_the_baseline_through_the_option(tmp_path):
+    ls = Lockstep()                        # a bus and registries to hand the factory
+    reg = MessageRegistry.from_message_set(msgs.message_set("rcll2016"))
+    ts = InProcessTeamServer(
+        profile="rcll2016", team_name="T", key="k", clock=ls.clock,
+        refbox_public=lambda: ls.bus.peer("public", registry=reg, name="x"),
+        refbox_team=lambda color: ls.bus.peer(color.lower(), registry=reg, name="x"),
+        agents=lambda: ls.bus.stream_server("ts2", registry=ls.team_reg, key="k"),
+        state=str(tmp_path / "ts.sqlite"), options=TeamServerOptions(baseline=True))
+    assert ts.config.planner == "greedy" and ts.config.max_products == 1
+    assert isinstance(ts.server.planner, GreedyPlanner)
+    ts.close()
+
+
+def test_cli_offers_the_planner(capsys):
+    with pytest.raises(SystemExit):
+        main(["teamserver", "--help"])
+    assert "--planner {htn,greedy}" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as bad:
+        main(["teamserver", "--team", "X", "--key", "k", "--planner", "astar"])
+    assert bad.value.code == 2
