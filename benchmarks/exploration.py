@@ -5,8 +5,11 @@ the oracle that knows where the stations stand) a lockstep game with three
 robots plays its exploration (SETUP shortened to 1 s) and stops as soon as
 every own station is correctly known and all exploration points are
 scored, or when the exploration time is over.  Measured per game: the
-exploration points and the game seconds until every own station was
-correctly known (the team server sure of its zone).
+exploration points, the game seconds until every own station was
+correctly known (the team server sure of its zone), and the game seconds
+until every exploration point was scored ("all points"; the game stops
+then, so this is its simulated time less SETUP, to within one step; a game
+that never scores them all counts the whole exploration window).
 
     .venv/bin/python benchmarks/exploration.py [--profile rcll2016|rcll2025] [--seeds 30]
                                                [--strategies algorithm1,random,nearest,oracle]
@@ -64,15 +67,24 @@ def main(argv=None) -> int:
     return 0 if all("error" not in r for r in rows) else 1
 
 
+def full_after(game, row) -> float:
+    """Game seconds until every exploration point was scored (the window when never)."""
+    ex = row["exploration"]
+    if ex["points"] >= ex["max_points"]:
+        return max(row["sim_time"] - row["phase_lengths"]["SETUP"], 0.0)
+    return game.exploration_window()
+
+
 def render(profile, strategies, seeds, games, rows, wall, per_seed=False) -> str:
     by = {st: [r for g, r in zip(games, rows) if g.strategy == st] for st in strategies}
+    game_of = {id(r): g for g, r in zip(games, rows)}
     oracle = median(r["exploration"]["known_all_after"] for r in by.get("oracle", []) if "error" not in r)
     lines = [f"exploration, {profile}, {len(seeds)} seeds ({seeds[0]}..{seeds[-1]}), 3 robots, "
              f"oracle perception; {wall:.0f} s wall",
              "",
              f"{'strategy':11} {'full points':>12} {'median pts':>11} {'known':>7} {'median time s':>14} "
-             f"{'vs oracle':>10} {'errors':>7}",
-             f"{'-' * 11} {'-' * 12} {'-' * 11} {'-' * 7} {'-' * 14} {'-' * 10} {'-' * 7}"]
+             f"{'vs oracle':>10} {'all points s':>13} {'errors':>7}",
+             f"{'-' * 11} {'-' * 12} {'-' * 11} {'-' * 7} {'-' * 14} {'-' * 10} {'-' * 13} {'-' * 7}"]
     for st in strategies:
         ok = [r for r in by[st] if "error" not in r]
         full = sum(1 for r in ok if r["exploration"]["points"] >= r["exploration"]["max_points"])
@@ -83,17 +95,20 @@ def render(profile, strategies, seeds, games, rows, wall, per_seed=False) -> str
         med = median(times)
         ratio = med / oracle if med is not None and oracle else None
         share = f"{full}/{len(ok)} ({100 * full / len(ok):.0f}%)" if ok else "-"
+        all_pts = median(full_after(game_of[id(r)], r) for r in ok)
         lines.append(f"{st:11} {share:>12} {fmt(median(r['exploration']['points'] for r in ok), '.0f'):>11} "
                      f"{known:>3}/{len(ok):<3} {fmt(med):>14} {fmt(ratio, '.2f') + 'x' if ratio else '-':>10} "
-                     f"{len(by[st]) - len(ok):>7}")
+                     f"{fmt(all_pts):>13} {len(by[st]) - len(ok):>7}")
     if per_seed:
-        lines += ["", f"{'strategy':11} {'seed':>4} {'points':>6} {'known after s':>13} {'wall s':>7}"]
+        lines += ["", f"{'strategy':11} {'seed':>4} {'points':>6} {'known after s':>13} {'all points s':>12} "
+                      f"{'wall s':>7}"]
         for g, r in zip(games, rows):
             if "error" in r:
                 lines.append(f"{g.strategy:11} {g.seed:4d} error: {r['error']}")
             else:
                 lines.append(f"{g.strategy:11} {g.seed:4d} {r['exploration']['points']:6d} "
-                             f"{fmt(r['exploration']['known_all_after']):>13} {fmt(r['wall_time'], '.0f'):>7}")
+                             f"{fmt(r['exploration']['known_all_after']):>13} {fmt(full_after(g, r)):>12} "
+                             f"{fmt(r['wall_time'], '.0f'):>7}")
     return "\n".join(lines)
 
 
