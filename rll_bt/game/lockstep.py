@@ -193,18 +193,10 @@ class LockstepGame:
             self.pace.sleep(ahead)
 
     def finished(self) -> bool:
-        st = self.sim.status()
-        if st.phase == "POST_GAME":
-            return True
-        if self.options.until == "exploration":
-            return self.exploration_over(st)
-        return False
+        return self.options.game_over(self.sim.status())
 
     def exploration_over(self, st: GameStatus | None = None) -> bool:
-        st = st or self.sim.status()
-        if self.options.rules.phases.exploration_in_production > 0:
-            return st.phase == "PRODUCTION" and st.game_time >= self.options.exploration_window()
-        return st.phase in ("PRODUCTION", "POST_GAME")
+        return self.options.exploration_over(st or self.sim.status())
 
     def run_for(self, seconds: float) -> None:
         self.start()

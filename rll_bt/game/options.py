@@ -101,6 +101,16 @@ class GameOptions:
             return float(self.exploration if self.exploration is not None else p.exploration_in_production)
         return float(self.exploration if self.exploration is not None else p.exploration)
 
+    def exploration_over(self, status) -> bool:
+        """Whether exploration is over at ``status`` (a :class:`~.interfaces.GameStatus`)."""
+        if self.rules.phases.exploration_in_production > 0:
+            return status.phase == "PRODUCTION" and status.game_time >= self.exploration_window()
+        return status.phase in ("PRODUCTION", "POST_GAME")
+
+    def game_over(self, status) -> bool:
+        """Whether the game as asked for (``until``) is over at ``status``."""
+        return status.phase == "POST_GAME" or (self.until == "exploration" and self.exploration_over(status))
+
     def expected_duration(self) -> float:
         """Simulated seconds of the whole game (or until exploration ends), no overtime."""
         lengths = self.phase_lengths()

@@ -238,6 +238,8 @@ class ProcessGame:
                 self.recorder.sample()
                 if self.progress is not None and len(self.recorder.rec.samples) != before:
                     self.progress(self.clock.now() - self._t0, self.sim.status())
+            elif self.progress is not None:       # the processes are coming up (the bar throttles itself)
+                self.progress(0.0, self.sim.status())
             return now
         return last
 
@@ -263,7 +265,7 @@ class ProcessGame:
         self._started = True
         self.sim.start()
         self._t0 = self.clock.now()
-        self._last = self.wall.now()
+        self._last = self._wall0 = self.wall.now()
         self.recorder.sample(force=True)
         return True
 
@@ -290,8 +292,7 @@ class ProcessGame:
         self.run_until(lambda g: False, seconds)
 
     def finished(self) -> bool:
-        st = self.sim.status()
-        return st.phase == "POST_GAME" or (self.options.until == "exploration" and self._exploration_over(st))
+        return self.options.game_over(self.sim.status())
 
     def run(self, limit: float | None = None) -> GameResult:
         """Play until the game is over, at most ``limit`` simulated seconds
@@ -309,12 +310,6 @@ class ProcessGame:
             self._last = self._tick(self._last)
         return self.result(self.finished())
 
-    def _exploration_over(self, st) -> bool:
-        o = self.options
-        if o.rules.phases.exploration_in_production > 0:
-            return st.phase == "PRODUCTION" and st.game_time >= o.exploration_window()
-        return st.phase in ("PRODUCTION", "POST_GAME")
-
     def result(self, finished: bool) -> GameResult:
         """The game as lockstep reports it: times in simulated seconds since the
         game started (the world ran while the processes came up)."""
@@ -323,6 +318,9 @@ class ProcessGame:
         self._result_made = True
         if self._started:
             self.recorder.sample(force=True)
+            lag = (self.wall.now() - self._wall0) - (self.clock.now() - self._t0)
+            if lag > 1.0:         # the agents' timeouts ran on the wall clock meanwhile
+                self.recorder.note("the world fell behind the wall clock", seconds=round(lag, 1))
         self._stop_children()
         snap = dict(self.snapshot())
         snap["restarts"] = self.restarts

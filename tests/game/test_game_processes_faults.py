@@ -74,8 +74,8 @@ def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
 
     summary = finish(result, opts)
     assert summary["team_server_restarts"] == 1
-    assert [e["what"] for e in summary["events"]] == ["agent killed", "agent started", "team server restarted",
-                                                      "station down"]
+    assert [e["what"] for e in summary["events"]][:4] == ["agent killed", "agent started", "team server restarted",
+                                                          "station down"]     # (+ how far the world fell behind)
     runs = result.recording.tasks[victim]
     assert any(r["id"] == tid and r["outcome"] == "agent killed" for r in runs)
     log = [json.loads(x) for x in (opts.out / "messages.jsonl").read_text().splitlines()]
