@@ -469,6 +469,10 @@ class Dispatcher:
             if status != "SUCCEEDED":
                 self._park_wait[robot.number] = self.clock.now() + self.config.park_retry
             return
+        if status == "FAILED" and self.feeds.took(task):
+            log.info("task %d failed (%s), but %s took its workpiece: done", task.id, error,
+                     task.machine)
+            status = "SUCCEEDED"
         if task.kind == M.DISCARD and status != "CANCELLED":
             self._discard_outcome(robot, status == "SUCCEEDED")
         if status != "CANCELLED":

@@ -22,7 +22,8 @@ for it until it is fed, so the next robot's workpiece is processed with the
 - checks every finished feed: the station must report that it took a
   workpiece (:attr:`teamserver.model.Station.fed_at`) within ``confirm``
   seconds, else the workpiece is lost and its product repaired
-  (:meth:`~FeedMonitor.verify`);
+  (:meth:`~FeedMonitor.verify`); a feed a robot reports failed although its
+  station took the workpiece counts as done (:meth:`~FeedMonitor.took`);
 - keeps feeds finished before their PrepareMachine could go out (a robot at
   the DS before the order's window) so the dispatcher sends it later
   (:meth:`~FeedMonitor.late`);
@@ -114,6 +115,14 @@ class FeedMonitor:
         if st is None or st.state in ACCEPTING:
             return True
         return st.state == "PREPARED" and self.adoptable(task)
+
+    def took(self, task: M.Task) -> bool:
+        """Has ``task``'s station taken a workpiece since its prepare (a robot may
+        report a feed failed that got there: it failed backing off)?"""
+        if not is_feed(task) or task.prepared_at is None:
+            return False
+        st = self.kb.stations.get(task.prepare["machine"])
+        return st is not None and st.fed_at >= task.prepared_at
 
     # -- finished feeds --------------------------------------------------------------
     def finished(self, task: M.Task) -> None:

@@ -57,6 +57,24 @@ def test_a_delivery_the_station_never_took_is_made_again_at_the_same_gate():
     assert ds_gates(ls) == [3]
 
 
+def test_a_feed_reported_failed_that_reached_the_station_counts_as_done():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=1)])
+    failed = []
+
+    def fail(agent, t):
+        if t.WhichOneof("kind") == "mount_cap" and not failed:
+            failed.append(t.task_id)                 # it timed out backing off
+            return dict(error="TIMEOUT", holding=False, fed=True)
+        return None
+    assert play(ls, delivered(ls, 1), fail=fail)
+    kb = ls.server.kb
+    [p] = [p for p in kb.products.values() if p.order_id == 1]
+    assert kb.tasks[failed[0]].state == M.DONE and p.repairs == 0
+    assert len([t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_CAP]) == 1
+    assert [g for _, g in ls.stations.deliveries] == [1]
+
+
 def test_a_station_waiting_with_another_gate_is_fed_a_spare_base_first():
     ls = Lockstep()
     production_setup(ls, [dict(id=1, delivery_gate=1), dict(id=2, delivery_gate=2)])

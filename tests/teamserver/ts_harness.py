@@ -309,7 +309,8 @@ class Stations:
 def play(ls, until, *, t0=0.0, dt=0.5, steps=800, fail=None, drop=None, drive=3):
     """Run the game from production time ``t0``: each robot drives to the station of a
     task it gets (``drive`` steps), then reports it done; ``fail(agent, task)`` may
-    return a failure (TaskResult fields), ``drop(agent, task)`` True makes a feed's
+    return a failure (TaskResult fields; ``fed=True``: the feed's workpiece reached
+    the station all the same), ``drop(agent, task)`` True makes a feed's
     workpiece fall beside the station (reported done all the same).  True once
     ``until(gt)`` holds.  ``ls.stations`` is the scripted :class:`Stations`."""
     st = ls.stations = getattr(ls, "stations", None) or Stations(ls)
@@ -341,10 +342,13 @@ def play(ls, until, *, t0=0.0, dt=0.5, steps=800, fail=None, drop=None, drive=3)
                 t = item[0]
                 kind = t.WhichOneof("kind")
                 outcome = fail(a, t) if fail else None
+                machine = getattr(t, kind).machine if kind not in ("discard", "go_to") else None
                 if outcome:
+                    outcome = dict(outcome)
+                    if outcome.pop("fed", False) and kind in FEEDS:
+                        st.fed(machine, gt, t.task_id)      # failed after it got there
                     a.result(t.task_id, "FAILED", **outcome)
                     continue
-                machine = getattr(t, kind).machine if kind not in ("discard", "go_to") else None
                 if kind in FEEDS and not (drop and drop(a, t)):
                     st.fed(machine, gt, t.task_id)
                 elif kind == "get_workpiece":
