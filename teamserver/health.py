@@ -7,7 +7,8 @@ needs the place is retried and repaired until the game ends, holding a
 product slot and robots.  :class:`StationHealth` counts failures in a row
 per *place* (a station, or a ring station's slide) and, after
 ``max_failures`` of them, reports the place as unusable for ``pause``
-seconds; a success there clears the count.  The planner then plans around
+seconds (twice as long each time it comes to that again); a success there
+clears the count.  The planner then plans around
 the place (another station with the same ring colour or cap, or other
 orders), and products that need it are repaired or abandoned.
 
@@ -60,18 +61,21 @@ class StationHealth:
         fails, until = dict(st["fails"]), dict(st["until"])
         if ok:
             if fails.pop(place, None) is not None:
-                self.kb.set("health", {"fails": fails, "until": until})
+                self.kb.set("health", {**st, "fails": fails})
             return False
         n = fails.get(place, 0) + 1
         fails[place] = n
+        marks = dict(st.get("marks", {}))
         paused = False
         if n >= self.max_failures:
-            until[place] = now + self.pause
+            marks[place] = marks.get(place, 0) + 1
+            pause = self.pause * 2 ** (marks[place] - 1)
+            until[place] = now + pause
             fails[place] = 0
             paused = True
             log.warning("%s failed %d times in a row: not planned with for %.0f s",
-                        place, n, self.pause)
-        self.kb.set("health", {"fails": fails, "until": until})
+                        place, n, pause)
+        self.kb.set("health", {"fails": fails, "until": until, "marks": marks})
         return paused
 
     def unusable(self, now: float) -> frozenset[str]:

@@ -194,6 +194,7 @@ class ProductionManager:
                 cancels += self.repair(p)
         if not self.ready_to_plan():
             return cancels, None
+        self.adopt_free_caps()
         choice = self.planner.choose(self.world(game_time, horizon))
         for cand in choice.start:
             self.start(cand)
@@ -242,6 +243,71 @@ class ProductionManager:
         buf = self.cap_buffer
         buf[cs] = product_id
         self._set_cap_buffer(buf)
+
+    def adopt_free_caps(self) -> list[M.Product]:
+        """Give each cap retrieved ahead to the most urgent product that has yet to
+        retrieve one of its colour there: its cap chain (retrieve, take the cap-less
+        base, discard it or put it on a slide) is cancelled, a base from the BS takes
+        the cap-less base's place on the slide.  (A station holding a cap cannot
+        retrieve another: without this the product would wait for ever.)"""
+        out = []
+        for cs, owner in sorted(self.cap_buffer.items()):
+            if owner != FREE:
+                continue
+            best = None
+            for p in self.active_products():
+                order = self.kb.orders.get(p.order_id)
+                if order is None:
+                    continue
+                chain = self._cap_chain(p, cs)
+                if chain is not None and (best is None or order.end < best[0]):
+                    best = (order.end, p, chain)
+            if best is None:
+                continue
+            _, p, (retrieve, pickup, after) = best
+            for t in (retrieve, pickup) + ((after,) if after.kind == M.DISCARD else ()):
+                t.state, t.error = M.CANCELLED, f"mounts the cap waiting in {cs}"
+                self.kb.save_task(t)
+            if after.kind == M.DISCARD:
+                for t in self.kb.tasks_of(p.tasks):
+                    if after.id in t.deps:
+                        t.deps = tuple(d for d in t.deps if d != after.id)
+                        self.kb.save_task(t)
+            else:                               # the slide still wants a base: from the BS
+                bs = f"{self.prefix}-BS"
+                base = self.kb.orders[p.order_id].base
+                get = M.Task(self.kb.next_id("task"), M.GET_WORKPIECE,
+                             {"machine": bs, "side": M.OUTPUT, "base": base, "role": EXTRA},
+                             product=p.id, prepare={"machine": bs, "bs": {"side": M.OUTPUT,
+                                                                          "color": base}},
+                             locks=(bs,), releases=(bs,), created=self.kb.get("game_time", 0.0))
+                self.kb.save_task(get)
+                after.deps = tuple(get.id if d == pickup.id else d for d in after.deps)
+                after.params = {**after.params, "carry_from": get.id}
+                after.holder = None
+                self.kb.save_task(after)
+                p.tasks = tuple(p.tasks) + (get.id,)
+                self.kb.save_product(p)
+            self._take_cap(cs, p.id)
+            out.append(p)
+            log.info("%s mounts the cap waiting in %s", p.id, cs)
+        return out
+
+    def _cap_chain(self, product: M.Product, cs: str):
+        """(retrieve, cap-less pickup, what takes the base) of ``product`` at ``cs``, all
+        still PENDING; None if there is none."""
+        tasks = self.kb.tasks_of(product.tasks)
+        for r in tasks:
+            if r.kind != M.RETRIEVE_CAP or r.machine != cs or r.state != M.PENDING:
+                continue
+            pick = [t for t in tasks if r.id in t.deps and t.kind == M.GET_WORKPIECE]
+            if len(pick) != 1 or pick[0].state != M.PENDING:
+                return None
+            after = [t for t in tasks if pick[0].id in t.deps and t.carry]
+            if len(after) != 1 or after[0].state != M.PENDING:
+                return None
+            return r, pick[0], after[0]
+        return None
 
     def prefill(self, game_time: float, horizon: float) -> list[M.Product]:
         """Retrieve a cap ahead into each idle cap station that holds none and that no

@@ -153,3 +153,46 @@ def test_cli_offers_the_planner(capsys):
     with pytest.raises(SystemExit) as bad:
         main(["teamserver", "--team", "X", "--key", "k", "--planner", "astar"])
     assert bad.value.code == 2
+
+
+@pytest.mark.parametrize("order, rest", [
+    (dict(id=2, cap_color=2), M.DISCARD),                       # C0: the base was discarded
+    (dict(id=5, complexity=1, rings=["RING_BLUE"], cap_color=2), M.PUT_WORKPIECE),  # on a slide
+])
+def test_a_cap_retrieved_ahead_goes_to_a_product_planned_before_it(order, rest):
+    ls = Lockstep(config=ServerConfig(prefill_caps=False))
+    production_setup(ls, [order], states={"C-CS1": "DOWN"})     # grey cap (C-CS1)
+    pm, kb = ls.server.production, ls.server.kb
+    [p] = [p for p in kb.products.values() if p.order_id == order["id"]]
+    retrieve, pick, after = pm._cap_chain(p, "C-CS1")
+    ls.station_states["C-CS1"] = "IDLE"
+    ls.refbox.machines(ls.station_states)
+    assert after.kind == rest
+    pm._take_cap("C-CS1", "free")                       # then a cap is retrieved ahead
+    assert not ls.server.dispatcher.ready(retrieve, 1.0)  # the CS cannot retrieve another
+    assert pm.adopt_free_caps() == [p]
+    assert pm.cap_buffer["C-CS1"] == p.id
+    assert {kb.tasks[t.id].state for t in (retrieve, pick)} == {M.CANCELLED}
+    [mount] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_CAP]
+    if rest == M.DISCARD:
+        assert kb.tasks[after.id].state == M.CANCELLED and after.id not in mount.deps
+    else:                                               # a base from the BS feeds the slide
+        slide = kb.tasks[after.id]
+        [get] = [kb.tasks[d] for d in slide.deps]
+        assert get.machine == "C-BS" and slide.params["carry_from"] == get.id
+        assert slide.state == M.PENDING and get.state == M.PENDING
+    assert play(ls, lambda gt: kb.products[p.id].state == "DELIVERED")
+    assert not [t for t in kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP
+                and t.state == M.DONE]
+
+
+def test_a_place_paused_again_is_paused_twice_as_long():
+    kb = KnowledgeBase(__import__("rll_bt").rules.profile("rcll2016"))
+    h = StationHealth(kb, max_failures=2, pause=100.0)
+    cs = M.Task(1, M.GET_WORKPIECE, {"machine": "C-CS1", "side": M.OUTPUT})
+    for now in (0.0, 1.0):
+        h.outcome(cs, False, "GRAB_FAILED", now)
+    assert h.unusable(99.0) == {"C-CS1"} and not h.unusable(101.0)
+    for now in (200.0, 201.0):
+        h.outcome(cs, False, "GRAB_FAILED", now)
+    assert h.unusable(390.0) == {"C-CS1"} and not h.unusable(402.0)

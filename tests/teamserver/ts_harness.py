@@ -199,8 +199,9 @@ RS_2016 = {"C-RS1": ("RING_BLUE", "RING_GREEN"), "C-RS2": ("RING_ORANGE", "RING_
 COSTS_2016 = {"RING_BLUE": 2, "RING_GREEN": 0, "RING_ORANGE": 1, "RING_YELLOW": 0}
 
 
-def production_setup(ls, orders, t=0.0):
-    """Our colour, PRODUCTION running, known machines, ring costs, idle stations, orders."""
+def production_setup(ls, orders, t=0.0, states=None):
+    """Our colour, PRODUCTION running, known machines, ring costs, idle stations (but
+    ``states``: machine -> state), orders."""
     for a in ls.agents:
         a.hello()
         a.status()
@@ -210,6 +211,7 @@ def production_setup(ls, orders, t=0.0):
         ls.agents[0].observe(name, zone=z, zconf=0.99)
     ls.refbox.rings(COSTS_2016)
     ls.station_states = {m: "IDLE" for m in PLACES_2016}
+    ls.station_states.update(states or {})
     ls.refbox.machines(ls.station_states, RS_2016)
     bc, cc = ls.refbox.ms.enum("BaseColor"), ls.refbox.ms.enum("CapColor")
     rc = ls.refbox.ms.enum("RingColor")
