@@ -189,16 +189,16 @@ def m_product(ctx: ProductionContext):
 
 @DOMAIN.method("product_with", "reuse_capless_base")
 def m_product_reuse(ctx: ProductionContext, cs: str):
-    """The cap-less base from the cap retrieval serves as an additional base: for the
-    last ring that needs one, so that the cap is retrieved as late as possible (the
-    retrieved cap keeps the cap station from other products until it is mounted)."""
+    """The cap-less base from the cap retrieval serves as an additional base for the
+    last ring, if that one needs one: the cap is then retrieved while the ring before
+    is mounted.  (For an earlier ring the retrieved cap would keep the cap station
+    from every other product for several ring mounts.)"""
     pr = ctx.progress
     if not ctx.reuse_capless_base or pr.cap_ready is not None:
         return None
     remaining = ctx.order.rings[len(pr.rings):]
-    for i in reversed(range(len(remaining))):
-        if _bases_needed(ctx, remaining, i) > 0:
-            return _product_spec(ctx, cs, reuse_for=i)
+    if remaining and _bases_needed(ctx, remaining, len(remaining) - 1) > 0:
+        return _product_spec(ctx, cs, reuse_for=len(remaining) - 1)
     return None
 
 

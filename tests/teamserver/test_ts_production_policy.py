@@ -196,3 +196,24 @@ def test_a_place_paused_again_is_paused_twice_as_long():
     for now in (200.0, 201.0):
         h.outcome(cs, False, "GRAB_FAILED", now)
     assert h.unusable(390.0) == {"C-CS1"} and not h.unusable(402.0)
+
+
+@pytest.mark.parametrize("rings, reused", [
+    (("RING_GREEN", "RING_ORANGE"), True),     # the last ring costs a base: the cap-less one
+    (("RING_ORANGE", "RING_GREEN"), False),    # only the first does: fetched from the BS
+])
+def test_the_cap_less_base_serves_only_the_last_ring(rings, reused):
+    from rll_bt import rules
+    from teamserver.planning.estimate import SimRobot
+    from teamserver.planning.planner import World
+    p16 = rules.profile("rcll2016")
+    rs = {"C-RS1": ("RING_BLUE", "RING_GREEN"), "C-RS2": ("RING_ORANGE", "RING_YELLOW")}
+    costs = {"RING_BLUE": 2, "RING_GREEN": 0, "RING_ORANGE": 1, "RING_YELLOW": 0}
+    caps = {"C-CS1": "CAP_GREY", "C-CS2": "CAP_BLACK"}
+    o = M.Order(6, 2, "BASE_RED", rings, "CAP_GREY", 1, 0, 0, 900, 1)
+    w = World([o], [SimRobot("1", (4.5, -0.5), 0.0)], {}, rs, costs, caps, 0.0, 900.0)
+    pl = ProductionPlanner(p16, "C")
+    net = pl.decompose(pl.context(w, o))
+    kinds = [s.fields["kind"] for s in net.steps]
+    assert kinds.count(M.DISCARD) == (0 if reused else 1)
+    assert kinds.count(M.PUT_WORKPIECE) == 1
