@@ -142,7 +142,8 @@ class Activity:
 class Sequence(Activity):
     """Run child activities one after the other; fails with the first
     failing child's code.  Children are created lazily by factories so each
-    sees the state the previous one left."""
+    sees the state the previous one left; a factory may return None to skip
+    its step."""
 
     name = "sequence"
 
@@ -164,8 +165,11 @@ class Sequence(Activity):
                 if self._index >= len(self._factories):
                     self.message = f"{self.name}: done"
                     return Status.SUCCESS
-                self.current = self._factories[self._index]().start()
+                child = self._factories[self._index]()
                 self._index += 1
+                if child is None:
+                    continue
+                self.current = child.start()
             status = self.current.poll()
             if status is Status.RUNNING:
                 return Status.RUNNING

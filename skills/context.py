@@ -144,7 +144,8 @@ class SkillContext:
     def costmap(self) -> Costmap:
         if self._costmap is None:
             s = self.settings
-            self._costmap = Costmap(self.map, s.costmap_resolution, self.robot.radius, s.plan_padding)
+            self._costmap = Costmap(self.map, s.costmap_resolution, self.robot.radius, s.plan_padding,
+                                    obstacle_padding=s.obstacle_padding)
         return self._costmap
 
     def heading_to(self, x: float, y: float) -> float:

@@ -36,6 +36,7 @@ from .errors import SkillError
 from .exploration import ExploreZone
 from .localisation.relocalise import Relocalise
 from .manipulation import ApproachStation, GrabFrom, PutOnto, place_for
+from .manipulation.station import back_off_distance
 from .navigation import Navigate, PoseGoal, StationSideGoal, ZoneGoal
 from .navigation.motions import MoveRelative, Turn
 
@@ -250,7 +251,8 @@ class BackOff(SkillNode):
     requires_capabilities = Capability.DRIVE | Capability.ODOMETRY
 
     def make(self, sctx):
-        return MoveRelative(sctx, -abs(self.distance), speed=0.2)
+        # the laser does not see behind: the known map limits the way back
+        return MoveRelative(sctx, -back_off_distance(sctx, abs(self.distance)), speed=0.2)
 
 
 class TurnNode(SkillNode):

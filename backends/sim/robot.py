@@ -95,9 +95,12 @@ def _approach(current: float, target: float, up: float, down: float) -> float:
 
 @dataclass
 class Collision:
+    """One collision event: a robot's motion blocked after a free one."""
     time: float
     robot: tuple[str, int]
     obstacle: str                         # machine name, "wall", or "robot TEAM/N"
+    pose: Pose2D | None = None            # the robot's true pose at the contact (field frame)
+    speed: float = 0.0                    # m/s the robot was moving at when it hit
 
 
 @dataclass

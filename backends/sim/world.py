@@ -249,13 +249,14 @@ class World(StationAPI, GripperHandling, CameraViews):
                 hi = mid
         stop = start if lo == 0.0 else Pose2D(start.x + (pose.x - start.x) * lo,
                                               start.y + (pose.y - start.y) * lo, start.theta)
+        speed = math.hypot(r.velocity[0], r.velocity[1])
         if r.config.odom_slip:          # the wheels keep turning
             r.commit(stop, vel, h, wheels=pose.relative_to(start))
         else:
             r.commit(stop, (0.0, 0.0, 0.0), h)
         if not r.blocked:
             r.collisions += 1
-            self.collision_log.append(Collision(now, r.key, hit))
+            self.collision_log.append(Collision(now, r.key, hit, stop, speed))
         r.blocked = True
         r.blocked_steps += 1
 
@@ -281,11 +282,16 @@ class World(StationAPI, GripperHandling, CameraViews):
 
     def clearance(self, team: str, number: int) -> float:
         """Smallest gap between the robot and any wall, station or robot (metres)."""
+        return self.closest(team, number)[0]
+
+    def closest(self, team: str, number: int) -> tuple[float, str]:
+        """(gap in metres, what) of the wall, station or robot nearest to the
+        robot; ``what`` is a machine name, "wall" or "robot TEAM/N"."""
         r = self.robot(team, number)
-        gaps = [box.sdf(r.pose.x, r.pose.y) - r.radius for _, box in self._obstacles]
-        gaps += [math.hypot(r.pose.x - o.pose.x, r.pose.y - o.pose.y) - r.radius - o.radius
+        gaps = [(box.sdf(r.pose.x, r.pose.y) - r.radius, name) for name, box in self._obstacles]
+        gaps += [(math.hypot(r.pose.x - o.pose.x, r.pose.y - o.pose.y) - r.radius - o.radius, f"robot {o.name}")
                  for o in self.robots.values() if o is not r]
-        return min(gaps)
+        return min(gaps, key=lambda g: g[0])
 
     def bumper(self, robot: SimRobot) -> bool:
         """Pressed while the robot pushes against something or touches it."""

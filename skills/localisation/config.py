@@ -54,6 +54,7 @@ class AmclConfig:
     lost: float = 0.2                    # below this for lost_updates updates: lost
     lost_updates: int = 5
     fit_tolerance: float = 0.15          # metres, a beam agrees with the map within this
+    station_slack: float = 0.5           # metres a beam may reach past a mapped station face (its pose may be off)
     cluster_xy: float = 0.3              # metres, particles within this of the best bin
     cluster_theta: float = math.radians(20.0)
 

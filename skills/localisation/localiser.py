@@ -9,14 +9,23 @@ from a backend's odometry and laser.
 
 The filter runs only after ``update_min_d`` metres or ``update_min_a``
 radians of odometry (as AMCL does), and, while its confidence is low, every
-``still_update_period`` seconds when standing.  Between filter updates the
+``still_update_period`` seconds when standing.  Each filter update moves the
+particles to the odometry of the *scan's* time (a scan is up to one laser
+period old; at 0.7 m/s that is 7 cm), from a short history of the odometry
+kept at every :meth:`Localiser.update` call.  Between filter updates the
 pose is the last estimate moved on by odometry, so ``pose()`` is smooth and
 current at every tick.
+
+Relocalising (:class:`~skills.localisation.relocalise.Relocalise`) may
+:meth:`Localiser.boost` the particle and beam counts for a while, and starts
+a global search with a prior around the last estimate, so that in a
+mirror-symmetric field the hypothesis on the robot's own side wins.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -83,10 +92,13 @@ class Localiser:
         self._pose_at_update: Pose2D | None = None     # estimate at the last filter update
         self._last_filter_time = -math.inf
         self._last_scan_stamp: float | None = None
+        self._reset_stamp = -math.inf
         self._low_streak = 0
         self._estimate: PoseEstimate | None = None
         self.filter_updates = 0
         self.last_contradiction = 0.0      # share of beams through mapped walls at the estimate
+        self._odom_history: deque[tuple[float, Pose2D]] = deque(maxlen=32)
+        self._base_config = self.config
 
     # -- set-up -----------------------------------------------------------
     def initialise(self, pose: Pose2D, sigma: tuple[float, float, float] = (0.1, 0.1, 0.1)) -> None:
@@ -94,13 +106,39 @@ class Localiser:
         self.filter.initialise(pose, sigma)
         self._reset(pose)
 
-    def initialise_global(self) -> None:
-        """Start lost: particles over all free space."""
+    def initialise_global(self, prior: Pose2D | None = None, prior_sigma: float = 2.5) -> None:
+        """Start lost: particles over all free space; with ``prior`` (the
+        last believed pose) weighted by a broad Gaussian around it
+        (``prior_sigma`` metres), which decides between look-alike places
+        far apart (the mirror image of the robot's place in the other
+        team's half) while any place can still win on the evidence."""
         self.filter.initialise_uniform()
+        if prior is not None:
+            p = self.filter.particles
+            d2 = (p[:, 0] - prior.x) ** 2 + (p[:, 1] - prior.y) ** 2
+            w = np.exp(-0.5 * d2 / prior_sigma ** 2)
+            self.filter.weights = w / w.sum()
         self._reset(None)
+
+    def boost(self, particles: int, beams: int | None = None) -> None:
+        """Use up to ``particles`` particles (and ``beams`` beams) until
+        :meth:`unboost`: for relocalising, where the particles must cover a
+        wide area; KLD sampling shrinks the set again as it converges."""
+        cfg = self._base_config
+        self.config = replace(cfg, particles=max(particles, cfg.particles),
+                              max_particles=max(particles, cfg.max_particles),
+                              beams=max(beams or cfg.beams, cfg.beams))
+        self.filter.config = self.config
+
+    def unboost(self) -> None:
+        """Back to the configured counts (the next resample trims the set)."""
+        self.config = self._base_config
+        self.filter.config = self.config
 
     def _reset(self, pose: Pose2D | None) -> None:
         self._odom_at_update = self.backend.odometry().pose
+        self._reset_stamp = self.clock.now()
+        self._last_scan_stamp = None
         self._pose_at_update = pose
         self._last_filter_time = -math.inf
         self._low_streak = 0
@@ -121,7 +159,10 @@ class Localiser:
         whether it ran.  Cheap otherwise: one odometry read."""
         if not self.initialised:
             raise RuntimeError("initialise the localiser first")
-        odom = self.backend.odometry().pose
+        reading = self.backend.odometry()
+        odom = reading.pose
+        if not self._odom_history or self._odom_history[-1][0] != reading.stamp:
+            self._odom_history.append((reading.stamp, odom))
         du, dv, dw = odometry_step(self._odom_at_update, odom)
         moved = math.hypot(du, dv) >= self.config.update_min_d or abs(dw) >= self.config.update_min_a
         now = self.clock.now()
@@ -131,8 +172,11 @@ class Localiser:
         if not (moved or still or force):
             return False
         scan = self._scan()
-        if scan is None:
-            return False
+        if scan is None or scan.stamp == self._last_scan_stamp or scan.stamp < self._reset_stamp - 1e-9:
+            return False          # no scan, the one already used, or one from before a re-initialisation
+        self._last_scan_stamp = scan.stamp
+        odom = self._odometry_at(scan.stamp, odom)        # where the robot was when the scan was taken
+        du, dv, dw = odometry_step(self._odom_at_update, odom)
         self.filter.predict((du, dv, dw))
         if not moved:
             self.filter.jitter(*self.config.still_jitter)
@@ -149,6 +193,21 @@ class Localiser:
         self._estimate = self._make_estimate(now, ranges, angles, scan.mount)
         self._pose_at_update = self._estimate.pose
         return True
+
+    def _odometry_at(self, stamp: float, now_pose: Pose2D) -> Pose2D:
+        """The odometry pose at ``stamp``: interpolated in the history (the
+        newest one when the stamp is newer, ``now_pose`` without history)."""
+        h = self._odom_history
+        if not h or stamp >= h[-1][0]:
+            return now_pose
+        if stamp <= h[0][0]:
+            return h[0][1]
+        for (t0, p0), (t1, p1) in zip(reversed(list(h)[:-1]), reversed(list(h)[1:])):
+            if t0 <= stamp <= t1:
+                f = 0.0 if t1 <= t0 else (stamp - t0) / (t1 - t0)
+                step = p1.relative_to(p0)
+                return p0.compose(Pose2D(step.x * f, step.y * f, step.theta * f))
+        return now_pose
 
     def _scan(self) -> LaserScan | None:
         try:
@@ -172,28 +231,35 @@ class Localiser:
 
         Only beams expected to reach at least 0.3 m count.  Beams cut short
         are neutral (unmapped stations, other robots); beams that reach past
-        a mapped wall contradict the pose, beams that end at the expected
-        wall support it: agreement = (1 - long / 0.2) *
-        min(1, match / 0.3), each factor clipped to [0, 1].  Sets
-        ``last_contradiction`` (the share of beams through walls), which
-        gates the random injection."""
+        a wall contradict the pose; beams that reach past a mapped station
+        face by less than ``station_slack`` metres are neutral too (a
+        station's mapped pose may be off, from a zone centre or a rough
+        sighting: only the walls are certain), deeper they contradict it;
+        beams that end at the expected wall or station
+        support it: agreement = (1 - long / 0.2) * min(1, match / 0.3), each
+        factor clipped to [0, 1].  Sets ``last_contradiction`` (the share of
+        beams through walls), which gates the random injection."""
         if len(ranges) == 0:
             self.last_contradiction = 0.0
             return 0.0
         spec, occ = self.map.occupancy(self.config.grid_resolution)
         origin = pose.compose(mount)
-        expected = march_rays(spec, occ, (origin.x, origin.y), angles + origin.theta,
-                              self.filter.field.range_max)
+        rays = ((origin.x, origin.y), angles + origin.theta, self.filter.field.range_max)
+        expected = march_rays(spec, occ, *rays)
+        if self.map.obstacles:
+            walls = march_rays(*self.map.wall_occupancy(self.config.grid_resolution), *rays)
+        else:
+            walls = expected
         # beams ending next to the robot (docked at a station) graze corners
         # of the rasterised map: they say little about the pose
         judged = expected >= 0.3
         if not judged.any():
             self.last_contradiction = 0.0
             return 1.0
-        r, e = ranges[judged], expected[judged]
+        r, e, w = ranges[judged], expected[judged], walls[judged]
         tol = self.config.fit_tolerance
-        match = float(np.mean(np.abs(r - e) <= tol))
-        long = float(np.mean(r > e + tol))
+        match = float(np.mean((np.abs(r - e) <= tol) | (np.abs(r - w) <= tol)))
+        long = float(np.mean((r > w + tol) | (r > e + self.config.station_slack)))
         self.last_contradiction = long
         return float(np.clip(1.0 - long / 0.2, 0.0, 1.0) * min(1.0, match / 0.3))
 

@@ -1,46 +1,140 @@
-"""Recovering a lost pose: spread the particles and look around.
+"""Recovering a lost or wrong pose: spread the particles, look around, and
+use the station tags the camera sees.
 
 :class:`Relocalise` re-initialises the localiser around its last estimate
-(or over the whole field with ``global_search``), then turns the robot on
-the spot (at most one full turn) while the filter updates, and succeeds as
-soon as the confidence reaches the localiser's ``confident`` level.  If a
-full turn does not do it, it fails with LOCALISATION_LOST.
+(``spread``, standard deviations in m, m, rad), or over the whole field
+with ``global_search`` (weighted toward the last estimate, so the mirror
+image of the robot's place in the other half does not win on a tie), with
+more particles and beams than usual (:meth:`Localiser.boost`), then turns
+the robot on the spot (one full turn) while the filter updates.
+
+Every sighting of the tag of a station whose pose is known gives the
+robot's pose directly (:func:`pose_from_tag`): when that disagrees with the
+filter's estimate, the filter starts again around it (the laser then
+refines it).  So a robot that sees any known tag recovers from any wrong
+pose, symmetric field or not.
+
+It succeeds once the estimate is confident (the localiser's ``confident``
+level) and compact (``std_xy`` below ``max_std``) for ``settle`` filter
+updates in a row, and either a known tag agrees with it or the estimate
+never fell below ``hold`` confidence while the robot turned by
+``look_around`` radians (a wrong pose often fits the part of the field in
+view, and fits badly somewhere else; the laser's 240 degrees plus half a
+turn see all round).
+It fails with LOCALISATION_LOST when a full turn did not do it.
 """
 from __future__ import annotations
 
 import math
 
+from rll_bt.backend import Pose2D, wrap_angle
+
 from ..activity import Activity, Status
 from ..errors import SkillError, SkillFailure
+from ..manipulation.tagview import tag_pose_in_robot
 from ..navigation.motions import Turn
+from ..perception.tags.geometry import tag_pose_on_machine
+
+
+def pose_from_tag(ctx, detections) -> list[Pose2D]:
+    """Robot poses (field frame) implied by the tags in ``detections`` of
+    stations whose pose ``ctx.machines`` knows, one per such tag."""
+    out = []
+    for det in detections.tags:
+        owner = ctx.profile.machine_for_tag(det.tag_id)
+        if owner is None:
+            continue
+        machine = ctx.machines.get(owner[0])
+        seen = tag_pose_in_robot(detections, det.tag_id)
+        if machine is None or seen is None:
+            continue
+        tag, _ = tag_pose_on_machine(machine, owner[1], ctx.profile.mps)
+        out.append(tag.compose(seen.inverse()))
+    return out
 
 
 class Relocalise(Activity):
     name = "relocalise"
 
     def __init__(self, ctx, spread: tuple[float, float, float] = (0.5, 0.5, 0.6),
-                 global_search: bool = False, timeout: float | None = 30.0):
+                 global_search: bool = False, timeout: float | None = 40.0, particles: int | None = None,
+                 max_std: float = 0.12, settle: int = 3, tag_disagreement: float = 0.3,
+                 look_around: float = math.pi, hold: float = 0.3):
         super().__init__(ctx, timeout)
         self.spread = spread
         self.global_search = global_search
+        self.particles = particles or (6000 if global_search else 1500)
+        self.max_std = max_std
+        self.settle = settle
+        self.tag_disagreement = tag_disagreement
+        self.look_around = look_around
+        self.hold = hold
         self.turn: Turn | None = None
+        self.tag_fixes = 0
 
     def _on_start(self) -> None:
         loc = self.ctx.pose_source
         if not hasattr(loc, "filter"):
             raise SkillFailure(SkillError.LOCALISATION_LOST, "the pose source cannot relocalise")
-        if self.global_search or loc.pose() is None:
-            loc.initialise_global()
+        last = loc.pose()
+        loc.boost(self.particles, beams=60)
+        if self.global_search or last is None:
+            loc.initialise_global(prior=last)
         else:
-            loc.initialise(loc.pose(), self.spread)
+            loc.initialise(last, self.spread)
+        self._good = 0                    # filter updates in a row with a confident estimate
+        self._fair_from: float | None = None   # turned (rad) when the estimate last became fair
+        self._agreed = False              # a tag confirmed the current estimate
+        self._seen = loc.filter_updates
+        self._last_tags = None
+        self.tag_fixes = 0
         self.turn = Turn(self.ctx, by=2.0 * math.pi, omega=0.5).start()
+
+    def _look(self) -> None:
+        """Restart the filter around a tag's answer when it disagrees."""
+        tags = getattr(self.ctx, "tags", None)
+        dets = tags.detections() if tags is not None else None
+        if dets is None or dets.stamp == self._last_tags:
+            return
+        self._last_tags = dets.stamp
+        loc = self.ctx.pose_source
+        odom_then = self.ctx.odometry_history.at(dets.stamp)
+        odom_now = self.ctx.backend.odometry().pose
+        moved = odom_now.relative_to(odom_then) if odom_then is not None else Pose2D()
+        est = loc.pose() if loc.estimate() is not None else None
+        for fix in pose_from_tag(self.ctx, dets):
+            fix = fix.compose(moved)              # from the image's time to now
+            d, a = (math.inf, math.inf) if est is None else (fix.distance_to(est), abs(wrap_angle(fix.theta - est.theta)))
+            if d > self.tag_disagreement or a > self.tag_disagreement:
+                loc.initialise(fix, (0.15, 0.15, 0.1))
+                self.tag_fixes += 1
+                self._good = 0
+                self._agreed = False
+            elif d <= 0.5 * self.tag_disagreement and a <= 0.5 * self.tag_disagreement:
+                self._agreed = True
+            return
 
     def _step(self, now: float) -> Status:
         loc = self.ctx.pose_source
-        loc.update(force=True)
-        if loc.confidence >= loc.config.confident:
-            self.message = f"relocalised, confidence {loc.confidence:.2f}"
-            return Status.SUCCESS
+        self._look()
+        loc.update(force=True)            # (the context's own update may have run it already)
+        if loc.filter_updates != self._seen:
+            self._seen = loc.filter_updates
+            est = loc.estimate()
+            fair = est.confidence >= self.hold and est.std_xy <= self.max_std
+            good = fair and est.confidence >= loc.config.confident
+            turned = abs(self.turn.by - self.turn.remaining)
+            if not fair:
+                self._fair_from = None
+            elif self._fair_from is None:
+                self._fair_from = turned
+            self._good = self._good + 1 if good else 0
+            # never doubtful while the robot turned far enough to see all round
+            looked = self._fair_from is not None and turned - self._fair_from >= self.look_around
+            if self._good >= self.settle and (self._agreed or looked):
+                self.message = (f"relocalised, confidence {est.confidence:.2f}"
+                                + (f" ({self.tag_fixes} tag fixes)" if self.tag_fixes else ""))
+                return Status.SUCCESS
         if self.turn.poll() is not Status.RUNNING:
             raise SkillFailure(SkillError.LOCALISATION_LOST,
                                f"still lost after a full turn (confidence {loc.confidence:.2f})")
@@ -49,4 +143,7 @@ class Relocalise(Activity):
     def _on_stop(self, status: Status) -> None:
         if self.turn is not None and self.turn.status is Status.RUNNING:
             self.turn.cancel()
+        loc = self.ctx.pose_source
+        if hasattr(loc, "unboost"):
+            loc.unboost()
         self.ctx.stop_base()

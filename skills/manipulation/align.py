@@ -36,10 +36,12 @@ from .tagview import tag_pose_in_robot
 class AlignToTag(Activity):
     name = "align to tag"
 
-    def __init__(self, ctx, place: Place, distance: float | None = None, window: int = 10):
+    def __init__(self, ctx, place: Place, distance: float | None = None, window: int = 10,
+                 at_spot: bool = True):
         m = ctx.settings.manipulation
         super().__init__(ctx, None)
         self.place = place
+        self.at_spot = at_spot        # False: line up with the tag (the belt), not the spot beside it
         self.distance = m.coarse_distance if distance is None else distance
         self.window = window
         self.sightings = 0
@@ -49,7 +51,7 @@ class AlignToTag(Activity):
         prof = self.ctx.profile
         check_place(self.place, prof)
         self.tag_id = prof.tag_ids(self.place.machine)[0 if self.place.side == "INPUT" else 1]
-        self.lateral = lateral_offset(self.place, prof)
+        self.lateral = lateral_offset(self.place, prof) if self.at_spot else 0.0
         self.targets: list[Pose2D] = []
         self.sightings = 0
         self.last_seen: float | None = None

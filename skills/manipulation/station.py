@@ -4,7 +4,11 @@
   place (from the machine map; closer where a wall or station leaves less
   room), line up on the tag (when a tag source works and the camera can
   see the tag from there, else on the map pose), dock by laser to
-  ``final_distance``.
+  ``final_distance``.  A spot beside the belt (shelf slot, slide) is
+  lined up with at the coarse distance when the robot fits there; where a
+  neighbouring station or a wall leaves no room for that, the robot lines
+  up with the belt, docks, and then slides sideways along the face to the
+  spot (:func:`shift_docked`), and back again before it backs off.
 - :class:`GrabFrom`: approach, open, reach in, close, pull back, check the
   gripper holds a workpiece (``GRAB_FAILED`` when it does not), back off.
 - :class:`PutOnto`: approach, reach in, open, pull back, check the gripper
@@ -19,13 +23,36 @@ from __future__ import annotations
 import numpy as np
 
 from ..activity import Sequence
-from ..errors import SkillError
+from ..errors import SkillError, SkillFailure
 from ..navigation import Navigate, StationSideGoal
 from ..navigation.goals import approach_pose, feasible_distance, target_lateral
 from ..navigation.motions import MoveRelative
 from .align import AlignToTag, Dock
 from .gripper import GripperSequence
 from .places import Place, check_place, gripper_height, gripper_target, lateral_offset
+
+
+def spot_clearance(ctx, place: Place, distance: float) -> float:
+    """Room (m) between the robot, squarely in front of the place's spot
+    ``distance`` metres from the face, and the nearest wall or other
+    station of the map (inf when the station's pose is unknown)."""
+    machine = ctx.machines.get(place.machine)
+    if machine is None:
+        return float("inf")
+    mps = ctx.profile.mps
+    pose = approach_pose(machine, place.side, distance, target_lateral(place.spot, mps), mps)
+    clear = ctx.map.clearance(pose.x, pose.y, exclude=(place.machine,))
+    return float(clear[0]) - ctx.robot.radius
+
+
+def shift_docked(ctx, place: Place, coarse: float | None = None) -> bool:
+    """Whether the robot moves sideways to the place's spot only once docked:
+    the spot is off the belt line and the robot would not fit in front of
+    it at the coarse distance (``coarse``, default the setting)."""
+    if abs(lateral_offset(place, ctx.profile)) < 1e-6:
+        return False
+    m = ctx.settings.manipulation
+    return spot_clearance(ctx, place, m.coarse_distance if coarse is None else coarse) < ctx.settings.plan_padding
 
 
 def tags_available(ctx) -> bool:
@@ -53,15 +80,26 @@ class ApproachStation(Sequence):
             return Navigate(ctx, goal, position_tolerance=0.03, heading_tolerance=0.04)
 
         def align():
+            self.docked_shift = shift_docked(ctx, place, self.coarse)
             use = tags_available(ctx) if self.use_tag is None else self.use_tag
             if use and self.use_tag is None and self.coarse < m.tag_min_distance:
                 use = False           # too close for the camera to see the tag whole
             if use:
-                return AlignToTag(ctx, place, self.coarse)
+                return AlignToTag(ctx, place, self.coarse, at_spot=not self.docked_shift)
             # without tags: the navigation pose from the machine map is the alignment
-            return MoveRelative(ctx, 0.0, -lateral_offset(place, ctx.profile))
+            shift = 0.0 if self.docked_shift else -lateral_offset(place, ctx.profile)
+            return MoveRelative(ctx, 0.0, shift)
 
-        super().__init__(ctx, [navigate, align, lambda: Dock(ctx, m.final_distance)], timeout,
+        def to_spot():
+            if not self.docked_shift:
+                return None
+            if spot_clearance(ctx, place, m.final_distance) < 0.0:
+                raise SkillFailure(SkillError.ALIGN_FAILED,
+                                   f"no room for the robot in front of {place.describe()}")
+            return MoveRelative(ctx, 0.0, -lateral_offset(place, ctx.profile), speed=0.1)
+
+        self.docked_shift = False
+        super().__init__(ctx, [navigate, align, lambda: Dock(ctx, m.final_distance), to_spot], timeout,
                          name=f"approach {place.describe()}")
 
 
@@ -78,34 +116,56 @@ def _handling(ctx, place: Place, steps_fn, approach: bool, use_tag, timeout, nam
 
     factories.append(gripper)
 
+    shifted = shift_docked(ctx, place)
+
+    def to_belt():
+        # slid along the face to the spot: slide back to the belt line first
+        return MoveRelative(ctx, 0.0, lateral_offset(place, ctx.profile), speed=0.1) if shifted else None
+
     def back_off():
         machine = ctx.machines.get(place.machine)
         docked = None
         if machine is not None:       # docked: the station and the laser know where we are
+            spot = "conveyor" if shifted else place.spot
             docked = approach_pose(machine, place.side, m.final_distance,
-                                   target_lateral(place.spot, ctx.profile.mps), ctx.profile.mps)
+                                   target_lateral(spot, ctx.profile.mps), ctx.profile.mps)
         return MoveRelative(ctx, -back_off_distance(ctx, m.back_off, docked), speed=0.2)
 
-    factories.append(back_off)
+    factories += [to_belt, back_off]
     return factories
 
 
 def back_off_distance(ctx, wanted: float, pose=None, step: float = 0.01) -> float:
-    """How far the robot can back straight off from ``pose`` (default: the
-    localised pose), at most ``wanted``, at least 5 cm: the laser does not
-    see behind, so the known map decides; the robot keeps its radius plus
-    5 cm from walls and stations all the way."""
-    pose = pose or ctx.pose()
-    dist = ctx.map.distance(ctx.settings.costmap_resolution)
+    """How far the robot can back straight off, at most ``wanted`` metres
+    (0 when there is no room behind it): the laser does not see behind, so
+    the known map decides; the robot keeps its radius plus 2 cm from walls
+    and stations all the way (or, already closer, does not get closer).
+    Checked from the localised pose and, when given, from ``pose`` too (the
+    pose docking should have left the robot at): the shorter way wins, as
+    either may be off by a few centimetres or the station's mapped pose by
+    more."""
+    poses = [ctx.pose()] + ([pose] if pose is not None else [])
+    return min(_room_behind(ctx, p, wanted, step) for p in poses)
+
+
+def _room_behind(ctx, pose, wanted: float, step: float) -> float:
     ds = np.arange(step, wanted + 1e-9, step)
+    if len(ds) == 0:
+        return 0.0
     xs = pose.x - np.cos(pose.theta) * ds
     ys = pose.y - np.sin(pose.theta) * ds
-    clear = dist.lookup(xs, ys)
-    start = float(dist.lookup(np.array([pose.x]), np.array([pose.y]))[0])
-    need = min(ctx.robot.radius + 0.05, start)       # docked: the face in front is close
-    bad = np.nonzero(clear < need)[0]
-    far = ds[bad[0] - 1] if len(bad) and bad[0] > 0 else (0.0 if len(bad) else wanted)
-    return float(max(far, 0.05))
+    bad = np.zeros(len(ds), dtype=bool)
+    # the walls on their own: a station mapped where it is not (the robot
+    # "inside" it) must not hide the wall behind the robot
+    for exclude in (tuple(ctx.map.obstacles), ()):
+        clear = ctx.map.clearance(xs, ys, exclude=exclude)
+        start = float(ctx.map.clearance(pose.x, pose.y, exclude=exclude)[0])
+        need = min(ctx.robot.radius + 0.02, start)       # docked: the face in front is close
+        bad |= clear < need - 1e-6
+    first = np.nonzero(bad)[0]
+    if not len(first):
+        return float(wanted)
+    return float(ds[first[0] - 1]) if first[0] > 0 else 0.0
 
 
 class GrabFrom(Sequence):

@@ -88,7 +88,7 @@ class FieldMap:
         self._obstacles: dict[str, np.ndarray] = {}
         self.margin = margin
         self.version = 0
-        self._grids: dict[float, tuple[int, GridSpec, np.ndarray]] = {}
+        self._grids: dict = {}              # resolution (or ("walls", resolution)) -> (version, spec, occupied)
         self._dist: dict[float, tuple[int, DistanceGrid]] = {}
         self._arena: dict[float, np.ndarray] = {}
 
@@ -140,6 +140,25 @@ class FieldMap:
         parts = [self._walls] + [polygon_edges(p) for p in self._obstacles.values()]
         return np.concatenate(parts, axis=0)
 
+    def clearance(self, x, y, exclude=()) -> np.ndarray:
+        """Exact distance (m) from field points to the nearest wall or
+        obstacle, leaving out the obstacles named in ``exclude`` (0 inside an
+        obstacle or outside the boundary).  For a few points: it checks every
+        segment, no grid."""
+        px = np.atleast_1d(np.asarray(x, dtype=float))
+        py = np.atleast_1d(np.asarray(y, dtype=float))
+        polys = [p for n, p in self._obstacles.items() if n not in set(exclude)]
+        segs = np.concatenate([self._walls] + [polygon_edges(p) for p in polys], axis=0)
+        a, ab = segs[:, :2], segs[:, 2:] - segs[:, :2]
+        len2 = np.maximum((ab * ab).sum(axis=1), 1e-12)
+        qx, qy = px[:, None] - a[None, :, 0], py[:, None] - a[None, :, 1]
+        t = np.clip((qx * ab[None, :, 0] + qy * ab[None, :, 1]) / len2[None, :], 0.0, 1.0)
+        d = np.sqrt(((qx - t * ab[None, :, 0]) ** 2 + (qy - t * ab[None, :, 1]) ** 2).min(axis=1))
+        blocked = ~self.in_arena(px, py)
+        for poly in polys:
+            blocked |= points_in_polygon(px, py, poly)
+        return np.where(blocked, 0.0, d)
+
     # -- geometry ---------------------------------------------------------
     @property
     def bounds(self) -> tuple[float, float, float, float]:
@@ -177,6 +196,18 @@ class FieldMap:
                 self._draw_segments(spec, occ, polygon_edges(poly))
         self._grids[resolution] = (self.version, spec, occ)
         return spec, occ
+
+    def wall_occupancy(self, resolution: float) -> tuple[GridSpec, np.ndarray]:
+        """(spec, occupied) with the walls only (no obstacles); cached."""
+        key = ("walls", resolution)
+        cached = self._grids.get(key)
+        if cached is None:
+            spec = self.grid_spec(resolution)
+            occ = np.zeros(spec.shape, dtype=bool)
+            self._draw_segments(spec, occ, self._walls)
+            cached = (0, spec, occ)
+            self._grids[key] = cached
+        return cached[1], cached[2]
 
     def distance(self, resolution: float) -> DistanceGrid:
         """Distance to the nearest wall or obstacle, per cell (cached)."""

@@ -11,7 +11,11 @@ blind) and more than ``blind_creep`` metres remain: then it turns to the
 direction of travel first.
 
 Limits: translation speed ``max_speed`` (the rules' 0.7 m/s), the speed
-from which the robot can still stop at the goal with ``max_decel``, and an
+from which the robot can still stop at the goal with ``max_decel``, the
+speed from which it can still slow down for the coming path corners (a
+corner turning by phi is taken at most at sqrt(2 max_accel
+``corner_overshoot``) / sin(phi), so the robot swings out by no more than
+about ``corner_overshoot`` metres while its velocity turns), and an
 optional external cap (the laser safety check); the commanded velocity
 vector changes by at most ``max_accel * dt`` (``max_decel * dt`` when
 slowing, ``emergency_decel * dt`` when the laser check caps the speed);
@@ -47,8 +51,9 @@ class Limits:
 class VelocityLimiter:
     """Holds the last command and limits how fast it changes."""
 
-    def __init__(self, limits: Limits):
+    def __init__(self, limits: Limits, min_turn: float = 0.6):
         self.limits = limits
+        self.min_turn = min_turn      # rad/s the body may always turn at
         self.v = np.zeros(2)          # field frame, m/s
         self.omega = 0.0
 
@@ -73,7 +78,17 @@ class VelocityLimiter:
         if n > a * dt:
             dv = dv * (a * dt / n)
         self.v = self.v + dv
-        omega_des = float(np.clip(omega_des, -lim.max_omega, lim.max_omega))
+        turn = lim.max_omega
+        # The base accelerates in its own frame: holding a field velocity v
+        # while turning at omega takes |v| * omega of that acceleration.
+        # Turn no faster than what is left after this step's change of
+        # velocity (but at least ``min_turn``), or the turning body drags
+        # the motion off the path.
+        speed = float(np.hypot(*self.v))
+        if speed > 1e-6:
+            spare = max(lim.max_accel - float(np.hypot(*dv)) / dt, 0.0)
+            turn = min(turn, max(spare / speed, self.min_turn))
+        omega_des = float(np.clip(omega_des, -turn, turn))
         dw = float(np.clip(omega_des - self.omega, -lim.max_alpha * dt, lim.max_alpha * dt))
         self.omega += dw
         return self.v.copy(), self.omega
@@ -98,7 +113,8 @@ class PathFollower:
     def __init__(self, path: np.ndarray, goal_theta: float | None, limits: Limits,
                  position_tolerance: float = 0.05, heading_tolerance: float = 0.05,
                  lookahead: float = 0.5, align_distance: float = 0.8, gain: float = 2.5,
-                 blind_angle: float | None = None, blind_creep: float = 0.15):
+                 blind_angle: float | None = None, blind_creep: float = 0.15,
+                 corner_overshoot: float = 0.04):
         self.path = np.asarray(path, dtype=float)
         if len(self.path) == 1:
             self.path = np.vstack([self.path, self.path])
@@ -107,6 +123,7 @@ class PathFollower:
         self.cum = np.concatenate([[0.0], np.cumsum(self.seg_len)])
         self.goal_theta = goal_theta
         self.limits = limits
+        self.corner_speed = self._corner_speeds(corner_overshoot)
         self.position_tolerance = position_tolerance
         self.heading_tolerance = heading_tolerance
         self.lookahead = lookahead
@@ -119,6 +136,34 @@ class PathFollower:
         self.done = False
         self.capped = False           # the last command was slowed by ``speed_cap``
         self.last_speed_wanted = 0.0
+        self.speed_limit = math.inf   # m/s, set from outside (tight spots ahead)
+
+    def _corner_speeds(self, overshoot: float) -> np.ndarray:
+        """Highest speed (m/s) at each inner vertex of the path (inf at the ends)."""
+        out = np.full(len(self.path), np.inf)
+        seg = np.diff(self.path, axis=0)
+        for i in range(1, len(self.path) - 1):
+            a, b = seg[i - 1], seg[i]
+            na, nb = float(np.hypot(*a)), float(np.hypot(*b))
+            if na < 1e-9 or nb < 1e-9:
+                continue
+            sin_phi = abs(float(a[0] * b[1] - a[1] * b[0])) / (na * nb)
+            if float(a @ b) < 0.0:         # turning back by more than 90 degrees
+                sin_phi = 1.0
+            if sin_phi > 1e-6:
+                out[i] = math.sqrt(2.0 * self.limits.max_accel * overshoot) / sin_phi
+        return out
+
+    def _corner_limit(self, decel: float) -> float:
+        """Speed from which the robot can still slow down to every coming
+        corner's speed (looking 2 m ahead)."""
+        i = int(np.searchsorted(self.cum, self.progress, side="right"))
+        limit = math.inf
+        while i < len(self.path) - 1 and self.cum[i] - self.progress <= 2.0:
+            d = max(self.cum[i] - self.progress, 0.0)
+            limit = min(limit, math.sqrt(self.corner_speed[i] ** 2 + 2.0 * decel * d))
+            i += 1
+        return limit
 
     @property
     def goal(self) -> np.ndarray:
@@ -180,7 +225,8 @@ class PathFollower:
             dist = remaining
         direction = target - p
         n = float(np.hypot(*direction))
-        speed = min(lim.max_speed, math.sqrt(2.0 * lim.max_decel * 0.8 * dist), self.gain * dist)
+        speed = min(lim.max_speed, math.sqrt(2.0 * lim.max_decel * 0.8 * dist), self.gain * dist,
+                    self._corner_limit(lim.max_decel * 0.8), self.speed_limit)
         wanted = speed
         self.capped = False
         if speed_cap is not None and n > 1e-9 and d_goal > self.position_tolerance:

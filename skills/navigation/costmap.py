@@ -2,8 +2,11 @@
 plus laser obstacles that expire.
 
 A cell is *lethal* when the robot centred there would come closer than
-``robot_radius + padding`` to a wall, station or recent laser obstacle, or
-lies outside the field boundary.  Other cells cost 1 plus a penalty that
+``robot_radius + padding`` to a wall or station, closer than
+``robot_radius + padding + obstacle_padding`` to a recent laser obstacle
+(another robot: the laser check keeps a wider berth from those, and a path
+it would not let the robot drive is no path), or lies outside the field
+boundary.  Other cells cost 1 plus a penalty that
 falls off linearly over ``inflation`` metres of extra clearance, so paths
 keep away from stations when there is room.
 """
@@ -17,13 +20,15 @@ from ..maps import FieldMap, GridSpec
 
 class Costmap:
     def __init__(self, field_map: FieldMap, resolution: float = 0.05, robot_radius: float = 0.225,
-                 padding: float = 0.05, inflation: float = 0.35, penalty: float = 4.0):
+                 padding: float = 0.05, inflation: float = 0.35, penalty: float = 4.0,
+                 obstacle_padding: float = 0.08):
         self.map = field_map
         self.resolution = resolution
         self.robot_radius = robot_radius
         self.padding = padding
         self.inflation = inflation
         self.penalty = penalty
+        self.obstacle_padding = obstacle_padding
         self.spec: GridSpec = field_map.grid_spec(resolution)
         self._temp_points = np.zeros((0, 2))
         self._temp_expiry = np.zeros(0)
@@ -79,7 +84,7 @@ class Costmap:
                 occ[row[ok], col[ok]] = True
                 if occ.any():
                     temp = ndimage.distance_transform_edt(~occ) * self.resolution
-                    clearance = np.minimum(clearance, temp)
+                    clearance = np.minimum(clearance, np.maximum(temp - self.obstacle_padding, 0.0))
             lethal = (clearance < self.lethal_radius) | ~self._arena
             extra = np.clip(1.0 - (clearance - self.lethal_radius) / self.inflation, 0.0, 1.0)
             cost = 1.0 + self.penalty * extra
@@ -92,6 +97,28 @@ class Costmap:
     def clearance(self) -> np.ndarray:
         self.grids()
         return self._clearance
+
+    def clearance_at(self, x, y) -> np.ndarray:
+        """Clearance (m) at field points, interpolated bilinearly between cell
+        centres (a cell's own value holds only at its centre; 0 off the grid)."""
+        clear = self.clearance()
+        spec = self.spec
+        fx = (np.asarray(x, dtype=float) - spec.x0) / spec.resolution - 0.5
+        fy = (np.asarray(y, dtype=float) - spec.y0) / spec.resolution - 0.5
+        c0, r0 = np.floor(fx).astype(np.int64), np.floor(fy).astype(np.int64)
+        tx, ty = fx - c0, fy - r0
+        inside = (r0 >= 0) & (r0 + 1 < spec.rows) & (c0 >= 0) & (c0 + 1 < spec.cols)
+        r0, c0 = np.clip(r0, 0, spec.rows - 2), np.clip(c0, 0, spec.cols - 2)
+        v = (clear[r0, c0] * (1 - tx) * (1 - ty) + clear[r0, c0 + 1] * tx * (1 - ty)
+             + clear[r0 + 1, c0] * (1 - tx) * ty + clear[r0 + 1, c0 + 1] * tx * ty)
+        return np.where(inside, v, 0.0)
+
+    def segment_clearance(self, x0: float, y0: float, x1: float, y1: float) -> float:
+        """The least clearance (m) along a straight segment (interpolated,
+        sampled every quarter cell)."""
+        n = max(int(np.hypot(x1 - x0, y1 - y0) / (self.resolution * 0.25)) + 1, 2)
+        t = np.linspace(0.0, 1.0, n)
+        return float(self.clearance_at(x0 + (x1 - x0) * t, y0 + (y1 - y0) * t).min())
 
     def is_free(self, x, y) -> np.ndarray:
         """Whether the robot may stand at the points (not lethal, on the grid)."""

@@ -29,6 +29,14 @@ from .laserview import points_now
 from .safety import clear_distance, scan_points, speed_limit, to_field
 
 
+def tight_speed(gap, settings) -> np.ndarray:
+    """Top speed (m/s) where the robot passes a wall or station ``gap``
+    metres away: ``tight_min_speed`` at the planner's padding, rising by
+    ``tight_slope`` m/s per metre of more room."""
+    g = np.asarray(gap, dtype=float) - settings.plan_padding
+    return np.maximum(settings.tight_min_speed + settings.tight_slope * g, settings.tight_min_speed)
+
+
 class Navigate(Activity):
     name = "navigate"
 
@@ -133,10 +141,8 @@ class Navigate(Activity):
                                 speed_limit(remembered, ux, uy, ctx.robot.radius, s.safety_margin + 0.07,
                                             0.08, decel, s.control_period))
                 return limit
-        # near obstacles look less far ahead: a long look-ahead cuts corners
-        clear = float(ctx.costmap.clearance()[ctx.costmap.spec.cell_of(pose.x, pose.y)]) \
-            if bool(ctx.costmap.spec.inside(*ctx.costmap.spec.cell_of(pose.x, pose.y))) else 0.0
-        self.follower.lookahead = float(np.clip(2.0 * (clear - ctx.robot.radius), 0.15, 0.5))
+        self.follower.lookahead = self._lookahead(pose)
+        self.follower.speed_limit = self._tight_speed(pose)
         vx, vy, w = self.follower.command(pose, dt, cap)
         if self.follower.done:
             self.message = f"reached {self.goal.describe()}" if hasattr(self.goal, "describe") else "reached"
@@ -189,6 +195,39 @@ class Navigate(Activity):
                                f"the goal ({target.x:.2f}, {target.y:.2f}) is blocked: no room for the robot")
         self.adjusted = float(d[r, c])
         return Pose2D(float(xs[r, c]), float(ys[r, c]), target.theta), heading
+
+    def _lookahead(self, pose: Pose2D, longest: float = 0.5, shortest: float = 0.1) -> float:
+        """The longest look-ahead (m) whose carrot the robot can head for in
+        a straight line keeping as clear of walls and stations as the path
+        does over that stretch: a carrot beyond a corner would pull the
+        robot across the corner.  A robot off the path toward an obstacle
+        gets the shortest look-ahead, which steers it back to the path."""
+        cm, f = self.ctx.costmap, self.follower
+        step = 0.25 * cm.resolution
+        arc = np.array([f.point_at(f.progress + s) for s in np.arange(0.0, longest + step, step)])
+        along = np.minimum.accumulate(cm.clearance_at(arc[:, 0], arc[:, 1]))
+        for la in np.arange(longest, shortest - 1e-9, -0.05):
+            k = int(round(la / step))
+            need = min(float(along[k]), cm.lethal_radius + cm.inflation) - 0.01
+            if cm.segment_clearance(pose.x, pose.y, arc[k, 0], arc[k, 1]) >= need:
+                return float(la)
+        return shortest
+
+    def _tight_speed(self, pose: Pose2D, ahead: float = 1.2) -> float:
+        """Speed (m/s) from which the robot can still slow down for the
+        tight spots of the path ahead: where the path passes a wall or
+        station with a gap of g metres the robot drives at most
+        ``tight_speed(g)`` (a small tracking error must not become a
+        contact at full speed)."""
+        cm, f, s = self.ctx.costmap, self.follower, self.ctx.settings
+        step = cm.resolution
+        dist = np.arange(0.0, ahead + step, step)
+        arc = np.array([f.point_at(f.progress + d) for d in dist])
+        gaps = cm.clearance_at(arc[:, 0], arc[:, 1]) - self.ctx.robot.radius
+        here = float(cm.clearance_at(np.array([pose.x]), np.array([pose.y]))[0]) - self.ctx.robot.radius
+        gaps[0] = min(gaps[0], here)
+        v = tight_speed(gaps, s)
+        return float(np.sqrt(v * v + 2.0 * self.limits.max_decel * 0.8 * dist).min())
 
     def _stalled(self, now: float, vx: float, vy: float) -> bool:
         """Commanded to drive for ``stall_time`` seconds without the odometry

@@ -98,16 +98,18 @@ class GridPlanner:
 
 def shortcut(path: np.ndarray, costmap: Costmap) -> np.ndarray:
     """Greedy line-of-sight smoothing: from each kept point jump to the
-    farthest later point reachable by a straight free line that stays as
-    clear of obstacles as the grid path does.  The far end is probed in
-    coarse steps first, then refined, so long paths need few checks."""
+    farthest later point reachable by a straight line that stays as clear
+    of obstacles as the grid path does (and never inside the lethal
+    radius; clearance interpolated between cell centres, so a line cannot
+    slip between two free cell centres past a corner).  The far end is
+    probed in coarse steps first, then refined, so long paths need few
+    checks."""
     if len(path) <= 2:
         return path.copy()
     n = len(path)
 
     def visible(i: int, k: int) -> bool:
-        return costmap.segment_free(path[i][0], path[i][1], path[k][0], path[k][1]) \
-            and _keeps_clearance(path, i, k, costmap)
+        return _keeps_clearance(path, i, k, costmap)
 
     out = [path[0]]
     i = 0
@@ -125,22 +127,14 @@ def shortcut(path: np.ndarray, costmap: Costmap) -> np.ndarray:
     return np.array(out)
 
 
-def _keeps_clearance(path: np.ndarray, i: int, k: int, costmap: Costmap) -> bool:
+def _keeps_clearance(path: np.ndarray, i: int, k: int, costmap: Costmap, slack: float = 0.01) -> bool:
     """The straight line i..k stays at least as clear as the grid path's
-    tightest point between them (capped at the inflation distance)."""
-    clear = costmap.clearance()
-    spec = costmap.spec
+    tightest point between them (capped at the inflation distance), less
+    ``slack`` metres, and outside the lethal radius."""
     seg = path[i:k + 1]
-    row, col = spec.cell_of(seg[:, 0], seg[:, 1])
-    ok = spec.inside(row, col)
-    need = min(float(clear[row[ok], col[ok]].min()) if ok.any() else 0.0,
-               costmap.lethal_radius + costmap.inflation)
+    need = min(float(costmap.clearance_at(seg[:, 0], seg[:, 1]).min()),
+               costmap.lethal_radius + costmap.inflation) - slack
+    need = max(need, costmap.lethal_radius)
     x0, y0 = path[i]
     x1, y1 = path[k]
-    m = max(int(np.hypot(x1 - x0, y1 - y0) / (spec.resolution * 0.5)) + 1, 2)
-    t = np.linspace(0.0, 1.0, m)
-    r2, c2 = spec.cell_of(x0 + (x1 - x0) * t, y0 + (y1 - y0) * t)
-    ok2 = spec.inside(r2, c2)
-    if not ok2.all():
-        return False
-    return float(clear[r2, c2].min()) >= need - spec.resolution
+    return costmap.segment_clearance(x0, y0, x1, y1) >= need
