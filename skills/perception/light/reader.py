@@ -19,8 +19,8 @@ import numpy as np
 from rll_bt.backend import LightDetection
 from rll_bt.errors import UserError
 
-from .hog import TowerDetector, crop_window
-from .mlp import Mlp
+from .hog import TowerDetector, crop_window, iou
+from .mlp import Mlp, crop_features
 
 MODEL_DIR = Path(__file__).with_name("models")
 DETECTOR_FILE = "tower_hog_svm.npz"
@@ -68,7 +68,8 @@ class LightReader:
     def _run(net: Mlp, image: np.ndarray, boxes) -> np.ndarray:
         if len(boxes) == 0:
             return np.zeros((0, net.w2.shape[1]))
-        return net.probabilities(net.features([crop_window(image, b, net.size) for b in boxes]).astype(np.float64))
+        x = np.stack([crop_features(crop_window(image, b, net.size), net.size) for b in boxes]).astype(np.float64)
+        return net.probabilities(x)
 
     def classify(self, image: np.ndarray, boxes) -> np.ndarray:
         """Probabilities over the eight states for each tower box (x, y, w, h) of ``image``."""
@@ -92,8 +93,14 @@ class LightReader:
         heights = REFINE_HEIGHTS if self.checker is not None else (1.0,)
         variants = [refine_box(b.xywh, k) for b in boxes for k in heights]
         p_no = self.no_tower(image, variants).reshape(len(boxes), len(heights))
-        picks = choose(_chunks(variants, len(heights)), p_no, self.reject, self.max_detections)
-        chosen = [(boxes[i], v) for i, v in picks]
+        chosen = []
+        for b, p, vs in zip(boxes, p_no, _chunks(variants, len(heights))):
+            best = int(np.argmin(p))
+            if p[best] >= self.reject or any(iou(vs[best], c[1]) > 0.3 for c in chosen):
+                continue
+            chosen.append((b, vs[best]))
+            if len(chosen) == self.max_detections:
+                break
         probs = self.classify(image, [v for _, v in chosen])
         return [LightDetection(box=tuple(int(round(c)) for c in v), state=int(p.argmax()), score=b.score,
                                probabilities=tuple(float(x) for x in p), camera=camera)
@@ -107,32 +114,6 @@ def refine_box(box, k: float) -> tuple[float, float, float, float]:
     """``box`` shortened to ``k`` of its height, keeping its top and its centre line."""
     x, y, w, h = (float(v) for v in box)
     return (x + w * (1 - k) / 2, y, w * k, h * k)
-
-
-def choose(variants, p_no: np.ndarray, reject: float, limit: int, overlap: float = 0.3
-           ) -> list[tuple[int, tuple]]:
-    """The hits to keep, in order (strongest detector score first): each
-    hit's most tower-like variant box, when the check's "no tower"
-    probability ``p_no`` (hits x variants) is below ``reject`` and the box
-    covers no more than ``overlap`` of a kept box or is covered no more
-    (two towers never overlap much; a box on part of a kept tower is a
-    duplicate).  Returns (hit index, box), at most ``limit``."""
-    out = []
-    for i, (vs, p) in enumerate(zip(variants, p_no)):
-        best = int(np.argmin(p))
-        if p[best] >= reject or any(overlap_of_smaller(vs[best], c) > overlap for _, c in out):
-            continue
-        out.append((i, vs[best]))
-        if len(out) == limit:
-            break
-    return out
-
-
-def overlap_of_smaller(a, b) -> float:
-    """Intersection of two (x, y, w, h) boxes over the smaller one's area."""
-    ix = max(0.0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
-    iy = max(0.0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
-    return ix * iy / max(min(a[2] * a[3], b[2] * b[3]), 1e-9)
 
 
 def _chunks(items: list, n: int) -> list[list]:
