@@ -178,27 +178,9 @@ class Dispatcher:
         if task.kind == M.DELIVER and game_time < self.deliver_from(task):
             return False
         if task.kind == M.RETRIEVE_CAP and (self.production.cap_buffer.get(task.machine)
-                                            or not self.cap_due(task)):
+                                            or not self.production.cap_due(task)):
             return False                # a CS holding a cap cannot retrieve another
         return True
-
-    def cap_due(self, task: M.Task) -> bool:
-        """A cap is retrieved only once every ring mount of its product that does not
-        wait for it is under way: a retrieved cap keeps its cap station from every
-        other product until it is mounted."""
-        product = self.kb.products.get(task.product or "")
-        if product is None:
-            return True
-        tasks = self.kb.tasks_of(product.tasks)
-        after, grew = {task.id}, True
-        while grew:                              # the steps that wait for the cap
-            grew = False
-            for t in tasks:
-                if t.id not in after and any(d in after for d in t.deps):
-                    after.add(t.id)
-                    grew = True
-        return not any(t.kind == M.MOUNT_RING and t.state == M.PENDING and t.id not in after
-                       for t in tasks)
 
     def deliver_from(self, task: M.Task) -> float:
         """Game time from which a delivery may start: its robot reaches the DS when
@@ -215,6 +197,7 @@ class Dispatcher:
         idle = {r.number: r for r in self.available_robots()}
         if not idle:
             return []
+        self.production.adopt_free_caps()
         ready = [t for t in self.kb.open_tasks() if self.ready(t, game_time)]
         assigned: list[M.Task] = []
         # carry tasks: their holder, if idle

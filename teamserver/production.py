@@ -217,27 +217,11 @@ class ProductionManager:
         pid = f"P{self.kb.next_id('product')}"
         product = M.Product(pid, cand.order.id, created=self.kb.get("game_time", 0.0))
         net = cand.network
-        free = self.free_cap(cand.order.cap)
-        if free:        # a cap retrieved ahead, or left by an abandoned product: mount that
-            try:
-                world = self.world(float(self.kb.get("game_time", 0.0)), 0.0)
-                net = self.planner.decompose(self.planner.context(
-                    world, cand.order, Progress(cap_ready=free)))
-                self._take_cap(free, pid)
-            except PlanningFailed:
-                net = cand.network
         self.kb.save_product(product)
         self.add_network(product, net)
         log.info("started %s for order %d (%d tasks)", pid, cand.order.id,
                  len(cand.network.steps))
         return product
-
-    def free_cap(self, cap: str) -> str | None:
-        """A CS holding a retrieved ``cap`` no product owns."""
-        for cs, owner in sorted(self.cap_buffer.items()):
-            if owner == FREE and self.cs_caps.get(cs) == cap:
-                return cs
-        return None
 
     def _take_cap(self, cs: str, product_id: str) -> None:
         buf = self.cap_buffer
@@ -245,11 +229,12 @@ class ProductionManager:
         self._set_cap_buffer(buf)
 
     def adopt_free_caps(self) -> list[M.Product]:
-        """Give each cap retrieved ahead to the most urgent product that has yet to
-        retrieve one of its colour there: its cap chain (retrieve, take the cap-less
-        base, discard it or put it on a slide) is cancelled, a base from the BS takes
-        the cap-less base's place on the slide.  (A station holding a cap cannot
-        retrieve another: without this the product would wait for ever.)"""
+        """Give each cap retrieved ahead (or left by an abandoned product) to the most
+        urgent product whose cap retrieval there is due (:meth:`cap_due`): its cap
+        chain (retrieve, take the cap-less base, discard it or put it on a slide) is
+        cancelled, a base from the BS takes the cap-less base's place on the slide.
+        (A station holding a cap cannot retrieve another: without this the product
+        would wait for ever.)"""
         out = []
         for cs, owner in sorted(self.cap_buffer.items()):
             if owner != FREE:
@@ -260,7 +245,9 @@ class ProductionManager:
                 if order is None:
                     continue
                 chain = self._cap_chain(p, cs)
-                if chain is not None and (best is None or order.end < best[0]):
+                if chain is None or not self.cap_due(chain[0]):
+                    continue                    # it would keep the cap long unmounted
+                if best is None or order.end < best[0]:
                     best = (order.end, p, chain)
             if best is None:
                 continue
@@ -293,6 +280,25 @@ class ProductionManager:
             log.info("%s mounts the cap waiting in %s", p.id, cs)
         return out
 
+    def cap_due(self, task: M.Task) -> bool:
+        """Is it time for ``task``'s product to retrieve (or take) its cap?  Once every
+        ring mount of the product that does not wait for the cap-less base is under
+        way: a retrieved cap keeps its cap station from every other product until it
+        is mounted."""
+        product = self.kb.products.get(task.product or "")
+        if product is None:
+            return True
+        tasks = self.kb.tasks_of(product.tasks)
+        after, grew = {task.id}, True
+        while grew:                              # the steps that wait for the cap
+            grew = False
+            for t in tasks:
+                if t.id not in after and any(d in after for d in t.deps):
+                    after.add(t.id)
+                    grew = True
+        return not any(t.kind == M.MOUNT_RING and t.state == M.PENDING and t.id not in after
+                       for t in tasks)
+
     def _cap_chain(self, product: M.Product, cs: str):
         """(retrieve, cap-less pickup, what takes the base) of ``product`` at ``cs``, all
         still PENDING; None if there is none."""
@@ -312,7 +318,7 @@ class ProductionManager:
     def prefill(self, game_time: float, horizon: float) -> list[M.Product]:
         """Retrieve a cap ahead into each idle cap station that holds none and that no
         product plans to use now, while an order may still want its colour: a later
-        product mounts it at once (:meth:`free_cap`).  The cap-less base is
+        product mounts it at once (:meth:`adopt_free_caps`).  The cap-less base is
         discarded.  Returns the cleanup products made now."""
         if game_time > horizon - self.prefill_stop or not self.kb.orders:
             return []
@@ -532,11 +538,6 @@ class ProductionManager:
             self._set_locks(locks)
         product.repair, product.repairs = None, product.repairs + 1
         order = self.kb.orders.get(product.order_id)
-        if order is not None and pr.cap_ready is None and self.free_cap(order.cap):
-            pr.cap_ready = self.free_cap(order.cap)      # mount a cap retrieved ahead
-            self._take_cap(pr.cap_ready, product.id)
-            owned[pr.cap_ready + CAP_LOCK] = product.id
-            self._set_locks({**self.locks, **owned})
         net = None
         if order is not None and order.open > 0 and product.repairs <= self.max_repairs:
             world = self.world(float(self.kb.get("game_time", 0.0)), 0.0)

@@ -56,7 +56,7 @@ def test_caps_are_retrieved_ahead_and_mounted_by_the_next_product():
     ls.step(n=3)
     [grey] = [p for p in kb.products.values() if p.order_id == 2]
     steps = kb.tasks_of(grey.tasks)
-    assert not [t for t in steps if t.kind == M.RETRIEVE_CAP]
+    assert {t.state for t in steps if t.kind == M.RETRIEVE_CAP} == {M.CANCELLED}
     assert [t.machine for t in steps if t.kind == M.MOUNT_CAP] == ["C-CS1"]
     assert pm.cap_buffer["C-CS1"] == grey.id
 
@@ -79,13 +79,13 @@ def test_a_cap_is_retrieved_once_the_ring_mounts_before_it_are_under_way():
     steps = {t.kind + str(i): t for i, t in enumerate(kb.tasks_of(p.tasks))}
     [retrieve] = [t for t in steps.values() if t.kind == M.RETRIEVE_CAP]
     mounts = [t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_RING]
-    assert not disp.cap_due(retrieve)
+    assert not ls.server.production.cap_due(retrieve)
     mounts[0].state = M.DONE
     kb.save_task(mounts[0])
-    assert not disp.cap_due(retrieve)
+    assert not ls.server.production.cap_due(retrieve)
     mounts[1].state = M.ASSIGNED
     kb.save_task(mounts[1])
-    assert disp.cap_due(retrieve)
+    assert ls.server.production.cap_due(retrieve)
 
 
 def test_a_cap_that_feeds_a_slide_is_retrieved_at_once():
@@ -95,7 +95,7 @@ def test_a_cap_that_feeds_a_slide_is_retrieved_at_once():
     kb, disp = ls.server.kb, ls.server.dispatcher
     [p] = [p for p in kb.products.values() if p.order_id == 5]
     [retrieve] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP]
-    assert disp.cap_due(retrieve)
+    assert ls.server.production.cap_due(retrieve)
 
 
 def test_a_place_that_keeps_failing_is_paused_and_a_success_clears_the_count():
@@ -217,3 +217,18 @@ def test_the_cap_less_base_serves_only_the_last_ring(rings, reused):
     kinds = [s.fields["kind"] for s in net.steps]
     assert kinds.count(M.DISCARD) == (0 if reused else 1)
     assert kinds.count(M.PUT_WORKPIECE) == 1
+
+
+def test_a_cap_waiting_ahead_is_not_given_to_a_product_far_from_its_cap():
+    ls = Lockstep(config=ServerConfig(prefill_caps=False))
+    production_setup(ls, [dict(id=6, complexity=2, rings=["RING_GREEN", "RING_YELLOW"],
+                               cap_color=2)], states={"C-CS1": "DOWN"})
+    pm, kb = ls.server.production, ls.server.kb
+    [p] = [p for p in kb.products.values() if p.order_id == 6]
+    pm._take_cap("C-CS1", FREE)
+    assert pm.adopt_free_caps() == []          # two rings to go: it would block C-CS1
+    for t in kb.tasks_of(p.tasks):
+        if t.kind == M.MOUNT_RING:
+            t.state = M.DONE
+            kb.save_task(t)
+    assert pm.adopt_free_caps() == [p] and pm.cap_buffer["C-CS1"] == p.id
