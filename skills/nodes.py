@@ -252,7 +252,7 @@ class BackOff(SkillNode):
 
     def make(self, sctx):
         # the laser does not see behind: the known map limits the way back
-        return MoveRelative(sctx, -back_off_distance(sctx, abs(self.distance)), speed=0.2)
+        return MoveRelative(sctx, -back_off_distance(sctx, abs(self.distance)), speed=0.2, partial=True)
 
 
 class TurnNode(SkillNode):

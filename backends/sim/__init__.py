@@ -29,10 +29,14 @@ World (:class:`backends.sim.world.World`)
       ``Pose2D``), ``world.teleport(team, n, pose)``,
       ``world.clearance(team, n)``, ``world.held_workpiece(team, n)``.
     - collisions: a motion into a wall, station or robot is stopped at the
-      contact point; ``SimRobot.collisions`` counts events (a blocked motion
-      after a free one), ``SimRobot.blocked_steps`` counts blocked steps,
-      ``world.collision_count`` sums the events, ``world.collision_log`` is
-      a list of ``Collision(time, robot, obstacle)``.
+      contact point; ``SimRobot.collisions`` counts events (a motion blocked
+      by a wall, station or robot the robot was not already touching: more
+      pushes against the same thing before the robot has left it by
+      ``CONTACT_GAP`` are the same contact), ``SimRobot.blocked_steps``
+      counts blocked steps, ``world.collision_count`` sums the events,
+      ``world.collision_log`` is a list of ``Collision(time, robot,
+      obstacle, pose, speed)`` (the robot's true pose at the contact and its
+      speed before it).
     - ``world.ray(start, end, ignore=None)`` -> (what, distance).
 
 Station API (for the simulated referee box)

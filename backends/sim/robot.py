@@ -118,7 +118,8 @@ class SimRobot:
     command: tuple[float, float, float] = (0.0, 0.0, 0.0)
     command_stamp: float = -math.inf
     odom: Pose2D = field(init=False)
-    collisions: int = 0                   # collision events (a blocked motion after a free one)
+    collisions: int = 0                   # collision events (a motion blocked by something not yet touched)
+    touching: set = field(default_factory=set)   # what the robot is in contact with (names as in Collision)
     blocked_steps: int = 0
     blocked: bool = False                 # the last step's motion was blocked
     contact: bool = False                 # touching something after the last step

@@ -227,6 +227,8 @@ class World(StationAPI, GripperHandling, CameraViews):
         return sum(r.collisions for r in self.robots.values())
 
     def _move(self, r: SimRobot, h: float, now: float) -> None:
+        if r.touching:
+            self._separate(r)
         pose, vel = r.propose(h, now)
         if pose is r.pose:
             r.commit(pose, vel, h)
@@ -254,11 +256,26 @@ class World(StationAPI, GripperHandling, CameraViews):
             r.commit(stop, vel, h, wheels=pose.relative_to(start))
         else:
             r.commit(stop, (0.0, 0.0, 0.0), h)
-        if not r.blocked:
+        if hit not in r.touching:       # a new contact, not more pushing against the same thing
             r.collisions += 1
             self.collision_log.append(Collision(now, r.key, hit, stop, speed))
+            r.touching.add(hit)
         r.blocked = True
         r.blocked_steps += 1
+
+    def _separate(self, r: SimRobot) -> None:
+        """Forget the contacts the robot has left (gap above ``CONTACT_GAP``)."""
+        for name in list(r.touching):
+            if name.startswith("robot "):
+                team, number = name[len("robot "):].split("/")
+                other = self.robots.get((team, int(number)))
+                gap = math.inf if other is None else \
+                    math.hypot(r.pose.x - other.pose.x, r.pose.y - other.pose.y) - r.radius - other.radius
+            else:
+                gap = min((box.sdf(r.pose.x, r.pose.y) - r.radius for n, box in self._obstacles if n == name),
+                          default=math.inf)
+            if gap > CONTACT_GAP:
+                r.touching.discard(name)
 
     def _blocker(self, r: SimRobot, pose: Pose2D) -> str | None:
         """What would overlap ``r`` at ``pose`` more than at its current pose."""

@@ -263,6 +263,16 @@ class Localiser:
         self.last_contradiction = long
         return float(np.clip(1.0 - long / 0.2, 0.0, 1.0) * min(1.0, match / 0.3))
 
+    def fit_now(self, pose: Pose2D) -> float | None:
+        """:meth:`fit` of the latest scan (the configured number of beams)
+        seen from ``pose``; None without a scan.  For checking a pose from
+        elsewhere (a tag sighting) against the laser."""
+        scan = self._scan()
+        if scan is None:
+            return None
+        ranges, angles = select_beams(scan, self.config.beams)
+        return self.fit(pose, ranges, angles, scan.mount)
+
     # -- results ----------------------------------------------------------
     def estimate(self) -> PoseEstimate | None:
         """The belief at the current odometry (the last filter estimate moved

@@ -10,9 +10,11 @@ the robot on the spot (one full turn) while the filter updates.
 
 Every sighting of the tag of a station whose pose is known gives the
 robot's pose directly (:func:`pose_from_tag`): when that disagrees with the
-filter's estimate, the filter starts again around it (the laser then
-refines it).  So a robot that sees any known tag recovers from any wrong
-pose, symmetric field or not.
+filter's estimate and the laser agrees with it clearly better than with
+the estimate (a station's known pose may itself be off: a zone centre from
+the team server), the filter starts again around it (the laser then
+refines it).  So a robot that sees a well-known tag recovers from any
+wrong pose, symmetric field or not.
 
 It succeeds once the estimate is confident (the localiser's ``confident``
 level) and compact (``std_xy`` below ``max_std``) for ``settle`` filter
@@ -59,7 +61,7 @@ class Relocalise(Activity):
     def __init__(self, ctx, spread: tuple[float, float, float] = (0.5, 0.5, 0.6),
                  global_search: bool = False, timeout: float | None = 40.0, particles: int | None = None,
                  max_std: float = 0.12, settle: int = 3, tag_disagreement: float = 0.3,
-                 look_around: float = math.pi, hold: float = 0.3):
+                 look_around: float = math.pi, hold: float = 0.3, tag_fit: float = 0.6):
         super().__init__(ctx, timeout)
         self.spread = spread
         self.global_search = global_search
@@ -69,6 +71,7 @@ class Relocalise(Activity):
         self.tag_disagreement = tag_disagreement
         self.look_around = look_around
         self.hold = hold
+        self.tag_fit = tag_fit          # laser agreement a tag's pose needs to be believed
         self.turn: Turn | None = None
         self.tag_fixes = 0
 
@@ -105,14 +108,19 @@ class Relocalise(Activity):
         for fix in pose_from_tag(self.ctx, dets):
             fix = fix.compose(moved)              # from the image's time to now
             d, a = (math.inf, math.inf) if est is None else (fix.distance_to(est), abs(wrap_angle(fix.theta - est.theta)))
+            fits = loc.fit_now(fix) or 0.0
             if d > self.tag_disagreement or a > self.tag_disagreement:
-                loc.initialise(fix, (0.15, 0.15, 0.1))
-                self.tag_fixes += 1
-                self._good = 0
-                self._agreed = False
-            elif d <= 0.5 * self.tag_disagreement and a <= 0.5 * self.tag_disagreement:
+                here = (loc.fit_now(est) or 0.0) if est is not None else 0.0
+                if fits >= self.tag_fit and fits >= here + 0.2:
+                    loc.initialise(fix, (0.15, 0.15, 0.1))
+                    self.tag_fixes += 1
+                    self._good = 0
+                    self._fair_from = None
+                    self._agreed = False
+                    return
+            elif d <= 0.5 * self.tag_disagreement and a <= 0.5 * self.tag_disagreement and fits >= self.tag_fit:
                 self._agreed = True
-            return
+                return
 
     def _step(self, now: float) -> Status:
         loc = self.ctx.pose_source

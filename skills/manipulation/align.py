@@ -10,6 +10,8 @@ matter over these few centimetres.  Once ``tag_sightings`` sightings are in,
 the tag may leave the image (a shelf slot or the slide lies beside it) and
 the robot finishes on odometry.  Tags come from ``ctx.tags`` (the
 backend's oracle, or a perception source for rendered or real images).
+It slows and waits for what the laser sees in its way (another robot
+beside the station; :class:`~skills.navigation.guard.MotionGuard`).
 
 :class:`Dock` covers the last stretch, where the camera no longer sees the
 tag: it fits a line to the laser points of the face ahead, turns square to
@@ -27,6 +29,7 @@ from rll_bt.backend import CapabilityError, Pose2D
 from ..activity import Activity, Status
 from ..errors import SkillError, SkillFailure
 from ..navigation.controller import Limits, VelocityLimiter, heading_command
+from ..navigation.guard import MotionGuard
 from ..navigation.safety import scan_points
 from ..localisation.particles import circular_mean
 from .places import Place, check_place, lateral_offset
@@ -61,6 +64,7 @@ class AlignToTag(Activity):
         self.seen_other: set[int] = set()
         self.limiter = VelocityLimiter(Limits.from_settings(self.ctx.settings,
                                                             self.ctx.settings.manipulation.align_speed))
+        self.guard = MotionGuard(self.ctx)
 
     def _look(self, odom: Pose2D, now: float) -> None:
         dets = self.ctx.tags.detections()
@@ -113,9 +117,14 @@ class AlignToTag(Activity):
         d = math.hypot(err.x, err.y)
         speed = min(m.align_speed, 1.2 * d)
         v = np.array([err.x, err.y]) / d * speed if d > 1e-9 else np.zeros(2)
+        # stop for what is in the way (another robot beside the station);
+        # the align time limit ends a wait that does not end
+        vx, vy = self.guard.clamp(float(v[0]), float(v[1]))
+        capped = math.hypot(vx, vy) < speed - 1e-9
         lim = self.limiter.limits
-        self.limiter.apply(v, heading_command(err.theta, Limits(lim.max_speed, 0.6, lim.max_accel,
-                                                                lim.max_decel, lim.max_alpha)), dt)
+        self.limiter.apply(np.array([vx, vy]), heading_command(err.theta, Limits(lim.max_speed, 0.6, lim.max_accel,
+                                                                                lim.max_decel, lim.max_alpha)),
+                           dt, emergency=capped)
         vx, vy, w = self.limiter.to_robot(0.0)
         self.ctx.backend.drive(vx, vy, w)
         return Status.RUNNING

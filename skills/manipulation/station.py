@@ -120,7 +120,8 @@ def _handling(ctx, place: Place, steps_fn, approach: bool, use_tag, timeout, nam
 
     def to_belt():
         # slid along the face to the spot: slide back to the belt line first
-        return MoveRelative(ctx, 0.0, lateral_offset(place, ctx.profile), speed=0.1) if shifted else None
+        return MoveRelative(ctx, 0.0, lateral_offset(place, ctx.profile), speed=0.1, partial=True) \
+            if shifted else None
 
     def back_off():
         machine = ctx.machines.get(place.machine)
@@ -129,7 +130,7 @@ def _handling(ctx, place: Place, steps_fn, approach: bool, use_tag, timeout, nam
             spot = "conveyor" if shifted else place.spot
             docked = approach_pose(machine, place.side, m.final_distance,
                                    target_lateral(spot, ctx.profile.mps), ctx.profile.mps)
-        return MoveRelative(ctx, -back_off_distance(ctx, m.back_off, docked), speed=0.2)
+        return MoveRelative(ctx, -back_off_distance(ctx, m.back_off, docked), speed=0.2, partial=True)
 
     factories += [to_belt, back_off]
     return factories
@@ -138,8 +139,8 @@ def _handling(ctx, place: Place, steps_fn, approach: bool, use_tag, timeout, nam
 def back_off_distance(ctx, wanted: float, pose=None, step: float = 0.01) -> float:
     """How far the robot can back straight off, at most ``wanted`` metres
     (0 when there is no room behind it): the laser does not see behind, so
-    the known map decides; the robot keeps its radius plus 2 cm from walls
-    and stations all the way (or, already closer, does not get closer).
+    the known map decides; the robot keeps its radius plus 5 cm (a few of
+    them are the pose's error) from walls and stations all the way (or, already closer, does not get closer).
     Checked from the localised pose and, when given, from ``pose`` too (the
     pose docking should have left the robot at): the shorter way wins, as
     either may be off by a few centimetres or the station's mapped pose by
@@ -160,7 +161,7 @@ def _room_behind(ctx, pose, wanted: float, step: float) -> float:
     for exclude in (tuple(ctx.map.obstacles), ()):
         clear = ctx.map.clearance(xs, ys, exclude=exclude)
         start = float(ctx.map.clearance(pose.x, pose.y, exclude=exclude)[0])
-        need = min(ctx.robot.radius + 0.02, start)       # docked: the face in front is close
+        need = min(ctx.robot.radius + 0.05, start)       # docked: the face in front is close
         bad |= clear < need - 1e-6
     first = np.nonzero(bad)[0]
     if not len(first):

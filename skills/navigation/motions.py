@@ -1,9 +1,13 @@
 """Short motions without planning, closed on odometry: move by an offset
 in the robot frame (backing away from a station) and turn on the spot.
 
-Both are non-blocking activities within the speed and acceleration limits;
-the laser is not consulted (they are used where the robot just came from or
-where it stands), so keep them short.
+Both are non-blocking activities within the speed and acceleration limits.
+They do not plan, so keep them short; :class:`MoveRelative` slows and stops
+for what the laser sees in its way (behind the robot, where the laser is
+blind, for the robots navigation saw there) and for a pressed bumper
+(:class:`~skills.navigation.guard.MotionGuard`), and waits; a move that may
+end early (a back-off: any distance gained is good) ends after
+``give_up_after`` seconds blocked, one that may not fails then.
 """
 from __future__ import annotations
 
@@ -14,7 +18,9 @@ import numpy as np
 from rll_bt.backend import Pose2D, wrap_angle
 
 from ..activity import Activity, Status
+from ..errors import SkillError, SkillFailure
 from .controller import Limits, VelocityLimiter, heading_command
+from .guard import MotionGuard
 
 
 class MoveRelative(Activity):
@@ -24,19 +30,24 @@ class MoveRelative(Activity):
     name = "move relative"
 
     def __init__(self, ctx, dx: float, dy: float = 0.0, dtheta: float = 0.0, speed: float = 0.15,
-                 tolerance: float = 0.01, heading_tolerance: float = 0.02, timeout: float | None = None):
+                 tolerance: float = 0.01, heading_tolerance: float = 0.02, timeout: float | None = None,
+                 guard: bool = True, give_up_after: float = 4.0, partial: bool = False):
         if timeout is None:
-            timeout = 2.0 * math.hypot(dx, dy) / speed + abs(dtheta) / 0.5 + 5.0
+            timeout = 2.0 * math.hypot(dx, dy) / speed + abs(dtheta) / 0.5 + give_up_after + 5.0
         super().__init__(ctx, timeout)
         self.offset = Pose2D(dx, dy, dtheta)
         self.speed = speed
         self.tolerance = tolerance
         self.heading_tolerance = heading_tolerance
+        self.guard = MotionGuard(ctx) if guard else None
+        self.give_up_after = give_up_after
+        self.partial = partial          # blocked for good: success with the distance made
 
     def _on_start(self) -> None:
         self.goal = self.ctx.backend.odometry().pose.compose(self.offset)
         self.limiter = VelocityLimiter(Limits.from_settings(self.ctx.settings, self.speed))
         self._last = None
+        self._blocked_since: float | None = None
 
     def _step(self, now: float) -> Status:
         odom = self.ctx.backend.odometry().pose
@@ -49,7 +60,23 @@ class MoveRelative(Activity):
         lim = self.limiter.limits
         speed = min(self.speed, 1.5 * d, math.sqrt(2.0 * lim.max_decel * 0.8 * d))
         v = np.array([err.x, err.y]) / d * speed if d > 1e-9 else np.zeros(2)
-        self.limiter.apply(v, heading_command(err.theta, lim), dt)
+        capped = False
+        if self.guard is not None and d > self.tolerance:
+            vx, vy = self.guard.clamp(float(v[0]), float(v[1]))
+            capped = math.hypot(vx, vy) < speed - 1e-9
+            v = np.array([vx, vy])
+            if math.hypot(vx, vy) < 0.01:
+                self._blocked_since = now if self._blocked_since is None else self._blocked_since
+                if now - self._blocked_since >= self.give_up_after:
+                    self.ctx.stop_base()
+                    if self.partial:
+                        self.message = f"stopped {d:.2f} m short: {self.guard.reason}"
+                        return Status.SUCCESS
+                    raise SkillFailure(SkillError.NAVIGATION_FAILED,
+                                       f"{self.name} blocked {d:.2f} m short: {self.guard.reason}")
+            else:
+                self._blocked_since = None
+        self.limiter.apply(v, heading_command(err.theta, lim), dt, emergency=capped)
         vx, vy, w = self.limiter.to_robot(0.0)
         self.ctx.backend.drive(vx, vy, w)
         return Status.RUNNING

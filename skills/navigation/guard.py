@@ -1,0 +1,101 @@
+"""A laser and bumper check for the short motions near stations that do
+not plan (lining up on a tag, sliding along a face, backing off).
+
+:class:`MotionGuard` answers how fast the robot may move in a direction of
+its own frame: the latest scan's points (moved to now by odometry) ahead
+within the robot's width plus ``lateral`` must stay ``margin`` metres
+away, braking at the base's deceleration; toward where the laser is blind
+(behind) the unexplained points remembered by navigation
+(``ctx.laser_memory``: other robots seen on the way in) count instead.  A
+pressed bumper stops every motion.  Units: metres, seconds, the robot
+frame (x forward, y left).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rll_bt.backend import CapabilityError
+
+from .laserview import points_now
+from .safety import scan_points, speed_limit
+
+
+class MotionGuard:
+    def __init__(self, ctx, margin: float = 0.03, lateral: float = 0.02, max_range: float = 1.5):
+        self.ctx = ctx
+        self.margin = margin
+        self.lateral = lateral
+        self.max_range = max_range
+        self.reason = ""
+        self._no_laser = False
+        self._no_bumper = False
+
+    def _points(self) -> np.ndarray:
+        """Laser points in the robot frame of now (empty without a laser)."""
+        if self._no_laser:
+            return np.zeros((0, 2))
+        ctx = self.ctx
+        try:
+            scan = ctx.backend.laser_scan()
+        except CapabilityError:
+            self._no_laser = True
+            return np.zeros((0, 2))
+        if scan is None:
+            return np.zeros((0, 2))
+        pts = scan_points(scan, max_range=self.max_range)
+        then = ctx.odometry_history.at(scan.stamp)
+        if then is not None:
+            pts = points_now(pts, then, ctx.backend.odometry().pose)
+        return pts
+
+    def _remembered(self) -> np.ndarray:
+        """Remembered unexplained points in the robot frame."""
+        ctx = self.ctx
+        try:
+            pose = ctx.pose()
+        except RuntimeError:
+            return np.zeros((0, 2))
+        rel = ctx.laser_memory.relative(pose, ctx.clock.now())
+        c, s = math.cos(-pose.theta), math.sin(-pose.theta)
+        return np.column_stack([c * rel[:, 0] - s * rel[:, 1], s * rel[:, 0] + c * rel[:, 1]])
+
+    def bumped(self) -> bool:
+        if self._no_bumper:
+            return False
+        try:
+            return bool(self.ctx.backend.bumper())
+        except CapabilityError:
+            self._no_bumper = True
+            return False
+
+    def limit(self, vx: float, vy: float) -> float:
+        """Highest speed (m/s) allowed along the robot-frame direction
+        (vx, vy); 0 means blocked (``reason`` says by what)."""
+        speed = math.hypot(vx, vy)
+        if speed < 1e-9:
+            return math.inf
+        if self.bumped():
+            self.reason = "the bumper is pressed"
+            return 0.0
+        ux, uy = vx / speed, vy / speed
+        r = self.ctx.robot
+        decel = self.ctx.settings.max_decel * 0.8
+        period = self.ctx.settings.control_period
+        blind = abs(math.atan2(uy, ux)) > r.laser_fov / 2.0 - 0.4
+        pts = self._remembered() if blind else self._points()
+        cap = speed_limit(pts, ux, uy, r.radius, self.margin, self.lateral, decel, period)
+        if cap <= 0.0:
+            self.reason = "something is in the way" + (" (seen earlier, behind the robot)" if blind else "")
+        return cap
+
+    def clamp(self, vx: float, vy: float) -> tuple[float, float]:
+        """(vx, vy) slowed to :meth:`limit` along its direction."""
+        speed = math.hypot(vx, vy)
+        cap = self.limit(vx, vy)
+        if speed <= cap:
+            return vx, vy
+        k = max(cap, 0.0) / speed
+        return vx * k, vy * k
+

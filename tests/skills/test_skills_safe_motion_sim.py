@@ -1,0 +1,115 @@
+"""Driving among stations without touching them, in the PyBullet world:
+the places where whole games used to bump (a corner passed at full speed,
+a tight gap between a station and the wall, a slide beside a neighbouring
+station, a back-off with the wall right behind)."""
+import math
+
+import pytest
+
+from rll_bt.backend import Pose2D, open_backend
+from skills.activity import Status
+from skills.context import SkillContext
+from skills.manipulation import ApproachStation, GrabFrom, Place, PutOnto, place_for
+from skills.manipulation.station import back_off_distance, shift_docked, spot_clearance
+from skills.navigation import Navigate, PoseGoal, StationSideGoal, ZoneGoal
+from skills.navigation.goals import approach_pose
+from skills.navigation.motions import MoveRelative
+
+sim = pytest.importorskip("backends.sim")
+
+
+def scene(seed, pose, localisation="cheap", machines=None):
+    """A world, and a skills context whose map knows the stations (robot 1
+    at ``pose``, None: its lane)."""
+    world = sim.World("rcll2016", seed=seed)
+    bot = open_backend("sim", world=world, robot=("CYAN", 1), pose=pose)
+    pose = world.robot_pose("CYAN", 1)
+    ctx = SkillContext.create(bot, world.clock, world.profile, pose, localisation=localisation, seed=seed)
+    for name, st in world.stations.items():
+        ctx.machines.set(name, (machines or {}).get(name, st.pose))
+    return world, ctx
+
+
+def drive(world, activity, limit=120.0):
+    """Run an activity; returns (status, the smallest gap to anything on the way)."""
+    closest = world.clearance("CYAN", 1)
+    activity.start()
+    t_end = world.time + limit
+    while activity.poll() is Status.RUNNING and world.time < t_end:
+        world.step(0.1)
+        closest = min(closest, world.clearance("CYAN", 1))
+    return activity.status, closest
+
+
+@pytest.mark.parametrize("seed,start,goal", [
+    # round the corner of C-CS1 to its output: the path turns right below the corner
+    (8, Pose2D(2.29, 5.43, 0.0), StationSideGoal("C-CS1", "OUTPUT", 0.62)),
+    # between C-DS and the wall, into the corner behind it
+    (9, Pose2D(0.5, 3.0, 0.0), ZoneGoal(4)),
+    # past C-RS2 from a spot close to it
+    (4, Pose2D(3.167, 2.2, -1.17), PoseGoal(Pose2D(-2.05, 3.61, 1.45))),
+])
+def test_navigation_past_stations_keeps_a_gap(seed, start, goal):
+    world, ctx = scene(seed, start)
+    status, closest = drive(world, Navigate(ctx, goal))
+    assert status is Status.SUCCESS
+    assert world.collision_count == 0
+    assert closest > 0.02, f"came within {100 * closest:.1f} cm of something"
+
+
+def test_put_onto_a_slide_beside_a_neighbouring_station_slides_there_docked():
+    # seed 1: C-CS2 stands so close to C-RS2's input that the robot cannot
+    # stand in front of the slide at the tag-reading distance
+    world, ctx = scene(1, Pose2D(4.2, 2.8, -2.0))
+    slide = place_for("C-RS2", "SLIDE")
+    assert shift_docked(ctx, slide)
+    m = ctx.settings.manipulation
+    assert spot_clearance(ctx, slide, m.coarse_distance) < 0 < spot_clearance(ctx, slide, m.final_distance)
+    world.spawn_workpiece("C-BS", "output", "BASE_RED")
+    status, _ = drive(world, GrabFrom(ctx, Place("C-BS", "OUTPUT")))
+    assert status is Status.SUCCESS
+    put = PutOnto(ctx, slide)
+    status, closest = drive(world, put)
+    assert status is Status.SUCCESS, put.message
+    assert len(world.workpieces_at("C-RS2", "slide")) == 1
+    assert world.collision_count == 0 and closest > 0.01
+
+
+@pytest.mark.parametrize("seed,place", [(3, Place("C-BS", "OUTPUT")), (5, Place("C-CS1", "INPUT", "shelf0"))])
+def test_approach_lines_up_in_front_of_the_tag_and_docks_short_of_the_face(seed, place):
+    world, ctx = scene(seed, None)
+    approach = ApproachStation(ctx, place)
+    status, closest = drive(world, approach)
+    assert status is Status.SUCCESS, approach.message
+    face_gap, what = world.closest("CYAN", 1)
+    assert what == place.machine
+    m = ctx.settings.manipulation
+    expected = m.final_distance - ctx.robot.radius
+    assert abs(face_gap - expected) < 0.015          # docked 4.5 cm from the face, not on it
+    assert world.collision_count == 0 and closest > expected - 0.015
+
+
+@pytest.mark.parametrize("wall_gap", [0.03, 0.12])
+def test_back_off_with_the_wall_right_behind_does_not_touch_it(wall_gap):
+    world = sim.World("rcll2016", seed=6)
+    truth = world.stations["C-RS1"].pose           # its input faces the wall at y = 6
+    # facing the input, backed off until the wall is ``wall_gap`` behind the robot
+    d = 0.27
+    while True:
+        pose = approach_pose(truth, "INPUT", d)
+        if 6.0 - (pose.y + world.robot_config.geometry.radius) <= wall_gap * math.sin(math.pi / 4) + 1e-3:
+            break
+        d += 0.005
+    bot = open_backend("sim", world=world, robot=("CYAN", 1), pose=pose)
+    ctx = SkillContext.create(bot, world.clock, world.profile, pose, localisation=None)
+    # the map has C-RS1 where the team server guessed it: its zone's centre, 0.4 m off
+    for name, st in world.stations.items():
+        ctx.machines.set(name, Pose2D(-5.0, 5.25, truth.theta) if name == "C-RS1" else st.pose)
+    room = back_off_distance(ctx, 0.35, approach_pose(ctx.machines.get("C-RS1"), "INPUT", 0.27))
+    assert 0.0 <= room <= max(wall_gap - 0.05, 0.0) + 0.011
+    before = world.robot_pose("CYAN", 1)
+    status, closest = drive(world, MoveRelative(ctx, -room, speed=0.2))
+    assert status is Status.SUCCESS
+    assert world.collision_count == 0 and closest > 0.0
+    after = world.robot_pose("CYAN", 1)
+    assert math.hypot(after.x - before.x, after.y - before.y) <= room + 0.01
