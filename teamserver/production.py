@@ -18,21 +18,21 @@ import logging
 from rll_bt.rules import Profile
 
 from . import model as M
+from .caps import CLEANUP_ORDER, FREE, CapsMixin
+from .cleanup import CleanupMixin
 from .health import StationHealth
 from .kb import KnowledgeBase
-from .planning.domain import CAP_LOCK, CAPLESS, EXTRA, MAIN, ProductionContext, Progress
+from .planning.domain import CAP_LOCK, CAPLESS, EXTRA, MAIN, Progress
 from .planning.estimate import SimRobot, SimTask
-from .planning.htn import Network, PlanningFailed, Seq
+from .planning.htn import Network, PlanningFailed
 from .planning.planner import Candidate, ProductionPlanner, World
 
 log = logging.getLogger("teamserver.production")
 
 DELIVERED, ABANDONED, ACTIVE = "DELIVERED", "ABANDONED", "ACTIVE"
-CLEANUP_ORDER = 0          # order id of products that only clear a station
-FREE = "free"              # owner of a retrieved cap no product owns yet (cap_buffer)
 
 
-class ProductionManager:
+class ProductionManager(CapsMixin, CleanupMixin):
     """Products, their tasks and workpieces, kept in the knowledge base."""
 
     def __init__(self, kb: KnowledgeBase, planner: ProductionPlanner, prefix: str, *,
@@ -90,14 +90,6 @@ class ProductionManager:
             if locks[lk] == product and (names is None or lk in names):
                 del locks[lk]
         self._set_locks(locks)
-
-    @property
-    def cap_buffer(self) -> dict[str, str]:
-        """CS -> product whose retrieved cap it holds."""
-        return dict(self.kb.get("cap_buffer", {}))
-
-    def _set_cap_buffer(self, buf: dict[str, str]) -> None:
-        self.kb.set("cap_buffer", buf)
 
     # -- the planning world -------------------------------------------------------------
     def rs_colors(self) -> dict[str, tuple[str, ...]]:
@@ -202,17 +194,6 @@ class ProductionManager:
             self.prefill(game_time, horizon)
         return cancels, choice
 
-    def spare_robots(self) -> int:
-        """Idle robots with empty grippers beyond the steps that could start now."""
-        def idle(r: M.Robot) -> bool:
-            t = self.kb.tasks.get(r.task_id) if r.task_id is not None else None
-            return not r.holding and (t is None or t.kind == M.GO_TO)     # parking is idle
-        idle = sum(1 for r in self.kb.active_robots() if idle(r))
-        startable = sum(1 for t in self.kb.open_tasks() if t.state == M.PENDING and not t.carry
-                        and all(self.kb.tasks.get(d) is not None
-                                and self.kb.tasks[d].state == M.DONE for d in t.deps))
-        return idle - startable
-
     def start(self, cand: Candidate) -> M.Product:
         pid = f"P{self.kb.next_id('product')}"
         product = M.Product(pid, cand.order.id, created=self.kb.get("game_time", 0.0))
@@ -222,128 +203,6 @@ class ProductionManager:
         log.info("started %s for order %d (%d tasks)", pid, cand.order.id,
                  len(cand.network.steps))
         return product
-
-    def _take_cap(self, cs: str, product_id: str) -> None:
-        buf = self.cap_buffer
-        buf[cs] = product_id
-        self._set_cap_buffer(buf)
-
-    def adopt_free_caps(self) -> list[M.Product]:
-        """Give each cap retrieved ahead (or left by an abandoned product) to the most
-        urgent product whose cap retrieval there is due (:meth:`cap_due`): its cap
-        chain (retrieve, take the cap-less base, discard it or put it on a slide) is
-        cancelled, a base from the BS takes the cap-less base's place on the slide.
-        (A station holding a cap cannot retrieve another: without this the product
-        would wait for ever.)"""
-        out = []
-        for cs, owner in sorted(self.cap_buffer.items()):
-            if owner != FREE:
-                continue
-            best = None
-            for p in self.active_products():
-                order = self.kb.orders.get(p.order_id)
-                if order is None:
-                    continue
-                chain = self._cap_chain(p, cs)
-                if chain is None or not self.cap_due(chain[0]):
-                    continue                    # it would keep the cap long unmounted
-                if best is None or order.end < best[0]:
-                    best = (order.end, p, chain)
-            if best is None:
-                continue
-            _, p, (retrieve, pickup, after) = best
-            for t in (retrieve, pickup) + ((after,) if after.kind == M.DISCARD else ()):
-                t.state, t.error = M.CANCELLED, f"mounts the cap waiting in {cs}"
-                self.kb.save_task(t)
-            if after.kind == M.DISCARD:
-                for t in self.kb.tasks_of(p.tasks):
-                    if after.id in t.deps:
-                        t.deps = tuple(d for d in t.deps if d != after.id)
-                        self.kb.save_task(t)
-            else:                               # the slide still wants a base: from the BS
-                bs = f"{self.prefix}-BS"
-                base = self.kb.orders[p.order_id].base
-                get = M.Task(self.kb.next_id("task"), M.GET_WORKPIECE,
-                             {"machine": bs, "side": M.OUTPUT, "base": base, "role": EXTRA},
-                             product=p.id, prepare={"machine": bs, "bs": {"side": M.OUTPUT,
-                                                                          "color": base}},
-                             locks=(bs,), releases=(bs,), created=self.kb.get("game_time", 0.0))
-                self.kb.save_task(get)
-                after.deps = tuple(get.id if d == pickup.id else d for d in after.deps)
-                after.params = {**after.params, "carry_from": get.id}
-                after.holder = None
-                self.kb.save_task(after)
-                p.tasks = tuple(p.tasks) + (get.id,)
-                self.kb.save_product(p)
-            self._take_cap(cs, p.id)
-            out.append(p)
-            log.info("%s mounts the cap waiting in %s", p.id, cs)
-        return out
-
-    def cap_due(self, task: M.Task) -> bool:
-        """Is it time for ``task``'s product to retrieve (or take) its cap?  Once every
-        ring mount of the product that does not wait for the cap-less base is under
-        way: a retrieved cap keeps its cap station from every other product until it
-        is mounted."""
-        product = self.kb.products.get(task.product or "")
-        if product is None:
-            return True
-        tasks = self.kb.tasks_of(product.tasks)
-        after, grew = {task.id}, True
-        while grew:                              # the steps that wait for the cap
-            grew = False
-            for t in tasks:
-                if t.id not in after and any(d in after for d in t.deps):
-                    after.add(t.id)
-                    grew = True
-        return not any(t.kind == M.MOUNT_RING and t.state == M.PENDING and t.id not in after
-                       for t in tasks)
-
-    def _cap_chain(self, product: M.Product, cs: str):
-        """(retrieve, cap-less pickup, what takes the base) of ``product`` at ``cs``, all
-        still PENDING; None if there is none."""
-        tasks = self.kb.tasks_of(product.tasks)
-        for r in tasks:
-            if r.kind != M.RETRIEVE_CAP or r.machine != cs or r.state != M.PENDING:
-                continue
-            pick = [t for t in tasks if r.id in t.deps and t.kind == M.GET_WORKPIECE]
-            if len(pick) != 1 or pick[0].state != M.PENDING:
-                return None
-            after = [t for t in tasks if pick[0].id in t.deps and t.carry]
-            if len(after) != 1 or after[0].state != M.PENDING:
-                return None
-            return r, pick[0], after[0]
-        return None
-
-    def prefill(self, game_time: float, horizon: float) -> list[M.Product]:
-        """Retrieve a cap ahead into each idle cap station that holds none and that no
-        product plans to use now, while an order may still want its colour: a later
-        product mounts it at once (:meth:`adopt_free_caps`).  The cap-less base is
-        discarded.  Returns the cleanup products made now."""
-        if game_time > horizon - self.prefill_stop or not self.kb.orders:
-            return []
-        buf, made = self.cap_buffer, []
-        busy = {t.machine for t in self.kb.open_tasks() if t.machine}
-        prefilling = {t.machine for p in self.active_products() if p.order_id == CLEANUP_ORDER
-                      for t in self.kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP}
-        for cs, cap in sorted(self.cs_caps.items()):
-            st = self.kb.stations.get(cs)
-            if buf.get(cs) is not None or cs in busy or cs in prefilling or st is None or \
-                    st.state != "IDLE" or cs in self.unusable() or cs in self.locks:
-                continue
-            wanted = any(o.cap == cap and o.open > 0 for o in self.kb.orders.values())
-            if not wanted and game_time > self.prefill_unknown:
-                continue
-            pid = f"X{self.kb.next_id('product')}"
-            product = M.Product(pid, CLEANUP_ORDER, created=game_time)
-            self.kb.save_product(product)
-            ctx = ProductionContext(self.prefix, {}, {}, self.cs_caps, None)
-            net = self.planner.htn.plan(ctx, Seq(("retrieve_cap", cs), ("pickup", cs, True,
-                                                                          CAPLESS), ("discard",)))
-            self.add_network(product, net)
-            made.append(product)
-            log.info("%s retrieves a cap into %s ahead", pid, cs)
-        return made
 
     def add_network(self, product: M.Product, net: Network) -> list[M.Task]:
         ids = [self.kb.next_id("task") for _ in net.steps]
@@ -579,17 +438,6 @@ class ProductionManager:
             self.clear_output(pr.location.split(":")[0])
         log.info("abandoned %s", product.id)
 
-    def clear_output(self, machine: str) -> M.Product:
-        """A small product that takes a workpiece from ``machine``'s output and discards it."""
-        pid = f"X{self.kb.next_id('product')}"
-        product = M.Product(pid, CLEANUP_ORDER)
-        self.kb.save_product(product)
-        ctx = None
-        net = self.planner.htn.plan(ctx, Seq(("pickup", machine, False, CAPLESS),
-                                             ("discard",)))
-        self.add_network(product, net)
-        return product
-
     def feed_lost(self, task: M.Task) -> None:
         """``task`` was reported done, but its station never took the workpiece: undo
         what :meth:`task_done` booked and repair the product."""
@@ -613,56 +461,3 @@ class ProductionManager:
             product.state, product.delivered_at = ACTIVE, None
             self.kb.save_product(product)
         self.needs_repair(product.id, f"{machine} never took the workpiece of task {task.id}")
-
-    def flush(self, machine: str, instruction: dict) -> M.Product | None:
-        """A small product that feeds a spare base to ``machine``, PREPARED with
-        ``instruction`` that nothing needs, so that it processes it and becomes IDLE
-        again (a ring or cap station's result is taken away and discarded)."""
-        kind = machine[2:4]
-        bs = f"{self.prefix}-BS"
-        base = "BASE_RED"
-        if kind == "DS":
-            feed = (M.DELIVER, {"machine": machine, **instruction.get("ds", {})})
-        elif kind == "RS" and "rs" in instruction:
-            feed = (M.MOUNT_RING, {"machine": machine, "cost": 0, **instruction["rs"]})
-        elif kind == "CS":
-            feed = (M.MOUNT_CAP, {"machine": machine, "cap_color": self.cs_caps.get(machine)})
-        else:
-            return None
-        pid = f"X{self.kb.next_id('product')}"
-        product = M.Product(pid, CLEANUP_ORDER, created=self.kb.get("game_time", 0.0))
-        self.kb.save_product(product)
-        now = self.kb.get("game_time", 0.0)
-        ids = [self.kb.next_id("task") for _ in range(2 if kind == "DS" else 4)]
-        tasks = [M.Task(ids[0], M.GET_WORKPIECE, {"machine": bs, "side": M.OUTPUT, "base": base,
-                                                  "role": EXTRA},
-                        product=pid, prepare={"machine": bs, "bs": {"side": M.OUTPUT,
-                                                                    "color": base}},
-                        locks=(bs,), releases=(bs,), created=now),
-                 M.Task(ids[1], feed[0], {**feed[1], "carry_from": ids[0]}, product=pid,
-                        deps=(ids[0],), locks=(machine,),
-                        releases=(machine,) if kind == "DS" else (), carry=True, created=now)]
-        if kind != "DS":
-            tasks += [M.Task(ids[2], M.GET_WORKPIECE, {"machine": machine, "side": M.OUTPUT,
-                                                       "role": EXTRA},
-                             product=pid, deps=(ids[1],), locks=(machine,),
-                             releases=(machine,), created=now),
-                      M.Task(ids[3], M.DISCARD, {"carry_from": ids[2]}, product=pid,
-                             deps=(ids[2],), carry=True, created=now)]
-        for t in tasks:
-            self.kb.save_task(t)
-        product.tasks = tuple(ids)
-        self.kb.save_product(product)
-        return product
-
-    def discard_for(self, robot: M.Robot) -> M.Task:
-        """A task for a robot holding a workpiece nothing needs: discard it."""
-        pid = f"X{self.kb.next_id('product')}"
-        product = M.Product(pid, CLEANUP_ORDER)
-        self.kb.save_product(product)
-        t = M.Task(self.kb.next_id("task"), M.DISCARD, {}, product=pid, carry=True,
-                   holder=robot.number, created=self.kb.get("game_time", 0.0))
-        self.kb.save_task(t)
-        product.tasks = (t.id,)
-        self.kb.save_product(product)
-        return t

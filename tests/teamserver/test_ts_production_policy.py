@@ -14,7 +14,7 @@ from teamserver.game import InProcessTeamServer
 from teamserver.health import StationHealth
 from teamserver.kb import KnowledgeBase
 from teamserver.planning.planner import PLANNERS, GreedyPlanner, ProductionPlanner, make_planner
-from teamserver.production import FREE
+from teamserver.caps import FREE
 from teamserver.server import ServerConfig
 from ts_harness import Lockstep, play, production_setup
 
@@ -74,25 +74,24 @@ def test_a_cap_is_retrieved_once_the_ring_mounts_before_it_are_under_way():
     ls = Lockstep()
     # two rings that cost nothing: no cap-less base is needed, so the cap comes last
     production_setup(ls, [dict(id=6, complexity=2, rings=["RING_GREEN", "RING_YELLOW"])])
-    kb, disp = ls.server.kb, ls.server.dispatcher
+    kb, pm = ls.server.kb, ls.server.production
     [p] = [p for p in kb.products.values() if p.order_id == 6]
-    steps = {t.kind + str(i): t for i, t in enumerate(kb.tasks_of(p.tasks))}
-    [retrieve] = [t for t in steps.values() if t.kind == M.RETRIEVE_CAP]
+    [retrieve] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP]
     mounts = [t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_RING]
-    assert not ls.server.production.cap_due(retrieve)
+    assert not pm.cap_due(retrieve) and not ls.server.dispatcher.ready(retrieve, 1.0)
     mounts[0].state = M.DONE
     kb.save_task(mounts[0])
-    assert not ls.server.production.cap_due(retrieve)
+    assert not pm.cap_due(retrieve)
     mounts[1].state = M.ASSIGNED
     kb.save_task(mounts[1])
-    assert ls.server.production.cap_due(retrieve)
+    assert pm.cap_due(retrieve)
 
 
 def test_a_cap_that_feeds_a_slide_is_retrieved_at_once():
     ls = Lockstep()
     # BLUE costs two bases: one of them is the cap-less base of the cap retrieval
     production_setup(ls, [dict(id=5, complexity=1, rings=["RING_BLUE"])])
-    kb, disp = ls.server.kb, ls.server.dispatcher
+    kb = ls.server.kb
     [p] = [p for p in kb.products.values() if p.order_id == 5]
     [retrieve] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP]
     assert ls.server.production.cap_due(retrieve)

@@ -1,0 +1,79 @@
+"""Small products that only move a workpiece out of the way (order id 0):
+take one from a station output and discard it, discard what a robot holds,
+or feed a spare base to a station left PREPARED for nothing.
+
+A mixin of :class:`~teamserver.production.ProductionManager` (it needs
+``kb``, ``prefix``, ``cs_caps``, ``planner`` and ``add_network()``).
+"""
+from __future__ import annotations
+
+from . import model as M
+from .caps import CLEANUP_ORDER
+from .planning.domain import CAPLESS, EXTRA
+from .planning.htn import Seq
+
+
+class CleanupMixin:
+    def clear_output(self, machine: str) -> M.Product:
+        """A small product that takes a workpiece from ``machine``'s output and discards it."""
+        pid = f"X{self.kb.next_id('product')}"
+        product = M.Product(pid, CLEANUP_ORDER)
+        self.kb.save_product(product)
+        ctx = None
+        net = self.planner.htn.plan(ctx, Seq(("pickup", machine, False, CAPLESS),
+                                             ("discard",)))
+        self.add_network(product, net)
+        return product
+
+    def flush(self, machine: str, instruction: dict) -> M.Product | None:
+        """A small product that feeds a spare base to ``machine``, PREPARED with
+        ``instruction`` that nothing needs, so that it processes it and becomes IDLE
+        again (a ring or cap station's result is taken away and discarded)."""
+        kind = machine[2:4]
+        bs = f"{self.prefix}-BS"
+        base = "BASE_RED"
+        if kind == "DS":
+            feed = (M.DELIVER, {"machine": machine, **instruction.get("ds", {})})
+        elif kind == "RS" and "rs" in instruction:
+            feed = (M.MOUNT_RING, {"machine": machine, "cost": 0, **instruction["rs"]})
+        elif kind == "CS":
+            feed = (M.MOUNT_CAP, {"machine": machine, "cap_color": self.cs_caps.get(machine)})
+        else:
+            return None
+        pid = f"X{self.kb.next_id('product')}"
+        product = M.Product(pid, CLEANUP_ORDER, created=self.kb.get("game_time", 0.0))
+        self.kb.save_product(product)
+        now = self.kb.get("game_time", 0.0)
+        ids = [self.kb.next_id("task") for _ in range(2 if kind == "DS" else 4)]
+        tasks = [M.Task(ids[0], M.GET_WORKPIECE, {"machine": bs, "side": M.OUTPUT, "base": base,
+                                                  "role": EXTRA},
+                        product=pid, prepare={"machine": bs, "bs": {"side": M.OUTPUT,
+                                                                    "color": base}},
+                        locks=(bs,), releases=(bs,), created=now),
+                 M.Task(ids[1], feed[0], {**feed[1], "carry_from": ids[0]}, product=pid,
+                        deps=(ids[0],), locks=(machine,),
+                        releases=(machine,) if kind == "DS" else (), carry=True, created=now)]
+        if kind != "DS":
+            tasks += [M.Task(ids[2], M.GET_WORKPIECE, {"machine": machine, "side": M.OUTPUT,
+                                                       "role": EXTRA},
+                             product=pid, deps=(ids[1],), locks=(machine,),
+                             releases=(machine,), created=now),
+                      M.Task(ids[3], M.DISCARD, {"carry_from": ids[2]}, product=pid,
+                             deps=(ids[2],), carry=True, created=now)]
+        for t in tasks:
+            self.kb.save_task(t)
+        product.tasks = tuple(ids)
+        self.kb.save_product(product)
+        return product
+
+    def discard_for(self, robot: M.Robot) -> M.Task:
+        """A task for a robot holding a workpiece nothing needs: discard it."""
+        pid = f"X{self.kb.next_id('product')}"
+        product = M.Product(pid, CLEANUP_ORDER)
+        self.kb.save_product(product)
+        t = M.Task(self.kb.next_id("task"), M.DISCARD, {}, product=pid, carry=True,
+                   holder=robot.number, created=self.kb.get("game_time", 0.0))
+        self.kb.save_task(t)
+        product.tasks = (t.id,)
+        self.kb.save_product(product)
+        return t

@@ -1,0 +1,71 @@
+"""Robots left holding a workpiece they cannot use yet.
+
+A robot that picks up a workpiece whose next step is not ready (the other
+parts of the step are still missing, or the order's window is not open)
+is *stuck* with it: it can do nothing else until the step is ready.  When
+every robot is stuck, nobody fetches the missing parts and production
+stops (seed 7 of the rcll2016 benchmark stopped this way for its last
+420 s).  :class:`HoldingMixin` tells which pickups would leave their robot
+stuck (:meth:`~HoldingMixin.blocks`), how many robots are stuck
+(:meth:`~HoldingMixin.stuck`) and how many may be
+(:meth:`~HoldingMixin.hold_limit`).
+
+A mixin of :class:`~teamserver.dispatch.Dispatcher` (it needs ``kb``,
+``production``, ``feeds``, ``config``, ``ready()``, ``station_usable()`` and
+``deliver_from()``).
+"""
+from __future__ import annotations
+
+from . import model as M
+
+
+class HoldingMixin:
+    @staticmethod
+    def hold_limit(task: M.Task, robots: int) -> int:
+        """How many robots may be left holding what they cannot use yet, counting the
+        one taking ``task``: one fewer than the robots for a pickup that clears a
+        station's output; two fewer (but one of two) for a new base from the BS:
+        it only starts work, and a robot fetching parts must stay free besides
+        the one clearing outputs."""
+        if (task.machine or "").endswith("-BS"):
+            return max(robots - 2, min(robots - 1, 1))
+        return robots - 1
+
+    def blocks(self, task: M.Task, game_time: float | None) -> bool:
+        """Would the robot that picks up ``task``'s workpiece be left holding it, its
+        next step not ready (other parts missing, the order's window not open)?"""
+        if task.kind != M.GET_WORKPIECE or task.carry or task.product is None:
+            return False
+        product = self.kb.products.get(task.product)
+        nxt = [t for t in self.kb.tasks_of(product.tasks if product else ())
+               if t.state == M.PENDING and t.carry and t.params.get("carry_from") == task.id]
+        return bool(nxt) and not self._ready_once_held(nxt[0], game_time, task.id)
+
+    def _ready_once_held(self, task: M.Task, game_time: float | None, pickup: int) -> bool:
+        """Would carry ``task`` be ready right after its ``pickup`` (a task id)?"""
+        if game_time is None:
+            return False
+        for d in task.deps:
+            dep = self.kb.tasks.get(d)
+            if d != pickup and (dep is None or dep.state != M.DONE):
+                return False
+        if not (self.production.lock_free(task) and self.station_usable(task.machine)
+                and self.feeds.accepts(task)):
+            return False
+        if task.kind == M.DELIVER:
+            return game_time + self.config.pickup_time >= self.deliver_from(task)
+        return True
+
+    def stuck(self, game_time: float | None) -> int:
+        """Robots holding a workpiece whose next step is not ready, or on their way to
+        pick up one (see :meth:`blocks`)."""
+        bound = {t.holder: t for t in self.kb.open_tasks()
+                 if t.carry and t.state == M.PENDING and t.holder is not None}
+        n = 0
+        for r in self.kb.active_robots():
+            t = self.kb.tasks.get(r.task_id) if r.task_id is not None else None
+            if t is not None and t.state == M.ASSIGNED and t.kind != M.GO_TO:
+                n += self.blocks(t, game_time)
+            elif r.holding and r.number in bound:
+                n += not self.ready(bound[r.number], game_time)
+        return n
