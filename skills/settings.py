@@ -47,7 +47,7 @@ class SkillSettings:
     safety_margin: float = 0.08       # m, kept free around the robot by the laser check
     blind_speed: float = 0.2          # m/s, top speed toward where the laser cannot see
     closing_speed: float = 0.5        # m/s an unmapped obstacle (another robot) may approach at
-    plan_padding: float = 0.05        # m, added to the robot radius in the costmap
+    plan_padding: float = 0.08        # m, added to the robot radius in the costmap
     obstacle_padding: float = 0.08    # m, more for laser obstacles (robots): the laser check's wider berth
     tight_min_speed: float = 0.25     # m/s passing a wall or station at the plan padding
     tight_slope: float = 4.0          # m/s more per metre of gap beyond the padding
