@@ -5,8 +5,9 @@ results, and robots that drop out.
   locks are free (or held by its own product), its station is neither
   BROKEN nor DOWN, the game is RUNNING in PRODUCTION, the station can take
   its workpiece (:mod:`.feeding`), a delivery's robot would reach the DS
-  when the order's window opens, and a cap retrieval's product has started
-  its last ring mount that does not need the cap-less base.
+  when the order's window opens, a ring mount's slide holds the bases its
+  colour costs (:mod:`.slides`), and a cap retrieval's product has started
+  its last ring mount that does not need the cap-less base (:mod:`.caps`).
 - A robot left holding a workpiece whose next step is not ready is *stuck*;
   pickups that would leave one more robot stuck wait while ``robots - 1``
   are (``robots - 2``, but one of two, for a new base from the BS), so that a
@@ -178,6 +179,8 @@ class Dispatcher(HoldingMixin):
             return False
         if task.kind == M.DELIVER and game_time < self.deliver_from(task):
             return False
+        if not self.production.slide_ready(task):
+            return False                # the ring station would break for want of bases
         if task.kind == M.RETRIEVE_CAP and (self.production.cap_buffer.get(task.machine)
                                             or not self.production.cap_due(task)):
             return False                # a CS holding a cap cannot retrieve another
@@ -199,6 +202,7 @@ class Dispatcher(HoldingMixin):
         if not idle:
             return []
         self.production.adopt_free_caps()
+        self.production.top_up_slides()
         ready = [t for t in self.kb.open_tasks() if self.ready(t, game_time)]
         assigned: list[M.Task] = []
         # carry tasks: their holder, if idle

@@ -22,6 +22,7 @@ from .caps import CLEANUP_ORDER, FREE, CapsMixin
 from .cleanup import CleanupMixin
 from .health import StationHealth
 from .kb import KnowledgeBase
+from .slides import SlidesMixin
 from .planning.domain import CAP_LOCK, CAPLESS, EXTRA, MAIN, Progress
 from .planning.estimate import SimRobot, SimTask
 from .planning.htn import Network, PlanningFailed
@@ -32,7 +33,7 @@ log = logging.getLogger("teamserver.production")
 DELIVERED, ABANDONED, ACTIVE = "DELIVERED", "ABANDONED", "ACTIVE"
 
 
-class ProductionManager(CapsMixin, CleanupMixin):
+class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
     """Products, their tasks and workpieces, kept in the knowledge base."""
 
     def __init__(self, kb: KnowledgeBase, planner: ProductionPlanner, prefix: str, *,

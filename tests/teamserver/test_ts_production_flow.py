@@ -181,3 +181,29 @@ def test_a_slide_the_robots_keep_failing_at_is_planned_around():
     assert "C-RS2:SLIDE" in ls.server.production.unusable()
     [c1] = [p for p in kb.products.values() if p.order_id == 5]
     assert c1.state == "ABANDONED"
+
+
+def test_a_base_that_missed_the_slide_is_fetched_again_before_the_mount():
+    ls = Lockstep()
+    # ORANGE costs one base on C-RS2's slide; the first one falls beside it
+    production_setup(ls, [dict(id=5, complexity=1, rings=["RING_ORANGE"])])
+    kb = ls.server.kb
+    dropped, broke = [], []
+
+    def drop(agent, t):
+        if t.WhichOneof("kind") == "put_workpiece" and not dropped:
+            dropped.append(t.task_id)
+            return True
+        return False
+
+    def until(gt):
+        if ls.stations.states["C-RS2"] == "BROKEN":
+            broke.append(gt)
+        return delivered(ls, 5)(gt)
+    assert play(ls, until, drop=drop)
+    assert not broke                                    # never mounted without the base
+    [p] = [p for p in kb.products.values() if p.order_id == 5]
+    puts = [t for t in kb.tasks_of(p.tasks) if t.kind == M.PUT_WORKPIECE]
+    assert len(puts) == 2 and all(t.state == M.DONE for t in puts) and p.repairs == 0
+    [mount] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_RING]
+    assert {t.id for t in puts} <= set(mount.deps)

@@ -235,6 +235,7 @@ def task_kinds(agent):
 
 
 FEEDS = ("mount_ring", "mount_cap", "retrieve_cap", "deliver")
+SLIDE = msgs.message_set("team").enum("MachineSide").Value("SLIDE")
 
 
 class Stations:
@@ -251,10 +252,17 @@ class Stations:
         self.waiting: set = set()
         self.deliveries: list = []          # (game time, gate)
         self.waiting_order: dict = {}       # DS -> order of the workpiece on its input
+        self.slides: dict = {}              # RS -> additional bases on its slide
         self.seen = 0
 
     def _send(self):
-        self.ls.refbox.machines(self.states, RS_2016)
+        self.ls.refbox.machines(self.states, RS_2016,
+                                **{rs: {"loaded_with": n} for rs, n in self.slides.items()})
+
+    def slide(self, machine):
+        """An additional base reached ``machine``'s slide."""
+        self.slides[machine] = self.slides.get(machine, 0) + 1
+        self._send()
 
     def take_prepares(self, gt):
         got = self.ls.refbox.received[self.seen:]
@@ -279,6 +287,14 @@ class Stations:
             self.deliveries.append((gt, gate))
             self.states[machine] = "IDLE"
             self._count(self.waiting_order.pop(machine, None), gate, gt)
+        elif machine[2:4] == "RS":
+            cost = COSTS_2016[self.ls.refbox.ms.enum("RingColor").Name(
+                self.instr[machine].instruction_rs.ring_color)]
+            if self.slides.get(machine, 0) < cost:
+                self.states[machine] = "BROKEN"             # the refbox breaks it
+            else:
+                self.slides[machine] = self.slides.get(machine, 0) - cost
+                self.states[machine] = "READY-AT-OUTPUT"
         else:
             self.states[machine] = "READY-AT-OUTPUT"
 
@@ -353,6 +369,9 @@ def play(ls, until, *, t0=0.0, dt=0.5, steps=800, fail=None, drop=None, drive=3)
                     continue
                 if kind in FEEDS and not (drop and drop(a, t)):
                     st.fed(machine, gt, t.task_id)
+                elif kind == "put_workpiece" and t.put_workpiece.side == SLIDE and not (
+                        drop and drop(a, t)):
+                    st.slide(machine)
                 elif kind == "get_workpiece":
                     st.taken(machine)
                 a.result(t.task_id, holding=kind == "get_workpiece")

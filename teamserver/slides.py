@@ -1,0 +1,87 @@
+"""Additional bases on the ring stations' slides, as the refbox counts them.
+
+A ring colour that costs bases takes them from the ring station's slide
+when its ring is mounted; with too few there the station breaks and the
+workpiece inside (with its rings) is lost.  The plan puts enough bases on
+the slide, but a base can miss it (a robot reports the put done while the
+base fell beside the slide) and another product's mount may take ours.
+So
+
+- a ring mount is sent only while the slide holds what its colour costs
+  (``loaded_with`` of MachineInfo, :meth:`SlidesMixin.slide_ready`);
+- a mount whose bases are all put but missing from the slide for
+  ``settle`` seconds gets the missing ones fetched from the BS
+  (:meth:`SlidesMixin.top_up_slides`).
+
+A mixin of :class:`~teamserver.production.ProductionManager` (it needs
+``kb``, ``prefix``, ``clock``, ``active_products()`` and ``orders``).
+"""
+from __future__ import annotations
+
+import logging
+
+from . import model as M
+from .planning.domain import EXTRA
+
+log = logging.getLogger("teamserver.production")
+
+
+class SlidesMixin:
+    settle: float = 6.0         # s after the last put before a short slide is topped up
+
+    def slide_ready(self, task: M.Task) -> bool:
+        """Does the slide of ``task``'s ring station hold what its ring costs?"""
+        if task.kind != M.MOUNT_RING:
+            return True
+        cost = int(task.params.get("cost", 0))
+        st = self.kb.stations.get(task.machine)
+        return cost <= 0 or st is None or st.loaded_with >= cost
+
+    def top_up_slides(self) -> list[M.Task]:
+        """Fetch the bases missing on the slide of each ring mount waiting only for
+        them; returns the new slide puts."""
+        if self.clock is None:
+            return []
+        now = self.clock.now()
+        out = []
+        for p in self.active_products():
+            tasks = {t.id: t for t in self.kb.tasks_of(p.tasks)}
+            for t in tasks.values():
+                if t.kind != M.MOUNT_RING or t.state != M.PENDING or self.slide_ready(t):
+                    continue
+                deps = [tasks.get(d) or self.kb.tasks.get(d) for d in t.deps]
+                if any(d is None or d.state != M.DONE for d in deps):
+                    continue                # its own bases may still be coming
+                last = max([d.finished_at or 0.0 for d in deps
+                            if d.kind == M.PUT_WORKPIECE] + [0.0])
+                if now - last < self.settle:
+                    continue                # the refbox may not have counted the last one
+                st = self.kb.stations.get(t.machine)
+                missing = int(t.params.get("cost", 0)) - (st.loaded_with if st else 0)
+                out += self._top_up(p, t, missing)
+        return out
+
+    def _top_up(self, product: M.Product, mount: M.Task, n: int) -> list[M.Task]:
+        bs = f"{self.prefix}-BS"
+        order = self.kb.orders.get(product.order_id)
+        base = order.base if order is not None else "BASE_RED"
+        made, created = [], self.kb.get("game_time", 0.0)
+        for _ in range(n):
+            get = M.Task(self.kb.next_id("task"), M.GET_WORKPIECE,
+                         {"machine": bs, "side": M.OUTPUT, "base": base, "role": EXTRA},
+                         product=product.id, prepare={"machine": bs, "bs": {
+                             "side": M.OUTPUT, "color": base}},
+                         locks=(bs,), releases=(bs,), created=created)
+            put = M.Task(self.kb.next_id("task"), M.PUT_WORKPIECE,
+                         {"machine": mount.machine, "side": M.SLIDE, "carry_from": get.id},
+                         product=product.id, deps=(get.id,), carry=True, created=created)
+            self.kb.save_task(get)
+            self.kb.save_task(put)
+            mount.deps = tuple(mount.deps) + (put.id,)
+            product.tasks = tuple(product.tasks) + (get.id, put.id)
+            made.append(put)
+        self.kb.save_task(mount)
+        self.kb.save_product(product)
+        log.info("%s: %s lacks %d base(s) for task %d: fetching them", product.id,
+                 mount.machine, n, mount.id)
+        return made
