@@ -27,6 +27,9 @@ from rll_bt.game.batch import fmt, mean, median, run_batch  # noqa: E402
 from rll_bt.game.options import GameOptions  # noqa: E402
 
 VARIANTS = {"htn": False, "baseline": True}
+#: how the simulated refbox judges a delivery (backends/sim/refbox/orders2016.py, orders2025.py)
+JUDGEMENTS = ("in-time", "late", "too-late", "too-soon", "wrong-gate", "wrong-product",
+              "too-many", "no-order")
 
 
 def main(argv=None) -> int:
@@ -78,6 +81,15 @@ def render(profile, seeds, games, rows, wall, per_seed=False) -> str:
                      f"{fmt(min(pts) if pts else None, 'd'):>5} {fmt(max(pts) if pts else None, 'd'):>5} "
                      f"{hundred:>4}/{len(rs):<5} {fmt(mean(r['orders_delivered'] for r in rs), '.2f'):>12} "
                      f"{fmt(mean(r['points']['total'] for r in rs)):>11}")
+    seen = {d.get("how") for rs in by.values() for r in rs for d in r.get("deliveries", ())}
+    hows = [h for h in JUDGEMENTS if h in seen] + sorted(h for h in seen - set(JUDGEMENTS) if h)
+    lines += ["", "deliveries per game, by the refbox's judgement:",
+              f"{'team server':12} " + " ".join(f"{h:>13}" for h in hows)]
+    for name, rs in by.items():
+        counts = [sum(1 for r in rs for d in r.get("deliveries", ()) if d.get("how") == h)
+                  for h in hows]
+        lines.append(f"{name:12} " + " ".join(f"{fmt(c / len(rs) if rs else None, '.2f'):>13}"
+                                               for c in counts))
     if means.get("baseline"):
         lines += ["", f"HTN / baseline (mean production points): {means['htn'] / means['baseline']:.2f}x"]
     elif means.get("htn") is not None:
