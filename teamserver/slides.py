@@ -8,7 +8,9 @@ base fell beside the slide) and another product's mount may take ours.
 So
 
 - a ring mount is sent only while the slide holds what its colour costs
-  (``loaded_with`` of MachineInfo, :meth:`SlidesMixin.slide_ready`);
+  (``loaded_with`` of MachineInfo, :meth:`SlidesMixin.slide_ready`), and a
+  base is put on a slide only while it has room (:data:`SLIDE_MAX`; one
+  more breaks the station);
 - a mount whose bases are all put but missing from the slide for
   ``settle`` seconds gets the missing ones fetched from the BS
   (:meth:`SlidesMixin.top_up_slides`).
@@ -26,16 +28,30 @@ from .planning.domain import EXTRA
 log = logging.getLogger("teamserver.production")
 
 
+#: bases a slide holds at most; one more breaks the ring station (the refbox's
+#: LOADED-WITH-MAX)
+SLIDE_MAX = 3
+
+
 class SlidesMixin:
     settle: float = 6.0         # s after the last put before a short slide is topped up
 
     def slide_ready(self, task: M.Task) -> bool:
-        """Does the slide of ``task``'s ring station hold what its ring costs?"""
-        if task.kind != M.MOUNT_RING:
+        """May ``task`` go now as far as slides are concerned?  A ring mount when the
+        slide holds what its ring costs; a put on a slide while the slide, with the
+        puts already under way, has room."""
+        st = self.kb.stations.get(task.machine or "")
+        if st is None:
             return True
-        cost = int(task.params.get("cost", 0))
-        st = self.kb.stations.get(task.machine)
-        return cost <= 0 or st is None or st.loaded_with >= cost
+        if task.kind == M.MOUNT_RING:
+            cost = int(task.params.get("cost", 0))
+            return cost <= 0 or st.loaded_with >= cost
+        if task.kind == M.PUT_WORKPIECE and task.params.get("side") == M.SLIDE:
+            going = sum(1 for t in self.kb.open_tasks() if t.id != task.id
+                        and t.state == M.ASSIGNED and t.kind == M.PUT_WORKPIECE
+                        and t.machine == task.machine and t.params.get("side") == M.SLIDE)
+            return st.loaded_with + going < SLIDE_MAX
+        return True
 
     def top_up_slides(self) -> list[M.Task]:
         """Fetch the bases missing on the slide of each ring mount waiting only for

@@ -207,3 +207,20 @@ def test_a_base_that_missed_the_slide_is_fetched_again_before_the_mount():
     assert len(puts) == 2 and all(t.state == M.DONE for t in puts) and p.repairs == 0
     [mount] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_RING]
     assert {t.id for t in puts} <= set(mount.deps)
+
+
+def test_a_full_slide_takes_no_more_bases_until_a_mount_uses_some():
+    ls = Lockstep()
+    production_setup(ls, [dict(id=5, complexity=1, rings=["RING_BLUE"])])   # 2 bases, RS1
+    pm, kb = ls.server.production, ls.server.kb
+    ls.refbox.machines(ls.station_states, {"C-RS1": ("RING_BLUE", "RING_GREEN")},
+                       **{"C-RS1": {"loaded_with": 3}})
+    ls.step()
+    [p] = [p for p in kb.products.values() if p.order_id == 5]
+    put = next(t for t in kb.tasks_of(p.tasks) if t.kind == M.PUT_WORKPIECE)
+    mount = next(t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_RING)
+    assert not pm.slide_ready(put) and pm.slide_ready(mount)
+    ls.refbox.machines(ls.station_states, {"C-RS1": ("RING_BLUE", "RING_GREEN")},
+                       **{"C-RS1": {"loaded_with": 1}})
+    ls.step()
+    assert pm.slide_ready(put) and not pm.slide_ready(mount)
