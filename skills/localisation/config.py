@@ -49,6 +49,7 @@ class AmclConfig:
     max_injection: float = 0.15          # at most this share of random particles per resample
     trim_beams: float = 0.0              # share of worst beams left out of the recovery statistic
     inject_above_contradiction: float = 0.05   # inject only while more beams than this pass mapped walls
+    lost_injection: float = 0.2          # share of random particles per resample while lost (all particles kept)
     # confidence
     confident: float = 0.6               # above this the pose is trusted
     lost: float = 0.2                    # below this for lost_updates updates: lost

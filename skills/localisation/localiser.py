@@ -144,7 +144,11 @@ class Localiser:
         self._low_streak = 0
         if pose is not None:
             est = self.filter.estimate()
-            self._estimate = PoseEstimate(self.clock.now(), pose, est.covariance, 0.0, 0.0,
+            # a pose given with a small spread (the operator's start pose) is
+            # as trusted as its spread says, until the laser has a say
+            std = math.sqrt(max(est.covariance[0, 0] + est.covariance[1, 1], 0.0))
+            trust = 1.0 / (1.0 + (std / 0.15) ** 2)
+            self._estimate = PoseEstimate(self.clock.now(), pose, est.covariance, trust, 0.0,
                                           len(self.filter.particles))
         else:
             self._estimate = None
@@ -186,7 +190,7 @@ class Localiser:
         if self.filter.updates % self.config.resample_interval == 0:
             self.filter.allow_injection = (self._estimate is None
                                            or self.last_contradiction > self.config.inject_above_contradiction)
-            self.filter.resample()
+            self.filter.resample(searching=self._low_streak >= self.config.lost_updates)
         self._odom_at_update = odom
         self._last_filter_time = now
         self.filter_updates += 1

@@ -154,17 +154,22 @@ class ParticleFilter:
     def effective_size(self) -> float:
         return float(1.0 / np.sum(self.weights ** 2))
 
-    def resample(self) -> None:
-        """KLD-adaptive systematic resampling with random injection."""
+    def resample(self, searching: bool = False) -> None:
+        """KLD-adaptive systematic resampling with random injection.
+        ``searching`` (the pose is lost): keep the full ``max_particles`` and
+        inject at least ``lost_injection`` of them at random, so the true
+        pose is found again even after the filter settled on a wrong one."""
         c = self.config
         idx = draw(self.weights, c.max_particles, self.rng)
         new = self.particles[idx]
-        if c.min_particles < c.max_particles:
+        if c.min_particles < c.max_particles and not searching:
             keys = bin_keys(new, c.kld_bin_xy, c.kld_bin_theta)
             n = kld_prefix_length(keys, c.min_particles, c.max_particles, c.kld_epsilon, c.kld_z)
             new = new[:n]
         new = np.array(new)
         p_inj = min(self.injection_probability, c.max_injection) if self.allow_injection else 0.0
+        if searching:
+            p_inj = max(p_inj, c.lost_injection)
         inject = int(self.rng.binomial(len(new), p_inj))
         if inject:
             new[:inject] = self.random_poses(inject)

@@ -11,10 +11,11 @@ the robot on the spot (one full turn) while the filter updates.
 Every sighting of the tag of a station whose pose is known gives the
 robot's pose directly (:func:`pose_from_tag`): when that disagrees with the
 filter's estimate and the laser agrees with it clearly better than with
-the estimate (a station's known pose may itself be off: a zone centre from
-the team server), the filter starts again around it (the laser then
-refines it).  So a robot that sees a well-known tag recovers from any
-wrong pose, symmetric field or not.
+the estimate, the filter starts again around it (the laser then refines
+it).  A station's known pose may itself be off (a zone centre from the
+team server), so a tag is believed only within ``tag_reach`` metres of
+where the robot believed itself when it started relocalising, or
+anywhere when the tags of two stations agree on the pose.
 
 It succeeds once the estimate is confident (the localiser's ``confident``
 level) and compact (``std_xy`` below ``max_std``) for ``settle`` filter
@@ -61,7 +62,8 @@ class Relocalise(Activity):
     def __init__(self, ctx, spread: tuple[float, float, float] = (0.5, 0.5, 0.6),
                  global_search: bool = False, timeout: float | None = 40.0, particles: int | None = None,
                  max_std: float = 0.12, settle: int = 3, tag_disagreement: float = 0.3,
-                 look_around: float = math.pi, hold: float = 0.3, tag_fit: float = 0.6):
+                 look_around: float = math.pi, hold: float = 0.3, tag_fit: float = 0.6,
+                 tag_reach: float = 2.0):
         super().__init__(ctx, timeout)
         self.spread = spread
         self.global_search = global_search
@@ -72,6 +74,8 @@ class Relocalise(Activity):
         self.look_around = look_around
         self.hold = hold
         self.tag_fit = tag_fit          # laser agreement a tag's pose needs to be believed
+        self.tag_reach = tag_reach
+        self.last: Pose2D | None = None
         self.turn: Turn | None = None
         self.tag_fixes = 0
 
@@ -79,7 +83,7 @@ class Relocalise(Activity):
         loc = self.ctx.pose_source
         if not hasattr(loc, "filter"):
             raise SkillFailure(SkillError.LOCALISATION_LOST, "the pose source cannot relocalise")
-        last = loc.pose()
+        last = self.last = loc.pose()
         loc.boost(self.particles, beams=60)
         if self.global_search or last is None:
             loc.initialise_global(prior=last)
@@ -105,8 +109,12 @@ class Relocalise(Activity):
         odom_now = self.ctx.backend.odometry().pose
         moved = odom_now.relative_to(odom_then) if odom_then is not None else Pose2D()
         est = loc.pose() if loc.estimate() is not None else None
-        for fix in pose_from_tag(self.ctx, dets):
-            fix = fix.compose(moved)              # from the image's time to now
+        fixes = [f.compose(moved) for f in pose_from_tag(self.ctx, dets)]     # from the image's time to now
+        for fix in fixes:
+            vouched = any(o is not fix and o.distance_to(fix) < 0.2 and abs(wrap_angle(o.theta - fix.theta)) < 0.1
+                          for o in fixes)
+            if self.last is not None and fix.distance_to(self.last) > self.tag_reach and not vouched:
+                continue
             d, a = (math.inf, math.inf) if est is None else (fix.distance_to(est), abs(wrap_angle(fix.theta - est.theta)))
             fits = loc.fit_now(fix) or 0.0
             if d > self.tag_disagreement or a > self.tag_disagreement:
