@@ -249,7 +249,7 @@ class Dispatcher(HoldingMixin):
         o = self.kb.orders.get(p.order_id) if p is not None else None
         if o is None or game_time is None:
             return 0.0
-        return min(max(o.end - game_time, 0.0), 900.0)
+        return min(max(o.end - game_time, 0.0), float(self.kb.profile.phases.production))
 
     def travel(self, robot: M.Robot, pos) -> float:
         """Metres from the robot to ``pos`` (0 when either is unknown)."""
