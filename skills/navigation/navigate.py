@@ -123,6 +123,11 @@ class Navigate(Activity):
             now_t = ctx.clock.now()
             ctx.laser_memory.add(moving + np.array([pose.x, pose.y]), now_t, (pose.x, pose.y))
             remembered = ctx.laser_memory.relative(pose, now_t)
+            # what was seen where the laser is blind now (another robot beside
+            # and behind, when the direction of travel still lies in view)
+            bearing = np.arctan2(remembered[:, 1], remembered[:, 0]) - pose.theta
+            unseen = np.abs((bearing + np.pi) % (2.0 * np.pi) - np.pi) > half_fov
+            moving = np.vstack([moving, remembered[unseen]])
             decel = self.limits.max_decel * 0.8
 
             def cap(ux: float, uy: float) -> float:
