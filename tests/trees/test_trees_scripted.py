@@ -109,6 +109,20 @@ def test_a_navigation_failure_backs_off_and_replans():
     assert calls("back_off")[0][1]["distance"] == 0.4
 
 
+def test_an_approach_that_lost_the_pose_relocalises_instead_of_backing_off():
+    rig = make(faults=[{"method": "drive", "call": 1, "message": "pose lost"}])
+    res = run(rig, "get_workpiece", machine="C-BS")
+    assert outcome(res) == ("SUCCEEDED", "NONE")
+    assert skills_called() == ["approach_station", "relocalise", "approach_station", "grab"]
+
+
+def test_a_go_to_that_lost_the_pose_relocalises_instead_of_backing_off():
+    rig = make(faults=[{"method": "drive", "call": 1, "message": "pose lost"}])
+    res = run(rig, "go_to", zone=7)
+    assert outcome(res) == ("SUCCEEDED", "NONE")
+    assert skills_called() == ["navigate_to_zone", "relocalise", "navigate_to_zone"]
+
+
 def test_navigation_that_never_works_ends_in_navigation_failed():
     rig = make(holding=True, faults=[{"method": "drive", "after": 0.0, "message": "motor fault"}])
     res = run(rig, "put_workpiece", machine="C-RS1")

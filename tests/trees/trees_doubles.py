@@ -37,7 +37,9 @@ class Double:
 
     def update(self):
         if self._broken is not None:
-            return self.fail(self.fail_code, self._broken)
+            # a fault message that says the pose is lost fails the way a lost localisation does
+            code = "LOCALISATION_LOST" if "pose lost" in self._broken else self.fail_code
+            return self.fail(code, self._broken)
         if self.ctx.clock.now() < self._until:
             return Status.RUNNING
         try:
