@@ -191,7 +191,7 @@ class Dispatcher(HoldingMixin):
         the order's window opens (never more than ``deliver_early`` s before it)."""
         nb = float(task.params.get("not_before", 0.0))
         robot = self.kb.robots.get(task.holder) if task.holder is not None else None
-        pos = self.production.positions().get(task.machine)
+        pos = self.production.positions().get(task.machine) if robot is not None else None
         drive = self.travel(robot, pos) / self.config.speed if robot is not None else 0.0
         return nb - min(drive + self.config.deliver_margin, self.config.deliver_early)
 

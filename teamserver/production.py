@@ -49,6 +49,7 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
         self.max_products = max_products
         self.max_repairs = max_repairs
         self.clock = clock
+        self._positions: tuple | None = None     # (what they were computed from, positions)
         self.health = StationHealth(kb)
         self.confirm_time = confirm_time
         self.prefill_caps = prefill
@@ -107,13 +108,20 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
         return out
 
     def positions(self) -> dict[str, tuple[float, float]]:
+        """Our machines' best known positions (recomputed when observations or station
+        records changed)."""
+        key = (self.kb.observation_count, tuple((n, s.zone) for n, s in
+                                                sorted(self.kb.stations.items())))
+        if self._positions is not None and self._positions[0] == key:
+            return dict(self._positions[1])
         out = {}
         for kind in self.profile.machine_types:
             name = f"{self.prefix}-{kind}"
             pos = self.kb.machine_position(name)
             if pos is not None:
                 out[name] = pos
-        return out
+        self._positions = (key, out)
+        return dict(out)
 
     def active_products(self) -> list[M.Product]:
         return [p for p in self.kb.products.values() if p.state == ACTIVE]
