@@ -9,7 +9,8 @@ state database mid-game, and that reports its view for the game report.
 ``options.baseline`` plays the greedy baseline of the benchmarks instead of
 the HTN production choice (``ServerConfig.planner = "greedy"``: one order at
 a time, the one with the earliest deadline that can be planned, no
-look-ahead; see :class:`~teamserver.planning.planner.GreedyPlanner`).
+look-ahead, so no caps retrieved ahead either; see
+:class:`~teamserver.planning.planner.GreedyPlanner`).
 """
 from __future__ import annotations
 
@@ -37,6 +38,7 @@ class InProcessTeamServer(TeamServerHandle):
                            planner="greedy" if self.options.baseline else "htn")
         if self.options.baseline:
             cfg.max_products = 1
+            cfg.prefill_caps = False        # no look-ahead: no caps retrieved for later orders
         for k, v in self.options.extra.items():
             setattr(cfg, k, v)
         self.config = cfg

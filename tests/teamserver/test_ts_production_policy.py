@@ -141,6 +141,7 @@ def test_the_simulated_game_plays_the_baseline_through_the_option(tmp_path):
         agents=lambda: ls.bus.stream_server("ts2", registry=ls.team_reg, key="k"),
         state=str(tmp_path / "ts.sqlite"), options=TeamServerOptions(baseline=True))
     assert ts.config.planner == "greedy" and ts.config.max_products == 1
+    assert not ts.config.prefill_caps                   # no look-ahead
     assert isinstance(ts.server.planner, GreedyPlanner)
     ts.close()
 
