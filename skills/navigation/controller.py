@@ -15,7 +15,8 @@ from which the robot can still stop at the goal with ``max_decel``, the
 speed from which it can still slow down for the coming path corners (a
 corner turning by phi is taken at most at sqrt(2 max_accel
 ``corner_overshoot``) / sin(phi), so the robot swings out by no more than
-about ``corner_overshoot`` metres while its velocity turns), and an
+about ``corner_overshoot`` metres while its velocity turns), an external
+``speed_limit`` (navigation's tight spots ahead), and an
 optional external cap (the laser safety check); the commanded velocity
 vector changes by at most ``max_accel * dt`` (``max_decel * dt`` when
 slowing, ``emergency_decel * dt`` when the laser check caps the speed);
@@ -51,9 +52,8 @@ class Limits:
 class VelocityLimiter:
     """Holds the last command and limits how fast it changes."""
 
-    def __init__(self, limits: Limits, min_turn: float = 0.6):
+    def __init__(self, limits: Limits):
         self.limits = limits
-        self.min_turn = min_turn      # rad/s the body may always turn at
         self.v = np.zeros(2)          # field frame, m/s
         self.omega = 0.0
 
@@ -78,17 +78,7 @@ class VelocityLimiter:
         if n > a * dt:
             dv = dv * (a * dt / n)
         self.v = self.v + dv
-        turn = lim.max_omega
-        # The base accelerates in its own frame: holding a field velocity v
-        # while turning at omega takes |v| * omega of that acceleration.
-        # Turn no faster than what is left after this step's change of
-        # velocity (but at least ``min_turn``), or the turning body drags
-        # the motion off the path.
-        speed = float(np.hypot(*self.v))
-        if speed > 1e-6:
-            spare = max(lim.max_accel - float(np.hypot(*dv)) / dt, 0.0)
-            turn = min(turn, max(spare / speed, self.min_turn))
-        omega_des = float(np.clip(omega_des, -turn, turn))
+        omega_des = float(np.clip(omega_des, -lim.max_omega, lim.max_omega))
         dw = float(np.clip(omega_des - self.omega, -lim.max_alpha * dt, lim.max_alpha * dt))
         self.omega += dw
         return self.v.copy(), self.omega
