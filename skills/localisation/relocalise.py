@@ -63,7 +63,7 @@ class Relocalise(Activity):
                  global_search: bool = False, timeout: float | None = 40.0, particles: int | None = None,
                  max_std: float = 0.12, settle: int = 3, tag_disagreement: float = 0.3,
                  look_around: float = math.pi, hold: float = 0.3, tag_fit: float = 0.6,
-                 tag_reach: float = 2.0):
+                 tag_reach: float = 2.0, tag_agreement: float = 0.06):
         super().__init__(ctx, timeout)
         self.spread = spread
         self.global_search = global_search
@@ -75,6 +75,7 @@ class Relocalise(Activity):
         self.hold = hold
         self.tag_fit = tag_fit          # laser agreement a tag's pose needs to be believed
         self.tag_reach = tag_reach
+        self.tag_agreement = tag_agreement      # m and rad: a tag this close confirms the estimate
         self.last: Pose2D | None = None
         self.turn: Turn | None = None
         self.tag_fixes = 0
@@ -126,7 +127,7 @@ class Relocalise(Activity):
                     self._fair_from = None
                     self._agreed = False
                     return
-            elif d <= 0.5 * self.tag_disagreement and a <= 0.5 * self.tag_disagreement and fits >= self.tag_fit:
+            elif d <= self.tag_agreement and a <= self.tag_agreement and fits >= self.tag_fit:
                 self._agreed = True
                 return
 
