@@ -188,6 +188,14 @@ class PathFollower:
         i = int(np.searchsorted(self.cum, self.progress + 0.05, side="left"))
         return self.path[min(i, len(self.path) - 1)].copy()
 
+    def points_at(self, s: np.ndarray) -> np.ndarray:
+        """Path points (K, 2) at arc lengths ``s`` (K,), clipped to the path."""
+        s = np.clip(np.asarray(s, dtype=float), 0.0, self.length)
+        i = np.clip(np.searchsorted(self.cum, s, side="right") - 1, 0, len(self.seg_len) - 1)
+        seg = self.seg_len[i]
+        t = np.where(seg > 1e-12, (s - self.cum[i]) / np.maximum(seg, 1e-12), 1.0)
+        return self.path[i] + (self.path[i + 1] - self.path[i]) * t[:, None]
+
     def point_at(self, s: float) -> np.ndarray:
         s = min(max(s, 0.0), self.length)
         i = int(np.searchsorted(self.cum, s, side="right")) - 1

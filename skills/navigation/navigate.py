@@ -209,7 +209,7 @@ class Navigate(Activity):
         gets the shortest look-ahead, which steers it back to the path."""
         cm, f = self.ctx.costmap, self.follower
         step = 0.25 * cm.resolution
-        arc = np.array([f.point_at(f.progress + s) for s in np.arange(0.0, longest + step, step)])
+        arc = f.points_at(f.progress + np.arange(0.0, longest + step, step))
         along = np.minimum.accumulate(cm.clearance_at(arc[:, 0], arc[:, 1]))
         for la in np.arange(longest, shortest - 1e-9, -0.05):
             k = int(round(la / step))
@@ -227,7 +227,7 @@ class Navigate(Activity):
         cm, f, s = self.ctx.costmap, self.follower, self.ctx.settings
         step = cm.resolution
         dist = np.arange(0.0, ahead + step, step)
-        arc = np.array([f.point_at(f.progress + d) for d in dist])
+        arc = f.points_at(f.progress + dist)
         gaps = cm.clearance_at(arc[:, 0], arc[:, 1]) - self.ctx.robot.radius
         here = float(cm.clearance_at(np.array([pose.x]), np.array([pose.y]))[0]) - self.ctx.robot.radius
         gaps[0] = min(gaps[0], here)
