@@ -32,7 +32,7 @@ import numpy as np
 from rll_bt.backend import Backend, CapabilityError, LaserScan, Pose2D
 from rll_bt.clock import Clock
 
-from ..maps import FieldMap, march_rays
+from ..maps import FieldMap, cast_rays
 from .config import AmclConfig
 from .motion import odometry_step
 from .particles import ParticleFilter
@@ -246,16 +246,15 @@ class Localiser:
         if len(ranges) == 0:
             self.last_contradiction = 0.0
             return 0.0
-        spec, occ = self.map.occupancy(self.config.grid_resolution)
         origin = pose.compose(mount)
-        rays = ((origin.x, origin.y), angles + origin.theta, self.filter.field.range_max)
-        expected = march_rays(spec, occ, *rays)
-        if self.map.obstacles:
-            walls = march_rays(*self.map.wall_occupancy(self.config.grid_resolution), *rays)
-        else:
-            walls = expected
-        # beams ending next to the robot (docked at a station) graze corners
-        # of the rasterised map: they say little about the pose
+        # exact ranges to the map's segments: a raster wall sits up to a cell
+        # off, and a beam grazing it would read as passing through it
+        rays = (np.array([origin.x, origin.y]), angles + origin.theta)
+        rmax = self.filter.field.range_max
+        walls = cast_rays(*rays, self.map.wall_segments(), rmax)
+        expected = np.minimum(walls, cast_rays(*rays, self.map.obstacle_segments(), rmax)) \
+            if self.map.obstacles else walls
+        # beams ending next to the robot (docked at a station) say little about the pose
         judged = expected >= 0.3
         if not judged.any():
             self.last_contradiction = 0.0

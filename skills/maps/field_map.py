@@ -88,7 +88,7 @@ class FieldMap:
         self._obstacles: dict[str, np.ndarray] = {}
         self.margin = margin
         self.version = 0
-        self._grids: dict = {}              # resolution (or ("walls", resolution)) -> (version, spec, occupied)
+        self._grids: dict[float, tuple[int, GridSpec, np.ndarray]] = {}
         self._dist: dict[float, tuple[int, DistanceGrid]] = {}
         self._arena: dict[float, np.ndarray] = {}
 
@@ -137,8 +137,16 @@ class FieldMap:
 
     def segments(self) -> np.ndarray:
         """All walls and obstacle edges (S, 4)."""
-        parts = [self._walls] + [polygon_edges(p) for p in self._obstacles.values()]
-        return np.concatenate(parts, axis=0)
+        return np.concatenate([self._walls, self.obstacle_segments()], axis=0)
+
+    def wall_segments(self) -> np.ndarray:
+        """The walls (S, 4): the boundary's edges and the extra walls."""
+        return self._walls
+
+    def obstacle_segments(self) -> np.ndarray:
+        """The obstacles' edges (S, 4); (0, 4) without obstacles."""
+        parts = [polygon_edges(p) for p in self._obstacles.values()]
+        return np.concatenate(parts, axis=0) if parts else np.zeros((0, 4))
 
     def clearance(self, x, y, exclude=()) -> np.ndarray:
         """Exact distance (m) from field points to the nearest wall or
@@ -196,18 +204,6 @@ class FieldMap:
                 self._draw_segments(spec, occ, polygon_edges(poly))
         self._grids[resolution] = (self.version, spec, occ)
         return spec, occ
-
-    def wall_occupancy(self, resolution: float) -> tuple[GridSpec, np.ndarray]:
-        """(spec, occupied) with the walls only (no obstacles); cached."""
-        key = ("walls", resolution)
-        cached = self._grids.get(key)
-        if cached is None:
-            spec = self.grid_spec(resolution)
-            occ = np.zeros(spec.shape, dtype=bool)
-            self._draw_segments(spec, occ, self._walls)
-            cached = (0, spec, occ)
-            self._grids[key] = cached
-        return cached[1], cached[2]
 
     def distance(self, resolution: float) -> DistanceGrid:
         """Distance to the nearest wall or obstacle, per cell (cached)."""
