@@ -7,7 +7,8 @@ for what the laser sees in its way (behind the robot, where the laser is
 blind, for the robots navigation saw there) and for a pressed bumper
 (:class:`~skills.navigation.guard.MotionGuard`), and waits; a move that may
 end early (a back-off: any distance gained is good) ends after
-``give_up_after`` seconds blocked, one that may not fails then.
+``give_up_after`` seconds blocked or at once when the bumper is pressed,
+one that may not fails then.
 """
 from __future__ import annotations
 
@@ -61,6 +62,12 @@ class MoveRelative(Activity):
         speed = min(self.speed, 1.5 * d, math.sqrt(2.0 * lim.max_decel * 0.8 * d))
         v = np.array([err.x, err.y]) / d * speed if d > 1e-9 else np.zeros(2)
         capped = False
+        if self.guard is not None and self.partial and self.guard.bumped():
+            # touching something: a move that may end early ends here, rather
+            # than touch it again each time it gives way a little
+            self.ctx.stop_base()
+            self.message = f"stopped {d:.2f} m short: the bumper is pressed"
+            return Status.SUCCESS
         if self.guard is not None and d > self.tolerance:
             vx, vy = self.guard.clamp(float(v[0]), float(v[1]))
             capped = math.hypot(vx, vy) < speed - 1e-9

@@ -113,3 +113,17 @@ def test_back_off_with_the_wall_right_behind_does_not_touch_it(wall_gap):
     assert world.collision_count == 0 and closest > 0.0
     after = world.robot_pose("CYAN", 1)
     assert math.hypot(after.x - before.x, after.y - before.y) <= room + 0.01
+
+
+def test_a_back_off_into_a_robot_behind_stops_at_the_first_touch():
+    world = sim.World("rcll2016", seed=2)
+    pose = Pose2D(0.0, 3.0, 0.0)
+    bot = open_backend("sim", world=world, robot=("CYAN", 1), pose=pose)
+    # another robot right behind, arrived while this one faced away (its laser never saw it)
+    open_backend("sim", world=world, robot=("CYAN", 2), pose=Pose2D(-0.5, 3.0, 0.0))
+    ctx = SkillContext.create(bot, world.clock, world.profile, pose, localisation=None)
+    move = MoveRelative(ctx, -0.3, speed=0.2, partial=True)
+    status, _ = drive(world, move, limit=20.0)
+    assert status is Status.SUCCESS and "bumper" in move.message
+    world.step(2.0)
+    assert world.collision_count == 1             # one touch, not one per push
