@@ -4,9 +4,11 @@ Run: .venv/bin/python benchmarks/light_detection.py [--towers 600] [--free 1000]
 
 Held-out frames are rendered from PyBullet worlds whose layouts training
 never saw (640x480, towers 0.5-2.5 m away, random camera heights, angles,
-light; half of them with procedural backgrounds where the renderer leaves
-the sky empty; photometric augmentation), plus tower-free frames, plus
-frames composed on procedural backgrounds with drawn and pasted towers.
+lighting: colour temperature, direction, intensity, exposure, bloom; the
+hall behind the stations, in about half of them replaced by a backdrop:
+procedural, or one of the photographs training never saw, or a collage of
+them; photometric augmentation), plus tower-free frames, plus frames
+composed on such backdrops with drawn and pasted towers.
 The tag-given region is what :func:`skills.perception.light.region.tower_region`
 makes of the station's tag pose (true pose plus tag-detection noise).
 
@@ -35,13 +37,12 @@ from skills.perception.light.dataset import ChunkSpec, make_chunk
 from skills.perception.light.evaluation import LightScore, confusion_table
 from skills.perception.light.reader import LightReader
 from skills.perception.light.region import tower_region  # noqa: F401  (documented above)
-from skills.perception.light.scenes import sim_world_class
 
 SEED = 7_000_001
 
 
 def _chunk(spec: ChunkSpec):
-    return make_chunk(spec, sim_world_class()).frames
+    return make_chunk(spec).frames
 
 
 def render(towers: int, free: int, pasted: int, workers: int, seed: int, per: int = 40):
@@ -49,7 +50,7 @@ def render(towers: int, free: int, pasted: int, workers: int, seed: int, per: in
     n = max(1, (towers + free) // per)
     for i in range(n):
         specs.append(ChunkSpec(("rcll2016", "rcll2025")[i % 2], seed + i, towers // n, free // n,
-                               pasted // n, strength=(0.3, 1.0), extract=False))
+                               pasted // n, strength=(0.3, 1.0), extract=False, photos="heldout"))
     frames = []
     with ProcessPoolExecutor(max_workers=workers) as pool:
         for k, part in enumerate(pool.map(_chunk, specs)):
@@ -120,6 +121,9 @@ def main() -> None:
     ap.add_argument("--free", type=int, default=1000, help="rendered tower-free frames")
     ap.add_argument("--pasted", type=int, default=300, help="frames composed on procedural backgrounds")
     ap.add_argument("--models", default=None, help="model directory (default: the shipped models)")
+    ap.add_argument("--compare", default=None, metavar="DIR",
+                    help="also run the HOG + network chain with the models in DIR (e.g. an older set) "
+                         "on the same frames")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seed", type=int, default=SEED)
     args = ap.parse_args()
@@ -138,18 +142,22 @@ def main() -> None:
           f"{len(composed)} composed frames")
 
     results = {}
+    runs = [(m, model_dir) for m in ("hog-region", "colour-roi", "hog-full", "colour-full")]
+    if args.compare:
+        runs += [("hog-region", args.compare), ("hog-full", args.compare)]
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
-        for method in ("hog-region", "colour-roi", "hog-full", "colour-full"):
+        for method, models in runs:
             for label, subset in (("rendered", rendered), ("composed", composed)):
                 if not subset:
                     continue
                 parts = [subset[i::args.workers] for i in range(args.workers)]
-                results[(method, label)] = LightScore.combine(pool.map(_eval_job, [(method, model_dir, p, colour)
-                                                                      for p in parts]))
-                print(f"  evaluated {method} on {label}", flush=True)
+                key = (method if models == model_dir else method + "-compare", label)
+                results[key] = LightScore.combine(pool.map(_eval_job, [(method, models, p, colour) for p in parts]))
+                print(f"  evaluated {key[0]} on {label}", flush=True)
 
     names = {"hog-region": "HOG + network, tag region", "colour-roi": "colour model, geometric ROI",
-             "hog-full": "HOG + network, full frame", "colour-full": "colour model, full frame"}
+             "hog-full": "HOG + network, full frame", "colour-full": "colour model, full frame",
+             "hog-region-compare": "compared models, tag region", "hog-full-compare": "compared models, full frame"}
     print()
     print(f"{'method':<30} {'frames':<9} {'towers':>6} {'state acc':>9} {'recall':>7} {'end2end':>8} "
           f"{'false/1000':>10} {'ms med':>7} {'ms p95':>7}")
@@ -168,6 +176,8 @@ def main() -> None:
     print("\naims: state accuracy >= 0.995, <= 1 false detection per 1000 tower-free frames, "
           "<= 15 ms per frame with the region")
     print("(time per frame: 2 evaluations run in parallel on the 2 cores)")
+    if args.compare:
+        print(f"compared models: {args.compare}")
 
 
 if __name__ == "__main__":

@@ -98,14 +98,19 @@ class Lighting:
     def random(cls, rng: np.random.Generator) -> "Lighting":
         """Lighting drawn from what halls and cameras give: warm to cold light
         (2700-8000 K) with a camera balanced for a guess of it, dim to
-        bright, from any side, soft to hard."""
+        bright, from any side, soft to hard; the exposure is at most what
+        keeps the brightest shaded surface near full scale (a camera's auto
+        exposure), so only lights and glare clip."""
         kelvin = float(np.exp(rng.uniform(math.log(2700), math.log(8000))))
         wb = kelvin * float(np.exp(rng.normal(0.0, 0.15))) if rng.random() < 0.7 else float(rng.uniform(3500, 6500))
         ambient = float(rng.uniform(0.2, 0.65))
+        intensity = float(rng.uniform(0.05, 0.85 - ambient * 0.6))
+        specular = float(rng.uniform(0.0, 0.25))
+        exposure = float(np.exp(rng.uniform(math.log(0.55), math.log(1.6))))
+        exposure = min(exposure, 1.15 / (ambient + intensity + 0.5 * specular))
         return cls(azimuth=float(rng.uniform(-math.pi, math.pi)), elevation=float(rng.uniform(0.2, 1.45)),
-                   intensity=float(rng.uniform(0.05, 0.85 - ambient * 0.6)), ambient=ambient,
-                   specular=float(rng.uniform(0.0, 0.25)), kelvin=kelvin, white_balance=float(np.clip(wb, 2000, 12000)),
-                   exposure=float(np.exp(rng.uniform(math.log(0.55), math.log(1.6)))),
+                   intensity=intensity, ambient=ambient, specular=specular, kelvin=kelvin,
+                   white_balance=float(np.clip(wb, 2000, 12000)), exposure=exposure,
                    bloom=float(rng.uniform(0.05, 0.6)))
 
 

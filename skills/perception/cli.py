@@ -53,10 +53,13 @@ def register(cli) -> None:
     t = sub.add_parser(
         "train-light", help="render a data set from the PyBullet world and train the light models",
         description="Render labelled frames from the PyBullet world (random stations, distances "
-                    "0.5-2.5 m, angles, camera heights, lighting; all 8 light states), add "
-                    "photometric augmentation and towers pasted onto procedural backgrounds, train "
-                    "the HOG tower detector with hard-negative mining and the light network with "
-                    "scaled conjugate gradient, report held-out accuracy and write the model files.")
+                    "0.5-2.5 m, angles, camera heights, lighting: colour temperature, direction, "
+                    "intensity, exposure; all 8 light states; the hall behind, often replaced by "
+                    "procedural backdrops or photographs), add photometric augmentation and towers "
+                    "pasted onto such backdrops, train the HOG tower detector with hard-negative "
+                    "mining, the tower check and the light network with scaled conjugate gradient, "
+                    "report held-out accuracy and write the model files.  Photographs come from "
+                    "scikit-image's sample data when it is installed (pip install 'rll-bt[vision-train]').")
     t.add_argument("--out", required=True, metavar="DIR", help="directory for the model files and report")
     t.add_argument("--samples", type=_int_at_least(10), default=None, metavar="N",
                    help="rendered training frames (default 1000; --quick: 60)")

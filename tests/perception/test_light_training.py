@@ -6,7 +6,6 @@ import numpy as np
 
 from skills.perception.light.dataset import ChunkSpec, make_chunk
 from skills.perception.light.reader import CLASSIFIER_FILE, DETECTOR_FILE, REPORT_FILE, LightReader
-from skills.perception.light.scenes import sim_world_class
 from skills.perception.light.training import TrainOptions, plan, train_light
 
 
@@ -36,7 +35,7 @@ def test_plan_keeps_training_and_heldout_worlds_apart():
 
 
 def test_chunk_labels_match_the_world(tmp_path):
-    res = make_chunk(ChunkSpec("rcll2025", 5, towers=4, free=2, pasted=2), sim_world_class())
+    res = make_chunk(ChunkSpec("rcll2025", 5, towers=4, free=2, pasted=2))
     towers = [f for f in res.frames if f.source.startswith("render")]
     free = [f for f in res.frames if f.source.startswith("free-render")]
     assert towers and free and all(f.tower_free for f in free)

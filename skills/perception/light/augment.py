@@ -1,9 +1,9 @@
 """Photometric augmentation of camera frames (BGR uint8 in, BGR uint8 out).
 
 Each call draws, from ``rng``: brightness offset, contrast, gamma, a colour
-cast (per-channel gain, like a white-balance error), blur (Gaussian or a
-short motion streak), sensor noise and JPEG compression.  ``strength``
-scales all of them (0: the image unchanged).
+cast (per-channel gain, like a white-balance error), saturation, vignetting,
+blur (Gaussian or a short motion streak), sensor noise and JPEG
+compression.  ``strength`` scales all of them (0: the image unchanged).
 """
 from __future__ import annotations
 
@@ -25,6 +25,16 @@ def photometric(img: np.ndarray, rng: np.random.Generator, strength: float = 1.0
     v = np.clip((v - mean) * contrast + mean + offset, 0, 1) ** gamma
     lut = np.clip(v * 255.0 + 0.5, 0, 255).astype(np.uint8)           # 256 x 3
     out = cv2.LUT(img, lut.reshape(256, 1, 3))
+    if rng.random() < 0.5:                                             # saturation
+        k = float(np.exp(rng.uniform(-0.6, 0.35) * s))
+        grey = cv2.cvtColor(cv2.cvtColor(out, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR)
+        out = cv2.addWeighted(out, k, grey, 1.0 - k, 0.0)
+    if rng.random() < 0.3 * s:                                         # vignetting
+        h, w = out.shape[:2]
+        yy, xx = np.ogrid[:h, :w]
+        r2 = ((xx - w / 2) / (w / 2)) ** 2 + ((yy - h / 2) / (h / 2)) ** 2
+        fall = (1.0 - rng.uniform(0.1, 0.45) * min(1.0, s) * r2 / 2).astype(np.float32)
+        out = np.clip(out * fall[:, :, None], 0, 255).astype(np.uint8)
     r = rng.random()
     if r < 0.3 * s:
         out = cv2.GaussianBlur(out, (0, 0), rng.uniform(0.3, 1.3) * s)

@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
+from .reader import overlap_of_smaller
 from .synth import BORDER_MM, HOUSING_MM, SEGMENT_MM
 
 LIGHT_ORDER = ("green", "yellow", "red")       # bits 0, 1, 2; bottom to top
@@ -99,13 +100,6 @@ class ColourModel:
                 found.append((box, self.read(image, box)))
         out = []
         for box, state in found:                               # merge segments of one tower
-            if all(_overlap(box, b) < 0.3 for b, _ in out):
+            if all(overlap_of_smaller(box, b) < 0.3 for b, _ in out):
                 out.append((box, state))
         return out
-
-
-def _overlap(a, b) -> float:
-    ix = max(0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
-    iy = max(0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
-    inter = ix * iy
-    return inter / float(min(a[2] * a[3], b[2] * b[3]) or 1)

@@ -1,9 +1,11 @@
 """Training and test material for the light models, made in worker processes.
 
 A *chunk* is one world (a layout of a profile, seeded) from which a worker
-renders frames showing towers and tower-free frames, replaces the empty
-sky of some by procedural backgrounds, and composes further frames by
-pasting rendered and drawn towers onto procedural backgrounds.  Every
+renders frames showing towers and tower-free frames, replaces the hall
+behind the stations in some by other backdrops (procedural, photographs,
+collages: :func:`.photos.backdrop`), and composes further frames by pasting
+rendered and drawn towers onto such backdrops.  Training uses the
+``train`` photographs, the benchmark the ``heldout`` ones.  Every
 frame gets photometric augmentation, then the worker cuts out
 
 - detector positives (HOG of the window around each fully visible tower,
@@ -25,7 +27,7 @@ import cv2
 import numpy as np
 
 from .augment import photometric
-from .backgrounds import procedural_background
+from .photos import backdrop
 from .hog import crop_window, make_hog, random_negatives, window_features, window_for_tower
 from .mlp import DEFAULT_SIZE, NO_TOWER
 from .synth import draw_tower, paste
@@ -86,6 +88,7 @@ class ChunkSpec:
     extract: bool = True            # cut training samples (False: frames only, for tests)
     keep: float = 1.0               # fraction of frames kept packed
     size: tuple[int, int] = (640, 480)
+    photos: str = "train"           # which photographs back the frames ("train" or "heldout")
 
 
 @dataclass
@@ -111,7 +114,7 @@ def classifier_crops(image: np.ndarray, box, rng: np.random.Generator, count: in
     """Crops of a tower box as a detector would cut it (position and scale off a little)."""
     out = [crop_window(image, box, DEFAULT_SIZE)]
     for _ in range(count - 1):
-        out.append(crop_window(image, jitter_box(box, rng, (0.2, 0.1), 0.2), DEFAULT_SIZE))
+        out.append(crop_window(image, jitter_box(box, rng, (0.2, 0.14), 0.22), DEFAULT_SIZE))
     return out
 
 
@@ -137,19 +140,19 @@ def detector_positives(image: np.ndarray, box, rng: np.random.Generator, count: 
     return out
 
 
-def _sky_swap(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    bg = procedural_background(rng, image.shape[0], image.shape[1])
+def _sky_swap(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator, photos: str) -> np.ndarray:
+    bg = backdrop(rng, image.shape[0], image.shape[1], photos)
     out = image.copy()
     out[sky] = bg[sky]
     return out
 
 
 def _compose(rng: np.random.Generator, size, sprites: list[tuple[np.ndarray, np.ndarray, int]],
-             n_towers: int) -> tuple[np.ndarray, list[Truth]]:
-    """A procedural background with ``n_towers`` towers pasted (rendered sprites
-    or drawn ones), some standing on a box."""
+             n_towers: int, photos: str = "train") -> tuple[np.ndarray, list[Truth]]:
+    """A backdrop with ``n_towers`` towers pasted (rendered sprites or drawn
+    ones), some standing on a box."""
     w, h = size
-    img = procedural_background(rng, h, w)
+    img = backdrop(rng, h, w, photos)
     truths: list[Truth] = []
     for _ in range(n_towers):
         state = int(rng.integers(0, 8))
@@ -189,13 +192,26 @@ def _overlap(a, b) -> float:
     return ix * iy
 
 
-def make_chunk(spec: ChunkSpec, world_class) -> ChunkResult:
-    """Render and cut one chunk (runs in a worker process)."""
+def free_frames(seed: int, count: int, size=(640, 480), photos: str = "train",
+                strength: tuple[float, float] = (0.3, 1.2)) -> list[PackedFrame]:
+    """``count`` tower-free frames composed on backdrops, augmented (no
+    rendering: cheap material for calibrating against false detections)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(count):
+        img, _ = _compose(rng, size, [], 0, photos)
+        out.append(PackedFrame.pack(photometric(img, rng, float(rng.uniform(*strength))), [], "free-paste"))
+    return out
+
+
+def make_chunk(spec: ChunkSpec, open_world=None) -> ChunkResult:
+    """Render and cut one chunk (runs in a worker process); ``open_world``
+    is a world factory (default: :func:`.scenes.world_factory`)."""
     import time
-    from .scenes import SceneRenderer, ViewRange
+    from .scenes import SceneRenderer, ViewRange, world_factory
     t0 = time.perf_counter()
     rng = np.random.default_rng(spec.seed)
-    world = world_class(spec.profile, seed=spec.seed)
+    world = (open_world or world_factory())(spec.profile, seed=spec.seed)
     try:
         renderer = SceneRenderer(world, rng, ViewRange(size=spec.size))
         rendered = []
@@ -217,14 +233,14 @@ def make_chunk(spec: ChunkSpec, world_class) -> ChunkResult:
     frames: list[tuple[np.ndarray, list[Truth], str, float | None]] = []
     for f in rendered:
         img, source = f.image, ("render" if f.towers else "free-render")
-        if f.sky is not None and rng.random() < 0.5:
-            img, source = _sky_swap(img, f.sky, rng), source + "+bg"
+        if f.sky is not None and rng.random() < 0.55:
+            img, source = _sky_swap(img, f.sky, rng, spec.photos), source + "+bg"
         truths = [Truth(t.box, t.state, t.clean, t.region, t.tower_height, t.roi) for t in f.towers]
         dist = min((t.distance for t in f.towers), default=None)
         frames.append((img, truths, source, dist))
     for i in range(spec.pasted):
         n = int(rng.integers(0, 4)) if i % 4 else 0
-        img, truths = _compose(rng, spec.size, sprites, n)
+        img, truths = _compose(rng, spec.size, sprites, n, spec.photos)
         frames.append((img, truths, "paste" if truths else "free-paste", None))
     for img, truths, source, dist in frames:
         img = photometric(img, rng, float(rng.uniform(*spec.strength)))

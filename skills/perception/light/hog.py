@@ -236,11 +236,13 @@ class TowerDetector:
         return b[order], sc[order]
 
     def detect(self, image: np.ndarray, region: tuple[int, int, int, int] | None = None,
-               tower_height: float | None = None) -> list[Box]:
+               tower_height: float | None = None, threshold: float | None = None) -> list[Box]:
         """Towers in ``image`` (optionally only inside ``region`` = x, y, w, h
-        and around an expected ``tower_height`` in pixels), best first."""
-        boxes, scores = self.raw_hits(image, region, tower_height)
-        return select(boxes, scores, self.threshold, self.min_support, self.nms_overlap)
+        and around an expected ``tower_height`` in pixels), best first;
+        ``threshold`` overrides the detector's."""
+        thr = self.threshold if threshold is None else threshold
+        boxes, scores = self.raw_hits(image, region, tower_height, threshold=thr)
+        return select(boxes, scores, thr, self.min_support, self.nms_overlap)
 
 
 def iou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -5,13 +5,18 @@ trained with scaled conjugate gradient on a flat parameter vector.  The
 same kind of network with two outputs (tower, no tower) is the tower
 check that looks at the detector's hits first.
 
-Input: the tower's crop resized to ``size`` (w, h; 6 x 24 pixels by
-default, the tower's shape) in BGR, as floats in [0, 1] minus 0.5,
-flattened.
+Input (:func:`crop_features`): the tower's crop cut at ``size`` (w, h;
+8 x 32 pixels, the tower's shape) in BGR, described by
+
+- ``pixels``: the crop reduced to 6 x 24, as floats in [0, 1] minus 0.5;
+- ``rich`` (the default): those pixels, plus each row's brightest value
+  per channel (a lit lens is bright across its middle wherever the box
+  sits), plus a HOG of the grey crop (4-pixel cells: the outline).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -20,16 +25,31 @@ from .scg import scg
 
 N_STATES = 8
 NO_TOWER = 8          # the label of "no tower" crops in the training material
+DEFAULT_SIZE = (8, 32)
+PIXELS = (6, 24)
+KINDS = ("pixels", "rich")
 
 
-DEFAULT_SIZE = (6, 24)
+@lru_cache(maxsize=1)
+def _crop_hog() -> cv2.HOGDescriptor:
+    return cv2.HOGDescriptor((8, 32), (8, 8), (4, 4), (4, 4), 9)
 
 
-def crop_features(crop: np.ndarray, size: tuple[int, int] = DEFAULT_SIZE) -> np.ndarray:
-    """A BGR crop to the network's input vector."""
+def crop_features(crop: np.ndarray, size: tuple[int, int] = DEFAULT_SIZE, kind: str = "rich") -> np.ndarray:
+    """A BGR crop to the network's input vector (see the module)."""
     if crop.shape[1] != size[0] or crop.shape[0] != size[1]:
         crop = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
-    return crop.astype(np.float32).ravel() / 255.0 - 0.5
+    small = crop if tuple(size) == PIXELS else cv2.resize(crop, PIXELS, interpolation=cv2.INTER_AREA)
+    px = small.astype(np.float32).ravel() / 255.0 - 0.5
+    if kind == "pixels":
+        return px
+    if kind != "rich":
+        raise ValueError(f"unknown feature kind {kind!r} (known: {', '.join(KINDS)})")
+    rows = crop.max(axis=1).astype(np.float32).ravel() / 255.0 - 0.5
+    grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY)
+    if grey.shape != (32, 8):
+        grey = cv2.resize(grey, (8, 32), interpolation=cv2.INTER_AREA)
+    return np.concatenate([px, rows, _crop_hog().compute(grey).ravel()])
 
 
 @dataclass
@@ -39,14 +59,21 @@ class Mlp:
     w2: np.ndarray      # (n_hidden, 8)
     b2: np.ndarray
     size: tuple[int, int] = DEFAULT_SIZE
+    kind: str = "rich"  # the input features (:func:`crop_features`)
 
     @classmethod
     def create(cls, n_in: int, n_hidden: int, size=DEFAULT_SIZE, seed: int = 0,
-               n_out: int = N_STATES) -> "Mlp":
+               n_out: int = N_STATES, kind: str = "rich") -> "Mlp":
         rng = np.random.default_rng(seed)
         return cls(rng.normal(0, 1 / np.sqrt(n_in), (n_in, n_hidden)), np.zeros(n_hidden),
                    rng.normal(0, 1 / np.sqrt(n_hidden), (n_hidden, n_out)), np.zeros(n_out),
-                   tuple(size))
+                   tuple(size), kind)
+
+    def features(self, crops) -> np.ndarray:
+        """Input rows of BGR crops (any size; cut at ``size``)."""
+        if len(crops) == 0:
+            return np.zeros((0, self.w1.shape[0]), np.float32)
+        return np.stack([crop_features(c, self.size, self.kind) for c in crops])
 
 
     # -- flat parameter vector for the optimiser ---------------------------
@@ -76,9 +103,12 @@ class Mlp:
         return self.probabilities(x).argmax(axis=1)
 
     def loss_and_grad(self, theta: np.ndarray, x: np.ndarray, y: np.ndarray, decay: float):
+        """Loss and gradient at ``theta``; the products run in ``x``'s precision
+        (float32 during training: twice as fast), the sums in float64."""
         self.set(theta)
         n = len(x)
-        h = np.tanh(x @ self.w1 + self.b1)
+        w1 = self.w1.astype(x.dtype, copy=False)
+        h = np.tanh((x @ w1).astype(np.float64) + self.b1)
         z = h @ self.w2 + self.b2
         z -= z.max(axis=1, keepdims=True)
         e = np.exp(z)
@@ -91,14 +121,14 @@ class Mlp:
         gw2 = h.T @ dz + decay * self.w2
         gb2 = dz.sum(axis=0)
         dh = (dz @ self.w2.T) * (1.0 - h ** 2)
-        gw1 = x.T @ dh + decay * self.w1
+        gw1 = (x.T @ dh.astype(x.dtype)).astype(np.float64) + decay * self.w1
         gb1 = dh.sum(axis=0)
         return float(loss), np.concatenate([gw1.ravel(), gb1, gw2.ravel(), gb2])
 
     def train(self, x: np.ndarray, y: np.ndarray, max_iter: int = 300, decay: float = 1e-4,
               callback=None):
         """Full-batch training with scaled conjugate gradient."""
-        x = np.asarray(x, dtype=np.float64)
+        x = np.asarray(x, dtype=np.float32)
         y = np.asarray(y, dtype=np.int64)
         cache = {}
 
@@ -118,11 +148,12 @@ class Mlp:
     def save(self, path) -> None:
         np.savez_compressed(path, w1=self.w1.astype(np.float32), b1=self.b1.astype(np.float32),
                             w2=self.w2.astype(np.float32), b2=self.b2.astype(np.float32),
-                            size=np.array(self.size))
+                            size=np.array(self.size), kind=np.array(self.kind))
 
     @classmethod
     def load(cls, path) -> "Mlp":
         with np.load(path) as d:
+            kind = str(d["kind"]) if "kind" in d else "pixels"
             return cls(d["w1"].astype(np.float64), d["b1"].astype(np.float64),
                        d["w2"].astype(np.float64), d["b2"].astype(np.float64),
-                       tuple(int(v) for v in d["size"]))
+                       tuple(int(v) for v in d["size"]), kind)

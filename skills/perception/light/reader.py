@@ -19,8 +19,8 @@ import numpy as np
 from rll_bt.backend import LightDetection
 from rll_bt.errors import UserError
 
-from .hog import TowerDetector, crop_window, iou
-from .mlp import Mlp, crop_features
+from .hog import TowerDetector, crop_window
+from .mlp import Mlp
 
 MODEL_DIR = Path(__file__).with_name("models")
 DETECTOR_FILE = "tower_hog_svm.npz"
@@ -34,13 +34,16 @@ class LightReader:
     a tower: optional) and the light network (8 states)."""
 
     def __init__(self, detector: TowerDetector, classifier: Mlp, checker: Mlp | None = None,
-                 max_detections: int = 3, reject: float = 0.5, candidates: int = 40):
+                 max_detections: int = 3, reject: float = 0.5, candidates: int = 40,
+                 region_threshold: float | None = None):
         self.detector = detector
         self.classifier = classifier
         self.checker = checker
         self.max_detections = max_detections
         self.reject = reject          # "no tower" probability at which a hit is dropped
         self.candidates = candidates  # detector hits the networks look at, strongest first
+        # the detector's threshold inside a tag-given region (a tower is expected there)
+        self.region_threshold = detector.threshold if region_threshold is None else region_threshold
 
     @classmethod
     def load(cls, directory: str | Path | None = None, **detector_options) -> "LightReader":
@@ -61,15 +64,18 @@ class LightReader:
         except (OSError, ValueError, KeyError) as exc:
             raise UserError(f"cannot read the light models in {d}: {exc}") from None
         reject = float(settings.pop("reject", 0.5))
+        region_threshold = settings.pop("region_threshold", None)
         settings.update(detector_options)
-        return cls(TowerDetector(vector, **settings), classifier, checker, reject=reject)
+        if "threshold" in detector_options:
+            region_threshold = None
+        return cls(TowerDetector(vector, **settings), classifier, checker, reject=reject,
+                   region_threshold=region_threshold)
 
     @staticmethod
     def _run(net: Mlp, image: np.ndarray, boxes) -> np.ndarray:
         if len(boxes) == 0:
             return np.zeros((0, net.w2.shape[1]))
-        x = np.stack([crop_features(crop_window(image, b, net.size), net.size) for b in boxes]).astype(np.float64)
-        return net.probabilities(x)
+        return net.probabilities(net.features([crop_window(image, b, net.size) for b in boxes]).astype(np.float64))
 
     def classify(self, image: np.ndarray, boxes) -> np.ndarray:
         """Probabilities over the eight states for each tower box (x, y, w, h) of ``image``."""
@@ -85,7 +91,9 @@ class LightReader:
              tower_height: float | None = None, camera: str = "front") -> list[LightDetection]:
         """Signal towers in a BGR image with their light states, best first.
         Hits the tower check calls "no tower" are dropped."""
-        boxes = self.detector.detect(image, region=region, tower_height=tower_height)[: self.candidates]
+        thr = self.region_threshold if region is not None and tower_height is not None else None
+        boxes = self.detector.detect(image, region=region, tower_height=tower_height, threshold=thr)
+        boxes = boxes[: self.candidates]
         if not boxes:
             return []
         # the detector's box is often too tall (the tower's mount continues its outline):
@@ -93,14 +101,8 @@ class LightReader:
         heights = REFINE_HEIGHTS if self.checker is not None else (1.0,)
         variants = [refine_box(b.xywh, k) for b in boxes for k in heights]
         p_no = self.no_tower(image, variants).reshape(len(boxes), len(heights))
-        chosen = []
-        for b, p, vs in zip(boxes, p_no, _chunks(variants, len(heights))):
-            best = int(np.argmin(p))
-            if p[best] >= self.reject or any(iou(vs[best], c[1]) > 0.3 for c in chosen):
-                continue
-            chosen.append((b, vs[best]))
-            if len(chosen) == self.max_detections:
-                break
+        picks = choose(_chunks(variants, len(heights)), p_no, self.reject, self.max_detections)
+        chosen = [(boxes[i], v) for i, v in picks]
         probs = self.classify(image, [v for _, v in chosen])
         return [LightDetection(box=tuple(int(round(c)) for c in v), state=int(p.argmax()), score=b.score,
                                probabilities=tuple(float(x) for x in p), camera=camera)
@@ -116,6 +118,32 @@ def refine_box(box, k: float) -> tuple[float, float, float, float]:
     return (x + w * (1 - k) / 2, y, w * k, h * k)
 
 
+def choose(variants, p_no: np.ndarray, reject: float, limit: int, overlap: float = 0.3
+           ) -> list[tuple[int, tuple]]:
+    """The hits to keep, in order (strongest detector score first): each
+    hit's most tower-like variant box, when the check's "no tower"
+    probability ``p_no`` (hits x variants) is below ``reject`` and the box
+    covers no more than ``overlap`` of a kept box or is covered no more
+    (two towers never overlap much; a box on part of a kept tower is a
+    duplicate).  Returns (hit index, box), at most ``limit``."""
+    out = []
+    for i, (vs, p) in enumerate(zip(variants, p_no)):
+        best = int(np.argmin(p))
+        if p[best] >= reject or any(overlap_of_smaller(vs[best], c) > overlap for _, c in out):
+            continue
+        out.append((i, vs[best]))
+        if len(out) == limit:
+            break
+    return out
+
+
+def overlap_of_smaller(a, b) -> float:
+    """Intersection of two (x, y, w, h) boxes over the smaller one's area."""
+    ix = max(0.0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
+    iy = max(0.0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
+    return ix * iy / max(min(a[2] * a[3], b[2] * b[3]), 1e-9)
+
+
 def _chunks(items: list, n: int) -> list[list]:
     return [items[i:i + n] for i in range(0, len(items), n)]
 
@@ -123,5 +151,5 @@ def _chunks(items: list, n: int) -> list[list]:
 def save_detector(path: str | Path, vector: np.ndarray, **settings) -> None:
     """Write a detector vector, its :class:`TowerDetector` settings and the
     reader's ``reject`` level (the tower check's "no tower" probability at
-    which a hit is dropped)."""
+    which a hit is dropped) and ``region_threshold``."""
     np.savez_compressed(path, detector=np.asarray(vector, np.float32), settings=np.array(json.dumps(settings)))

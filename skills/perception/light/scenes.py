@@ -1,19 +1,24 @@
-"""Labelled camera frames rendered from the PyBullet world.
+"""Labelled camera frames rendered from a simulated world.
 
-Skills never import a backend by name: the world class is found through
-the ``sim`` backend plug-in (``rll_bt.backends`` entry point), whose module
-exports ``World``.  Frames are rendered with PyBullet's TinyRenderer from a
-free camera (any height, pitch, roll and field of view, random light
-direction and strength), and every signal tower in the frame is labelled
-from the renderer's segmentation mask: its visible pixels, box and the
-light state set on its station.
+Skills never import a backend by name: the world comes from the
+``rll_bt.worlds`` entry point (``pybullet``: :func:`backends.sim.open_world`),
+a factory ``(profile, seed, **options) -> world`` whose worlds render camera
+views (``render_view``, ``tower_links``, ``backdrop_bodies``,
+``set_lighting``, ``set_tower_look``, ``hall``; see
+:mod:`backends.sim.camera`).  Every frame is rendered from a free camera
+(any height, pitch, roll and field of view) under random lighting (colour
+temperature, direction, intensity, exposure, bloom: ``Lighting.random``),
+with the hall restyled and the towers' unlit tint and lit emission varied;
+every signal tower in the frame is labelled from the renderer's
+segmentation: its visible pixels, box and the light state set on its
+station.
 
 Field frame and units as :mod:`rll_bt.rules` (metres, radians).  Boxes are
 (x, y, w, h) in pixels of the tower's visible silhouette.
 """
 from __future__ import annotations
 
-import importlib
+import colorsys
 import math
 from dataclasses import dataclass, field
 
@@ -23,21 +28,22 @@ from rll_bt import plugins
 from rll_bt.backend import CameraIntrinsics, light_state_code
 from rll_bt.errors import UserError
 
-NEAR, FAR = 0.02, 25.0
+NEAR = 0.02
 LIGHTS = ("GREEN", "YELLOW", "RED")
+WORLDS = "rll_bt.worlds"
+#: hue (0..1) of each light's plastic: green, yellow, red
+_HUES = {"GREEN": 0.37, "YELLOW": 0.13, "RED": 0.0}
+#: linear emission (R, G, B) of each lit light around which training varies
+_EMISSION = {"GREEN": (0.28, 1.9, 0.38), "YELLOW": (2.1, 1.45, 0.12), "RED": (2.3, 0.22, 0.14)}
 
 
-def sim_world_class():
-    """The PyBullet world class of the installed ``sim`` backend plug-in."""
+def world_factory(name: str = "pybullet"):
+    """The world factory ``name`` of the ``rll_bt.worlds`` entry points."""
     try:
-        factory = plugins.load("rll_bt.backends", "sim")
+        return plugins.load(WORLDS, name)
     except KeyError as exc:
-        raise UserError(str(exc.args[0]), hint="rendering training data needs the PyBullet 'sim' backend") from None
-    module = importlib.import_module(factory.__module__)
-    world = getattr(module, "World", None)
-    if world is None:
-        raise UserError(f"the sim backend plug-in ({factory.__module__}) exports no World class")
-    return world
+        raise UserError(str(exc.args[0]), hint="rendering training data needs the PyBullet sim "
+                        "(the rll_bt.worlds entry point 'pybullet' of rll-bt)") from None
 
 
 @dataclass
@@ -65,7 +71,7 @@ class Frame:
     intrinsics: CameraIntrinsics
     towers: list[TowerLabel] = field(default_factory=list)
     eye: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    sky: np.ndarray | None = None    # bool mask of the pixels where nothing was rendered
+    sky: np.ndarray | None = None    # bool mask of the backdrop (hall, or nothing rendered)
 
     @property
     def tower_free(self) -> bool:
@@ -97,33 +103,35 @@ def _look_rotation(yaw: float, pitch: float, roll: float) -> np.ndarray:
 class SceneRenderer:
     """Renders labelled frames of one world (a layout of a profile).
 
-    ``world`` is a ``World`` of the sim plug-in (or anything with its
-    station API: ``cid``, ``machines``, ``station(name)``, ``set_lights``,
-    ``profile``).  ``rng`` drives every random choice.
+    ``world`` comes from a :func:`world_factory` (see the module for what it
+    must offer); ``rng`` drives every random choice.
     """
 
     def __init__(self, world, rng: np.random.Generator, views: ViewRange = ViewRange()):
-        import pybullet
-        self.p = pybullet
         self.world = world
         self.rng = rng
         self.views = views
         self.mps = world.profile.mps
-        self._tower_links = {name: self._find_tower_links(world.station(name)) for name in world.machines}
-        self._body_machine = {world.station(n).body: n for n in world.machines}
+        self._tower_links = {name: world.tower_links(name) for name in world.machines}
+        self._backdrop = np.asarray(world.backdrop_bodies(), np.int64)
         f = world.profile.field
         self._field = (f.x_min, f.y_min, f.x_max, f.y_max)
 
-    def _find_tower_links(self, station) -> set[int]:
-        r = self.mps.tower_radius
-        links = set()
-        for shape in self.p.getVisualShapeData(station.body, physicsClientId=self.world.cid):
-            link, geom, dims = shape[1], shape[2], shape[3]
-            if geom == self.p.GEOM_CYLINDER and abs(dims[1] - r) < 1e-4:
-                links.add(link)
-        if not links:
-            raise RuntimeError(f"no signal tower found on station {station.name}")
-        return links
+    def randomise_look(self) -> None:
+        """Random lighting, hall textures, unlit tint (hue kept, strength and
+        shade varied) and lit emission (brightness varied)."""
+        w, rng = self.world, self.rng
+        w.set_lighting(w.lighting.random(rng))
+        w.hall.restyle(rng)
+        unlit = {}
+        for c in LIGHTS:
+            h = (_HUES[c] + rng.uniform(-0.03, 0.03)) % 1.0
+            r, g, b = colorsys.hsv_to_rgb(h, rng.uniform(0.45, 0.9), rng.uniform(0.2, 0.6))
+            unlit[c] = (r, g, b, 1.0)
+        gain = rng.uniform(0.75, 1.5)
+        emission = {c: tuple(float(v) * gain * rng.uniform(0.85, 1.15) for v in base)
+                    for c, base in _EMISSION.items()}
+        w.set_tower_look(unlit=unlit, emission=emission)
 
     # -- the scene ----------------------------------------------------------
     def randomise_lights(self) -> dict[str, int]:
@@ -215,25 +223,11 @@ class SceneRenderer:
 
     # -- rendering ----------------------------------------------------------
     def render(self, eye, rot, intr: CameraIntrinsics, states: dict[str, int]) -> Frame:
-        p, rng = self.p, self.rng
-        cid = self.world.cid
-        view = p.computeViewMatrix(list(eye), list(eye + rot[:, 2]), list(-rot[:, 1]), physicsClientId=cid)
-        vfov = math.degrees(2.0 * math.atan(intr.height / (2.0 * intr.fy)))
-        proj = p.computeProjectionMatrixFOV(vfov, intr.width / intr.height, NEAR, FAR, physicsClientId=cid)
-        el, az = rng.uniform(0.3, 1.4), rng.uniform(-math.pi, math.pi)
-        light_dir = [math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)]
-        tint = rng.uniform(0.85, 1.0, 3)
-        _, _, rgba, _, seg = p.getCameraImage(
-            intr.width, intr.height, view, proj, shadow=0, renderer=p.ER_TINY_RENDERER,
-            lightDirection=light_dir, lightColor=tint.tolist(), lightAmbientCoeff=rng.uniform(0.35, 0.75),
-            lightDiffuseCoeff=rng.uniform(0.3, 0.7), lightSpecularCoeff=rng.uniform(0.0, 0.3),
-            flags=p.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX, physicsClientId=cid)
-        rgb = np.reshape(np.asarray(rgba, dtype=np.uint8), (intr.height, intr.width, 4))[:, :, :3]
-        seg = np.reshape(np.asarray(seg, dtype=np.int64), (intr.height, intr.width))
-        frame = Frame(np.ascontiguousarray(rgb[:, :, ::-1]), intr, eye=tuple(float(v) for v in eye),
-                      sky=seg < 0)
-        body = np.where(seg >= 0, seg & ((1 << 24) - 1), -1)
-        link = np.where(seg >= 0, (seg >> 24) - 1, -2)
+        view = self.world.render_view(np.asarray(eye, float), rot, intr)
+        seg = view.seg
+        body, link = view.body, view.link
+        frame = Frame(view.image, intr, eye=tuple(float(v) for v in eye),
+                      sky=(seg < 0) | np.isin(body, self._backdrop))
         for name in self.world.machines:
             st = self.world.station(name)
             full = self._projected_box(st, eye, rot, intr)
@@ -284,17 +278,17 @@ class SceneRenderer:
             return None
         return where[0], where[1], tight[0]
 
-    def _silhouette_area(self, full) -> float:
-        """Pixels of an unoccluded tower: its outline nearly fills the box,
-        less the unlit borders between the segments, which show the background."""
+    @staticmethod
+    def _silhouette_area(full) -> float:
+        """Pixels of an unoccluded tower: its outline (segments, the core in
+        the borders between them, the housing) nearly fills the box."""
         x0, y0, x1, y1 = full
-        m = self.mps
-        solid = 1.0 - 3 * m.tower_segment_border / m.tower_height
-        return 0.93 * solid * (x1 - x0) * (y1 - y0)
+        return 0.92 * (x1 - x0) * (y1 - y0)
 
     def sample(self, tower: bool = True) -> Frame | None:
         """One random frame: showing a tower (``tower``) or none at all."""
         states = self.randomise_lights()
+        self.randomise_look()
         view = self.tower_view() if tower else self.free_view()
         if view is None:
             return None

@@ -47,7 +47,7 @@ def draw_tower(rng: np.random.Generator, width: int, state: int
     img[:int(housing)] = housing_col * shade[None, :, None]
     glow = np.zeros((hpx, wpx), np.float32)
     glow_cols = np.zeros((hpx, wpx, 3), np.float32)
-    exposure = rng.uniform(0.7, 1.0)
+    exposure = rng.uniform(0.85, 1.0)
     for i in range(3):                                                  # 0 green at the bottom
         top = int(round(hpx - (i + 1) * seg))
         bot = int(round(hpx - i * seg))
@@ -65,7 +65,7 @@ def draw_tower(rng: np.random.Generator, width: int, state: int
             glow[lt:lb] = 1.0
             glow_cols[lt:lb] = col
         else:
-            col = _hsv_bgr(hue, rng.uniform(40, 200), rng.uniform(35, 170))
+            col = _hsv_bgr(hue, rng.uniform(40, 200), rng.uniform(30, 140))
             spec = rng.uniform(0, 0.35) * np.exp(-((xs - rng.uniform(-0.5, 0.5)) / 0.15) ** 2)
             img[lt:lb] = col[None, None, :] * shade[None, :, None] + 255.0 * spec[None, :, None]
     alpha = np.ones((hpx, wpx), np.float32)

@@ -2,18 +2,23 @@
 
 Steps (progress is reported through ``progress(text)``):
 
-1. render chunks of labelled frames from the PyBullet world in worker
+1. render chunks of labelled frames from the simulated world in worker
    processes (:mod:`.dataset`), for training and, from other layouts, a
    held-out set;
 2. train the HOG + linear SVM tower detector, then mine hard negatives
-   (false detections on the training frames) and train again, ``rounds``
-   times;
-3. calibrate the detector's score threshold and minimum support on the
-   training frames: the most recall with no false detection there;
-4. train the network with scaled conjugate gradient on tower crops, both
-   jittered truth boxes and the detector's own boxes;
-5. evaluate detector and network on the held-out frames and write the
-   model files and a JSON report into the output directory.
+   (false detections on the training frames: rendered halls, photographs,
+   procedural backdrops) and train again, ``rounds`` times;
+3. train the tower check (tower / no tower) on truth crops, badly placed
+   crops and the detector's own hits, true and false, and the light network
+   on truth crops and the detector's true hits, both with scaled conjugate
+   gradient;
+4. calibrate the detector's score threshold and the check's rejection level
+   on frames the detector never mined (with extra composed tower-free
+   frames): no false detection on rendered tower-free frames, then the most
+   recall less what false detections elsewhere cost (:func:`calibrate`),
+   and a lower threshold inside tag-given regions (:func:`calibrate_region`);
+5. evaluate the chain on the held-out frames and write the model files and
+   a JSON report into the output directory.
 
 The full run is sized for 10 minutes on 2 cores; ``quick`` is a tiny run
 for tests (minutes of quality, seconds of time).
@@ -33,12 +38,13 @@ import numpy as np
 from rll_bt.clock import WallClock
 from rll_bt.errors import UserError
 
-from .dataset import ChunkResult, ChunkSpec, PackedFrame, make_chunk
+from .dataset import ChunkResult, ChunkSpec, PackedFrame, free_frames, make_chunk
 from .evaluation import LightScore
 from .hog import TowerDetector, crop_window, iou, make_hog, select, train_svm, window_features, window_for_tower
-from .mlp import DEFAULT_SIZE, N_STATES, NO_TOWER, Mlp, crop_features
+from .mlp import DEFAULT_SIZE, N_STATES, NO_TOWER, Mlp
+from .photos import photos
 from .reader import (CHECKER_FILE, CLASSIFIER_FILE, DETECTOR_FILE, REFINE_HEIGHTS, REPORT_FILE, LightReader,
-                     refine_box, save_detector)
+                     choose, refine_box, save_detector)
 
 PROFILES = ("rcll2016", "rcll2025")
 HELDOUT_SEED = 1_000_003
@@ -52,7 +58,8 @@ class TrainOptions:
     quick: bool = False
     workers: int = 2
     rounds: int = 2                # hard-negative rounds
-    hidden: int = 32
+    hidden: int = 32               # the light network's hidden units
+    check_hidden: int = 32         # the tower check's
     iterations: int = 300          # SCG iterations (each network)
     heldout: int | None = None     # rendered held-out frames (default samples / 3)
 
@@ -84,8 +91,12 @@ def plan(opts: TrainOptions) -> tuple[list[ChunkSpec], list[ChunkSpec]]:
 
 
 def _chunk_job(spec: ChunkSpec) -> ChunkResult:
-    from .scenes import sim_world_class
-    return make_chunk(spec, sim_world_class())
+    return make_chunk(spec)
+
+
+def _free_job(args) -> list[PackedFrame]:
+    seed, count = args
+    return free_frames(seed, count)
 
 
 @dataclass
@@ -94,8 +105,10 @@ class FrameHits:
     boxes: np.ndarray             # N x 4 tower boxes after non-maximum suppression
     scores: np.ndarray            # N SVM scores
     false: np.ndarray             # N bools: matches no tower
-    crops: np.ndarray             # N x variants x 24 x 6 x 3 network crops (REFINE_HEIGHTS, DEFAULT_SIZE)
+    crops: np.ndarray             # N x variants x 32 x 8 x 3 network crops (REFINE_HEIGHTS, DEFAULT_SIZE)
     hard: np.ndarray              # HOG features of the strongest false hits
+    state: np.ndarray             # N: state of the clean tower a hit matches, -1 for none
+    fit: np.ndarray               # N x variants: IoU of each variant's box with that tower
 
 
 def _mine_job(args) -> list[FrameHits]:
@@ -112,9 +125,17 @@ def _mine_job(args) -> list[FrameHits]:
         crops = np.stack([[crop_window(img, refine_box(k.xywh, v), DEFAULT_SIZE) for v in REFINE_HEIGHTS]
                           for k in kept]) if kept else \
             np.zeros((0, len(REFINE_HEIGHTS), DEFAULT_SIZE[1], DEFAULT_SIZE[0], 3), np.uint8)
+        state = np.full(len(kept), -1, np.int64)
+        fit = np.zeros((len(kept), len(REFINE_HEIGHTS)), np.float32)
+        for i, k in enumerate(kept):
+            clean = [t for t in f.truths if t.clean and t.box[3] >= 20]
+            best = max(clean, key=lambda t: iou(k.xywh, t.box), default=None)
+            if best is not None and iou(k.xywh, best.box) >= 0.3:
+                state[i] = best.state
+                fit[i] = [iou(refine_box(k.xywh, v), best.box) for v in REFINE_HEIGHTS]
         out.append(FrameHits(np.array([k.xywh for k in kept], np.float32).reshape(-1, 4),
                              np.array([k.score for k in kept], np.float32), false, crops,
-                             window_features(hog, hard)))
+                             window_features(hog, hard), state, fit))
     return out
 
 
@@ -128,29 +149,83 @@ def _split(items: list, n: int) -> list[list]:
     return [items[i::n] for i in range(n)]
 
 
-def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[np.ndarray], low: float
-              ) -> tuple[float, float, dict]:
+def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[np.ndarray], low: float,
+              limit: int = 3) -> tuple[float, float, dict]:
     """The detector threshold and the tower check's "no tower" level at which
-    a hit is dropped: no false detection on the tower-free ``frames``, and
-    then the most recall, each false detection elsewhere (a tower's mount,
-    a misplaced box) costing two hits."""
+    a hit is dropped, with the reader's own choice of hits
+    (:func:`.reader.choose`): no false detection on the rendered tower-free
+    ``frames``, then the most recall, each other false detection (on a
+    tower's mount, a misplaced box, or composed clutter) costing hits: two
+    on frames with towers, three on composed tower-free ones.  ``no_tower``
+    holds each frame's hits x variants probabilities."""
     top = max((float(h.scores.max()) for h in hits if len(h.scores)), default=low + 1.0)
+    # only hits some setting can keep matter: those the loosest check keeps
+    cases = []
+    for f, h, p in zip(frames, hits, no_tower):
+        keep = np.flatnonzero(p.min(axis=1) < 0.5) if len(p) else np.zeros(0, int)
+        vs = [[refine_box(h.boxes[k], v) for v in REFINE_HEIGHTS] for k in keep]
+        cases.append((f, h.scores[keep], p[keep], vs, f.source.endswith("paste")))
     best = None
-    for reject in (0.5, 0.3, 0.2, 0.1, 0.05):
-        for t in sorted(set(np.round(np.linspace(low, max(top, low + 0.1), 40), 4))):
-            score = LightScore()
-            for f, h, p in zip(frames, hits, no_tower):
-                keep = (h.scores >= t) & (p < reject)
-                score.add(f.truths, [(tuple(b), 0) for b in h.boxes[keep]])
-            # no false detection on tower-free frames; then recall, less two per other false detection
-            key = (score.false_free, -(score.hits - 2 * (score.false_all - score.false_free)), -reject, t)
+    for reject in (0.5, 0.3, 0.2, 0.15, 0.1, 0.05, 0.02):
+        for t in sorted(set(np.round(np.linspace(low, max(top, low + 0.1), 30), 4))):
+            rendered, composed = LightScore(), LightScore()
+            for f, scores, p, vs, is_composed in cases:
+                n = int((scores >= t).sum())          # hits come strongest first
+                picks = choose(vs[:n], p[:n], reject, limit)
+                (composed if is_composed else rendered).add(f.truths, [(tuple(b), 0) for _, b in picks])
+            score = LightScore.combine([rendered, composed])
+            other = score.false_all - score.false_free
+            key = (rendered.false_free, -(score.hits - 2 * other - 3 * composed.false_free), -reject, t)
             if best is None or key < best[0]:
-                best = (key, t, reject, score)
-    _, t, reject, score = best
+                best = (key, t, reject, score, composed.false_free)
+    _, t, reject, score, composed_false = best
     return float(t), float(reject), {"threshold": float(t), "reject": float(reject),
                                      "train_recall": score.hits / max(score.required, 1),
                                      "train_false": score.false_all, "train_false_free": score.false_free,
-                                     "train_frames": score.frames}
+                                     "train_false_composed_free": composed_false,
+                                     "train_frames": score.frames, "train_free_frames": score.free_frames}
+
+
+def calibrate_region(vector: np.ndarray, checker: Mlp, frames: list[PackedFrame], low: float,
+                     threshold: float, reject: float) -> tuple[float, dict]:
+    """The detector threshold inside a tag-given region: the lowest (most
+    recall) at which reading each required tower's region gives no more
+    false first detections than at the full-frame ``threshold``."""
+    det = TowerDetector(vector, threshold=low)
+    reads = []                         # per tower: (truth, scores, p_no, variants)
+    for f in frames:
+        img = None
+        for t in f.truths:
+            if not t.required or t.region is None:
+                continue
+            img = f.image if img is None else img
+            kept = det.detect(img, region=t.region, tower_height=t.tower_height)[:40]
+            vs = [[refine_box(k.xywh, v) for v in REFINE_HEIGHTS] for k in kept]
+            flat = [crop_window(img, b, DEFAULT_SIZE) for row in vs for b in row]
+            p = checker.probabilities(checker.features(flat).astype(np.float64))[:, 1] if flat else np.zeros(0)
+            reads.append((t, np.array([k.score for k in kept]), p.reshape(len(kept), len(REFINE_HEIGHTS)), vs))
+
+    def count(t_region):
+        hits = false = 0
+        for truth, scores, p, vs in reads:
+            n = int((scores >= t_region).sum())
+            picks = choose(vs[:n], p[:n], reject, 1)
+            if picks:
+                if iou(picks[0][1], truth.box) >= 0.3:
+                    hits += 1
+                else:
+                    false += 1
+        return hits, false
+
+    _, allowed = count(threshold)
+    best = (threshold, *count(threshold))
+    for t in np.round(np.linspace(low, threshold, 25), 4):
+        hits, false = count(float(t))
+        if false <= allowed and hits > best[1]:
+            best = (float(t), hits, false)
+    t, hits, false = best
+    return t, {"region_threshold": t, "region_recall": hits / max(len(reads), 1), "region_false": false,
+               "region_towers": len(reads)}
 
 
 def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: None,
@@ -168,6 +243,10 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
     except OSError as exc:
         raise UserError(f"cannot create the output directory: {exc}", where=str(out)) from None
     train_specs, held_specs = plan(opts)
+    n_photos = len(photos("train"))
+    say(f"backdrops: procedural and {n_photos} photographs" if n_photos else
+        "backdrops: procedural only (install scikit-image for its sample photographs: "
+        "pip install 'rll-bt[vision-train]')")
     say(f"rendering {sum(s.towers + s.free for s in train_specs)} training frames "
         f"(+{sum(s.pasted for s in train_specs)} composed) and "
         f"{sum(s.towers + s.free for s in held_specs)} held-out frames with {opts.workers} workers")
@@ -194,19 +273,32 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
 
         # -- detector: SVM, hard negatives, SVM again ------------------------
         rng = np.random.default_rng(opts.seed)
-        mine = [frames[i] for i in rng.permutation(len(frames))[: (40 if opts.quick else 500)]]
+        order = rng.permutation(len(frames))
+        n_mine, n_towers, n_free = (40, 20, 10) if opts.quick else (500, 400, 400)
+        mine = [frames[i] for i in order[:n_mine]]
+        # calibration: frames the detector never mined, every tower-free one of them
+        # and extra composed tower-free frames (false detections are what it must rule out)
+        rest = [frames[i] for i in order[n_mine:]]
+        calib = [f for f in rest if f.truths][:n_towers] + [f for f in rest if not f.truths]
+        for part in pool.map(_free_job, [(opts.seed * 7919 + 555_000 + k, n_free // opts.workers)
+                                          for k in range(opts.workers)]):
+            calib.extend(part)
+        calib = calib or mine
         per_frame = max(2, 3000 // max(1, len(mine)))     # hard negatives per frame and round
         low = -0.8
         hard_all = np.zeros((0, pos_f.shape[1]), np.float32)
         vector = train_svm(pos_f, neg_f)
         say(f"SVM round 0 trained on {len(pos_f)} + {len(neg_f)} windows")
+
+        def detect_all(fs):
+            """Hits on frames ``fs`` (order kept)."""
+            parts = _split(fs, opts.workers * 2)
+            got = pool.map(_mine_job, [(vector, p, low, per_frame) for p in parts])
+            return [f for p in parts for f in p], [h for part in got for h in part]
+
         hits: list[FrameHits] = []
         for r in range(opts.rounds + 1):
-            hits = []
-            for part in pool.map(_mine_job, [(vector, fs, low, per_frame) for fs in _split(mine, opts.workers * 2)]):
-                hits.extend(part)
-            order = [f for fs in _split(mine, opts.workers * 2) for f in fs]
-            mine = order
+            mine, hits = detect_all(mine)
             hard = np.vstack([h.hard for h in hits]) if hits else hard_all[:0]
             say(f"round {r}: {len(hard)} false windows on {len(mine)} frames")
             if r == opts.rounds:
@@ -214,62 +306,71 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
             hard_all = np.vstack([hard_all, hard])
             vector = train_svm(pos_f, np.vstack([neg_f, hard_all]))
             say(f"SVM round {r + 1} trained with {len(hard_all)} hard negatives")
-        # -- network: truth crops, the detector's own boxes, and its false hits --
-        # the first half of the mining frames teaches the network, the second calibrates
-        half = len(mine) // 2
-        det_crops, det_states, neg_crops = [], [], []
-        for j, (f, h) in enumerate(zip(mine, hits)):
-            for k in range(len(h.scores)):
-                if h.false[k]:
-                    if j < half:
-                        neg_crops.extend(h.crops[k])
-                    continue
-                for t in f.truths:
-                    if t.clean and t.box[3] >= 20 and iou(tuple(h.boxes[k]), t.box) >= 0.3:
-                        det_crops.append(h.crops[k][0])
-                        det_states.append(t.state)
-                        break
-    neg_crops = [neg_crops[i] for i in rng.permutation(len(neg_crops))[: 2 * len(crops_a)]]
-    towers = crops_a[states_a < N_STATES]
-    tower_states = states_a[states_a < N_STATES]
-    if det_crops:
-        towers = np.concatenate([towers, np.stack(det_crops)])
-        tower_states = np.concatenate([tower_states, np.asarray(det_states, np.int64)])
-    misplaced = [crops_a[states_a == NO_TOWER]] + ([np.stack(neg_crops)] if neg_crops else [])
-    not_towers = np.concatenate(misplaced)
+        calib, cal_hits = detect_all(calib)
+        say(f"{sum(len(h.scores) for h in cal_hits)} hits on {len(calib)} calibration frames")
 
-    def features(crops):
-        return np.stack([crop_features(c, DEFAULT_SIZE) for c in crops]).astype(np.float64)
+    # -- the check and the light network learn from truth crops and the detector's own hits --
+    # the check learns each true hit's best variant as a tower (it is to pick the best-placed box),
+    # the light network every variant that fits well (it must read whichever box the check picks)
+    good, good_states, fits, fit_states, bad = [], [], [], [], []
+    for h in hits:
+        for k in range(len(h.scores)):
+            if h.state[k] < 0:
+                if h.false[k]:
+                    bad.extend(h.crops[k])
+                continue
+            best = int(np.argmax(h.fit[k]))
+            if h.fit[k, best] >= 0.5:
+                good.append(h.crops[k][best])
+                good_states.append(int(h.state[k]))
+            for c, v in zip(h.crops[k], h.fit[k]):
+                if v >= 0.6:
+                    fits.append(c)
+                    fit_states.append(int(h.state[k]))
+                elif v < 0.35:
+                    bad.append(c)
+    true_boxes = crops_a[states_a < N_STATES]
+    towers = np.concatenate([true_boxes] + ([np.stack(good)] if good else []))
+    tower_states = np.concatenate([states_a[states_a < N_STATES], np.asarray(good_states, np.int64)])
+    not_towers = [crops_a[states_a == NO_TOWER]]
+    if bad:
+        not_towers.append(np.stack([bad[i] for i in rng.permutation(len(bad))[: 3 * len(towers)]]))
+    not_towers = np.concatenate(not_towers)
 
     def tick(k, _, fx):
         if k % 100 == 0:
             say(f"  SCG iteration {k}: loss {fx:.4f}")
 
-    true_boxes = crops_a[states_a < N_STATES]          # the check learns well-placed boxes only
-    x_check = features(np.concatenate([true_boxes, not_towers]))
-    y_check = np.concatenate([np.zeros(len(true_boxes), np.int64), np.ones(len(not_towers), np.int64)])
-    checker = Mlp.create(x_check.shape[1], opts.hidden, DEFAULT_SIZE, seed=opts.seed + 1, n_out=2)
-    say(f"training the tower check ({x_check.shape[1]} inputs, {opts.hidden} hidden, tower / no tower) on "
-        f"{len(true_boxes)} tower and {len(not_towers)} other crops with SCG, {opts.iterations} iterations")
+    checker = Mlp.create(1, 1, DEFAULT_SIZE, n_out=2)
+    x_check = np.concatenate([checker.features(towers), checker.features(not_towers)])
+    y_check = np.concatenate([np.zeros(len(towers), np.int64), np.ones(len(not_towers), np.int64)])
+    checker = Mlp.create(x_check.shape[1], opts.check_hidden, DEFAULT_SIZE, seed=opts.seed + 1, n_out=2)
+    say(f"training the tower check ({x_check.shape[1]} inputs, {opts.check_hidden} hidden, tower / no tower) on "
+        f"{len(towers)} tower and {len(not_towers)} other crops with SCG, {opts.iterations} iterations")
     checker.train(x_check, y_check, max_iter=opts.iterations, decay=1e-3, callback=tick)
-    x, y = features(towers), tower_states
+    x = np.concatenate([x_check[:len(true_boxes)], checker.features(fits)]) if fits else x_check[:len(true_boxes)]
+    y = np.concatenate([tower_states[:len(true_boxes)], np.asarray(fit_states, np.int64)])
     net = Mlp.create(x.shape[1], opts.hidden, DEFAULT_SIZE, seed=opts.seed)
     say(f"training the light network ({x.shape[1]} inputs, {opts.hidden} hidden, 8 states) on {len(x)} "
         f"tower crops with SCG, {opts.iterations} iterations")
     net.train(x, y, max_iter=opts.iterations, decay=1e-3, callback=tick)
     no_tower = []
-    for h in hits[half:]:
+    for h in cal_hits:
         if len(h.crops):
             n, v = h.crops.shape[:2]
-            p = checker.probabilities(features(h.crops.reshape((n * v,) + h.crops.shape[2:])))[:, 1]
-            no_tower.append(p.reshape(n, v).min(axis=1))
+            p = checker.probabilities(checker.features(h.crops.reshape((n * v,) + h.crops.shape[2:])))[:, 1]
+            no_tower.append(p.reshape(n, v))
         else:
-            no_tower.append(np.zeros(0))
-    threshold, reject, cal = calibrate(mine[half:], hits[half:], no_tower, low)
+            no_tower.append(np.zeros((0, len(REFINE_HEIGHTS))))
+    threshold, reject, cal = calibrate(calib, cal_hits, no_tower, low)
+    region_threshold, region_cal = calibrate_region(vector, checker, calib, low, threshold, reject)
+    cal.update(region_cal)
     support = 1
-    settings = {"threshold": threshold, "min_support": support}
+    settings = {"threshold": threshold, "min_support": support, "region_threshold": region_threshold}
     say(f"detector threshold {threshold:.3f}, tower check rejects at {reject:.2f}: recall "
-        f"{cal['train_recall']:.3f}, {cal['train_false']} false on {cal['train_frames']} calibration frames")
+        f"{cal['train_recall']:.3f}, {cal['train_false']} false on {cal['train_frames']} calibration frames; "
+        f"in tag regions threshold {region_threshold:.3f}: recall {region_cal['region_recall']:.3f}, "
+        f"{region_cal['region_false']} false on {region_cal['region_towers']} towers")
     train_acc = float((net.predict(x) == y).mean())
 
     # -- write and evaluate --------------------------------------------------
