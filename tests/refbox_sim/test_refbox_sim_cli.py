@@ -118,7 +118,7 @@ def test_udp_2025_game_explores_inside_production():
     ms = msgs.message_set("rcll2025")
     reg = MessageRegistry.from_message_set(ms)
     off = _free_offset()
-    proc = _start("--profile", "rcll2025", "--team-cyan", "Caro", "--key-cyan", "cyan-key",
+    proc = _start("--profile", "rcll2025", "--team-cyan", "Caro", "--key", "cyan-key",
                   "--seed", "4", "--port-offset", str(off), "--phase-lengths",
                   "setup=0.5,exploration=1.5,production=3,overtime=0", "--quit-after-game")
     public = UdpPeer("127.0.0.1", 4445 + off, 4444 + off, registry=reg, channel="public")
@@ -149,7 +149,7 @@ def test_udp_2025_game_explores_inside_production():
 
 def test_sigterm_ends_cleanly():
     off = _free_offset()
-    proc = _start("--team-cyan", "Caro", "--key-cyan", "k", "--port-offset", str(off),
+    proc = _start("--team-cyan", "Caro", "--key", "k", "--port-offset", str(off),
                   "--world", "table", "--start", "command")
     try:
         line = proc.stdout.readline()
@@ -169,7 +169,9 @@ def test_sigterm_ends_cleanly():
     (["--team-cyan", "A", "--key-cyan", "k", "--profile", "rcll1999"], "--profile"),
     (["--team-cyan", "A", "--key-cyan", "k", "--team-magenta", "B"], "--team-magenta"),
     (["--team-cyan", "A", "--key-cyan", "k", "--speed", "0"], "--speed"),
-    (["--team-cyan", "A", "--key-cyan", "k", "--key", "nokey"], "--key"),
+    (["--team-cyan", "A", "--key-cyan", "k", "--key", "other"], "--key"),   # cyan's key twice
+    (["--team-cyan", "A"], "--key"),                                          # no key for cyan
+    (["--team-cyan", "A", "--key", "k", "--key", "=x"], "--key"),
 ])
 def test_bad_arguments_exit_2_with_one_line(args, where, capsys):
     assert main(["refbox", "sim", *args]) == 2

@@ -37,11 +37,13 @@ def register(cli) -> None:
     p.add_argument("--profile", default="rcll2016",
                    help="rules profile: rcll2016 (default) or rcll2025")
     p.add_argument("--team-cyan", required=True, metavar="NAME", help="team playing cyan")
-    p.add_argument("--key-cyan", required=True, metavar="KEY", help="crypto key of the cyan team")
+    p.add_argument("--key-cyan", metavar="KEY",
+                   help="crypto key of the cyan team (or give it as --key KEY)")
     p.add_argument("--team-magenta", metavar="NAME", help="team playing magenta (optional)")
     p.add_argument("--key-magenta", metavar="KEY", help="crypto key of the magenta team")
-    p.add_argument("--key", action="append", default=[], metavar="NAME=KEY",
-                   help="key of a team that may be named later by SetTeamName (repeatable)")
+    p.add_argument("--key", action="append", default=[], metavar="KEY|NAME=KEY",
+                   help="KEY alone: the cyan team's key (as --key-cyan); NAME=KEY: the key of a "
+                        "team that may be named later by SetTeamName (repeatable)")
     p.add_argument("--seed", type=int, default=0, metavar="N",
                    help="fixes field, light codes, orders, ring costs, down times (default 0)")
     p.add_argument("--host", default="127.0.0.1",
@@ -96,14 +98,24 @@ def _settings(args):
                                      **parse_phase_lengths(args.phase_lengths))
     except ValueError as exc:
         raise UserError(str(exc), where="--phase-lengths") from None
-    keys = {args.team_cyan: args.key_cyan}
-    if args.team_magenta:
-        keys[args.team_magenta] = args.key_magenta
+    keys, cyan_key = {}, args.key_cyan
     for item in args.key:
         name, sep, key = item.partition("=")
-        if not sep or not name or not key:
-            raise UserError(f"expected NAME=KEY, not {item!r}", where="--key")
-        keys[name] = key
+        if not sep:
+            if cyan_key is not None and cyan_key != item:
+                raise UserError("the cyan team's key is given twice (--key-cyan, or --key without NAME=)",
+                                where="--key")
+            cyan_key = item
+        elif not name or not key:
+            raise UserError(f"expected KEY or NAME=KEY, not {item!r}", where="--key")
+        else:
+            keys[name] = key
+    if not cyan_key:
+        raise UserError(f"no key for the cyan team {args.team_cyan!r}: give --key KEY or --key-cyan KEY",
+                        where="--key")
+    keys[args.team_cyan] = cyan_key
+    if args.team_magenta:
+        keys[args.team_magenta] = args.key_magenta
     return prof, timing, keys
 
 
