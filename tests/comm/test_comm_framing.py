@@ -61,6 +61,21 @@ def test_short_bad_version_unknown_type_and_parse_error_are_counted(tm):
     assert codec.stats.total == 7
 
 
+def test_each_cause_is_logged_once_and_then_only_counted(tm, caplog):
+    codec = FrameCodec(tm.registry())
+    stranger = hand_plain_frame(2000, 99, tm.Stranger(s="hi").SerializeToString())
+    with caplog.at_level("WARNING", logger="rll_bt.comm"):
+        for _ in range(5):
+            assert codec.decode(b"\x02\x00") is None
+            assert codec.decode(stranger) is None
+    lines = [r.getMessage() for r in caplog.records if r.name == "rll_bt.comm"]
+    assert len(lines) == 2, lines
+    assert sum(S.TOO_SHORT in ln for ln in lines) == 1 and sum(S.UNKNOWN_TYPE in ln for ln in lines) == 1
+    assert codec.stats.as_dict() == {S.TOO_SHORT: 5, S.UNKNOWN_TYPE: 5}
+    assert codec.stats.summary().endswith("10 dropped (too_short 5, unknown_type 5)") or \
+        codec.stats.summary().endswith("10 dropped (unknown_type 5, too_short 5)")
+
+
 def test_v1_frames_decode(tm):
     body = tm.Hello(name="legacy", value=1).SerializeToString()
     # v1: comp_id u16, msg_type u16, payload_size u32 = len(protobuf), then protobuf
