@@ -47,6 +47,71 @@ def test_game_on_the_pybullet_world(world):
     assert world.lights("C-RS1") == {"RED": "OFF", "YELLOW": "ON", "GREEN": "OFF"}
 
 
+def test_c0_cap_retrieve_mount_and_delivery_by_gripper_on_the_pybullet_world(world):
+    """CS retrieve from its shelf, the cap-less carrier discarded, the cap mounted on a
+    base from the BS, the product delivered at the DS and scored: every handling done by
+    a robot's gripper in the PyBullet world."""
+    from backends.sim.refbox import CSInstruction, DSInstruction
+    g = RefboxGame("rcll2016", world.clock, world, seed=5, team_cyan="A", team_magenta="B")
+    g.start()
+    g.set_phase("PRODUCTION")
+    o = next(o for o in g.orders if o.complexity == 0)
+    o.active, o.begin, o.end = True, 0, 900
+    cs = "C-CS1" if o.cap == "CAP_GREY" else "C-CS2"
+    robot = world.add_robot("CYAN", 1)
+
+    def tick(seconds):
+        world.run(seconds, callback=lambda t: g.tick())
+
+    def grab(machine, slot):
+        world.teleport("CYAN", 1, world.station(machine).approach_pose(slot))
+        robot.gripper.command("close", now=world.time)
+        tick(3)
+        held = world.held_workpiece("CYAN", 1)
+        assert held is not None, f"nothing grabbed at {machine} {slot}"
+        return held
+
+    def put(machine, slot):
+        world.teleport("CYAN", 1, world.station(machine).approach_pose(slot))
+        robot.gripper.command("open", now=world.time)
+        tick(3)
+        assert world.held_workpiece("CYAN", 1) is None
+
+    def wait_ready(machine, limit=60.0):
+        for _ in range(int(limit)):
+            if g.stations[machine].state == "READY-AT-OUTPUT":
+                return
+            tick(1)
+        raise AssertionError(f"{machine} never got ready ({g.stations[machine].state})")
+
+    carrier = grab(cs, "shelf1")
+    assert carrier.cap == o.cap and carrier.base is not None
+    assert g.prepare("CYAN", cs, CSInstruction("RETRIEVE_CAP"), "CYAN") == "prepared"
+    put(cs, "input")
+    wait_ready(cs)
+    capless = grab(cs, "output")
+    assert capless.cap is None
+    world.teleport("CYAN", 1, world.station(cs).approach_pose("output", gap=0.6))   # discard
+    robot.gripper.command("open", now=world.time)
+    tick(3)
+    assert world.held_workpiece("CYAN", 1) is None and world.workpiece_at(cs, "output") is None
+    assert g.prepare("CYAN", "C-BS", BSInstruction("OUTPUT", o.base), "CYAN") == "prepared"
+    wait_ready("C-BS")
+    grab("C-BS", "output")
+    assert g.prepare("CYAN", cs, CSInstruction("MOUNT_CAP"), "CYAN") == "prepared"
+    put(cs, "input")
+    wait_ready(cs)
+    product = grab(cs, "output")
+    assert (product.base, product.rings, product.cap) == (o.base, (), o.cap)
+    before = g.points("CYAN")
+    assert g.prepare("CYAN", "C-DS", DSInstruction(o.gate), "CYAN") == "prepared"
+    put("C-DS", "input")
+    tick(10)
+    assert o.delivered["CYAN"] == 1
+    assert g.points("CYAN") - before == 20 + 10            # in time, plus the cap mounted
+    assert world.workpiece_at("C-DS", "input") is None
+
+
 def test_every_message_fits_an_encrypted_datagram(harness):
     h = harness().exploration()
     g = h.game
