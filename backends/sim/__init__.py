@@ -117,7 +117,24 @@ def open_world(profile=None, seed: int = 0, **options):
     return World(profile, seed=seed, **options)
 
 
-def open_sim(world, robot=1, **options):
-    """Entry point ``rll_bt.backends: sim`` (see :class:`SimBackend`)."""
-    from .backend import SimBackend
-    return SimBackend(world, robot, **options)
+def open_sim(world=None, robot=1, *, profile=None, seed: int = 0, perception: str = "oracle",
+             gui: bool = False, clock=None, **options):
+    """Entry point ``rll_bt.backends: sim`` (see :class:`SimBackend`).
+
+    With ``world``, a robot in that world (its owner steps it; ``profile``,
+    ``seed``, ``perception``, ``gui`` and ``clock`` are not used).  Without, a
+    robot in a headless world of its own built from ``profile`` (default
+    rcll2016), ``seed`` and ``perception`` that follows ``clock`` (default the
+    wall clock): see :mod:`backends.sim.standalone`."""
+    if world is not None:
+        from .backend import SimBackend
+        return SimBackend(world, robot, **options)
+    from rll_bt.clock import WallClock
+    from .standalone import StandaloneSimBackend
+    from .world import World
+    own = World(profile, seed=int(seed), perception=perception, gui=bool(gui))
+    try:
+        return StandaloneSimBackend(own, clock if clock is not None else WallClock(), robot, **options)
+    except Exception:
+        own.close()
+        raise

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from ..errors import Unavailable, UserError
 from .refbox import _port, _positive_float, _positive_int
-from .tree import _kv
+from .tree import _kv, _pose
 
 EXIT_OK, EXIT_INTERRUPTED = 0, 130
 
@@ -34,15 +34,6 @@ def _hostport(text: str) -> tuple[str, int]:
     if not host or not port:
         raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
     return host, _port(port)
-
-
-def _pose(text: str):
-    from ..backend import Pose2D
-    try:
-        x, y, theta = (float(v) for v in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected X,Y,THETA (m, m, rad), got {text!r}") from None
-    return Pose2D(x, y, theta)
 
 
 def register(cli) -> None:

@@ -17,6 +17,15 @@ from ..errors import Unavailable, UserError
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
 
 
+def _pose(text: str):
+    from ..backend import Pose2D
+    try:
+        x, y, theta = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y,THETA (m, m, rad), got {text!r}") from None
+    return Pose2D(x, y, theta)
+
+
 def _kv(text: str) -> tuple[str, str]:
     if "=" not in text:
         raise argparse.ArgumentTypeError(f"expected NAME=VALUE, got {text!r}")
@@ -80,6 +89,10 @@ def register(cli) -> None:
     p.add_argument("--timeout", type=float, metavar="S", help="stop after S seconds of clock time (exit 1)")
     p.add_argument("--clock", choices=("wall", "sim"), default="wall",
                    help="wall: real time; sim: a simulated clock that jumps to the next tick (as fast as possible)")
+    p.add_argument("--profile", choices=("rcll2016", "rcll2025"), default="rcll2016",
+                   help="rules profile of the skills' map (and of a simulated world; default rcll2016)")
+    p.add_argument("--start-pose", type=_pose, metavar="X,Y,THETA",
+                   help="the robot's field pose at start (default: the skills localise globally)")
     p.add_argument("-I", "--search-path", action="append", default=[], metavar="DIR")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
     p.set_defaults(func=_run)
@@ -200,6 +213,9 @@ def _backend(args, clock):
         params = inspect.signature(factory).parameters
         if "clock" in params and "clock" not in opts:
             opts["clock"] = clock
+        # a backend that builds its own world plays the run's rules profile
+        if "profile" in params and "profile" not in opts and getattr(args, "profile", None):
+            opts["profile"] = args.profile
     except (TypeError, ValueError):
         pass
     try:
@@ -228,7 +244,10 @@ def _run(args) -> int:
     backend = _backend(args, clock)
     logger = None
     try:
-        ctx = RunContext(backend=backend, clock=clock, task=_task_values(spec, task))
+        services = {"profile": args.profile}
+        if args.start_pose is not None:
+            services["start_pose"] = args.start_pose
+        ctx = RunContext(backend=backend, clock=clock, task=_task_values(spec, task), services=services)
         tree = build_tree(spec, ctx)
         if args.log:
             logger = TickLogger(tree, args.log)
