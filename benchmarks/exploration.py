@@ -1,7 +1,8 @@
 """Exploration strategies side by side in whole simulated games.
 
-For every seed and strategy (Algorithm 1 of the paper, random, nearest, and
-the oracle that knows where the stations stand) a lockstep game with three
+For every seed and strategy (Algorithm 1 of the paper with our extensions,
+Algorithm 1 exactly as printed, random, nearest, and the oracle that knows
+where the stations stand) a lockstep game with three
 robots plays its exploration (SETUP shortened to 1 s) and stops as soon as
 every own station is correctly known and all exploration points are
 scored, or when the exploration time is over.  Measured per game: the
@@ -12,7 +13,7 @@ then, so this is its simulated time less SETUP, to within one step; a game
 that never scores them all counts the whole exploration window).
 
     .venv/bin/python benchmarks/exploration.py [--profile rcll2016|rcll2025] [--seeds 30]
-                                               [--strategies algorithm1,random,nearest,oracle]
+                                               [--strategies algorithm1,algorithm1-paper,random,nearest,oracle]
                                                [--jobs 2] [--per-seed] [--json FILE]
 
 Aim: full points in at least 95 % of seeds and a median time within 1.3x
@@ -56,7 +57,7 @@ def main(argv=None) -> int:
         g = games[i]
         what = row.get("error") or (f"{row['exploration']['points']} pts, known after "
                                     f"{fmt(row['exploration']['known_all_after'])} s")
-        print(f"  [{time.perf_counter() - t0:6.0f} s] {g.strategy:10} seed {g.seed:3d}: {what}",
+        print(f"  [{time.perf_counter() - t0:6.0f} s] {g.strategy:16} seed {g.seed:3d}: {what}",
               file=sys.stderr, flush=True)
 
     rows = run_batch(games, jobs=args.jobs, stop="explored", done=done)
@@ -82,9 +83,9 @@ def render(profile, strategies, seeds, games, rows, wall, per_seed=False) -> str
     lines = [f"exploration, {profile}, {len(seeds)} seeds ({seeds[0]}..{seeds[-1]}), 3 robots, "
              f"oracle perception; {wall:.0f} s wall",
              "",
-             f"{'strategy':11} {'full points':>12} {'median pts':>11} {'known':>7} {'median time s':>14} "
+             f"{'strategy':16} {'full points':>12} {'median pts':>11} {'known':>7} {'median time s':>14} "
              f"{'vs oracle':>10} {'all points s':>13} {'errors':>7}",
-             f"{'-' * 11} {'-' * 12} {'-' * 11} {'-' * 7} {'-' * 14} {'-' * 10} {'-' * 13} {'-' * 7}"]
+             f"{'-' * 16} {'-' * 12} {'-' * 11} {'-' * 7} {'-' * 14} {'-' * 10} {'-' * 13} {'-' * 7}"]
     for st in strategies:
         ok = [r for r in by[st] if "error" not in r]
         full = sum(1 for r in ok if r["exploration"]["points"] >= r["exploration"]["max_points"])
@@ -96,17 +97,17 @@ def render(profile, strategies, seeds, games, rows, wall, per_seed=False) -> str
         ratio = med / oracle if med is not None and oracle else None
         share = f"{full}/{len(ok)} ({100 * full / len(ok):.0f}%)" if ok else "-"
         all_pts = median(full_after(game_of[id(r)], r) for r in ok)
-        lines.append(f"{st:11} {share:>12} {fmt(median(r['exploration']['points'] for r in ok), '.0f'):>11} "
+        lines.append(f"{st:16} {share:>12} {fmt(median(r['exploration']['points'] for r in ok), '.0f'):>11} "
                      f"{known:>3}/{len(ok):<3} {fmt(med):>14} {fmt(ratio, '.2f') + 'x' if ratio else '-':>10} "
                      f"{fmt(all_pts):>13} {len(by[st]) - len(ok):>7}")
     if per_seed:
-        lines += ["", f"{'strategy':11} {'seed':>4} {'points':>6} {'known after s':>13} {'all points s':>12} "
+        lines += ["", f"{'strategy':16} {'seed':>4} {'points':>6} {'known after s':>13} {'all points s':>12} "
                       f"{'wall s':>7}"]
         for g, r in zip(games, rows):
             if "error" in r:
-                lines.append(f"{g.strategy:11} {g.seed:4d} error: {r['error']}")
+                lines.append(f"{g.strategy:16} {g.seed:4d} error: {r['error']}")
             else:
-                lines.append(f"{g.strategy:11} {g.seed:4d} {r['exploration']['points']:6d} "
+                lines.append(f"{g.strategy:16} {g.seed:4d} {r['exploration']['points']:6d} "
                              f"{fmt(r['exploration']['known_all_after']):>13} {fmt(full_after(g, r)):>12} "
                              f"{fmt(r['wall_time'], '.0f'):>7}")
     return "\n".join(lines)

@@ -15,7 +15,7 @@ from rll_bt import rules
 from rll_bt.errors import Unavailable, UserError
 
 DEFAULT_STATE = "teamserver.sqlite"
-STRATEGIES = ("algorithm1", "random", "nearest")
+STRATEGIES = ("algorithm1", "algorithm1-paper", "random", "nearest")
 PLANNER_NAMES = ("htn", "greedy")         # teamserver.planning.planner.PLANNERS
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .. import rules
 
-STRATEGIES = ("algorithm1", "random", "nearest", "oracle")
+STRATEGIES = ("algorithm1", "algorithm1-paper", "random", "nearest", "oracle")
 PERCEPTION = ("oracle", "rendered")
 UNTIL = ("exploration", "end")
 #: presets of the localiser the skills build (the agent's ``services["localisation"]``)

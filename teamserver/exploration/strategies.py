@@ -1,6 +1,8 @@
 """Exploration strategies: which zone an idle robot explores next.
 
-- :class:`Algorithm1`: the paper's Algorithm 1, line by line;
+- :class:`Algorithm1`: the paper's Algorithm 1, line by line, with the
+  extensions its docstring lists (the default);
+- :class:`Algorithm1Paper`: Algorithm 1 exactly as printed, for comparison;
 - :class:`RandomStrategy`, :class:`NearestStrategy`: baselines;
 - :class:`OracleStrategy`: knows where the machines stand (a lower bound
   for benchmarks only; a real game has no oracle).
@@ -125,6 +127,43 @@ class Algorithm1(Strategy):
         return self._observed_unvisited(view, hyp) if hyp else None
 
 
+class Algorithm1Paper(Strategy):
+    """Algorithm 1 exactly as printed in the paper, without the extensions of
+    :class:`Algorithm1` (for comparison; ``--strategy algorithm1-paper``).
+
+    ``observations`` are the zones where a machine of ours is believed
+    (:meth:`ExplorationView.hypotheses`, any confidence); ``zonesNotVisited
+    (observations)`` those of them no robot has explored yet;
+    ``mFound(observations, thresh)`` the machines identified at ``thresh``.
+    No zone is held back because another robot is heading for it, and
+    nothing is known well enough from afar to skip a visit.  Two places
+    where the pseudocode would act on an empty set are read as the paper's
+    text says: at line 18 every observed zone has been visited (line 9
+    returned otherwise), so the lowest-confidence *observed* zone is chosen
+    ("if all zones are visited, the zone with the lowest confidence is
+    chosen"); and when line 15 has no unvisited zone left, it does the same.
+    """
+
+    name = "algorithm1-paper"
+
+    def next_zone(self, view: ExplorationView, pose=None) -> Decision | None:
+        not_visited = view.not_visited()
+        hyp = view.hypotheses()
+        if not hyp:                                                     # line 1
+            opposite = view.opposite_zone()
+            if opposite is not None and opposite in not_visited:        # lines 2-3
+                return Decision(opposite, "opposite")
+            if not_visited:                                             # lines 5-6
+                return Decision(self._choose_random(not_visited), "random-start")
+            return None
+        observed_not_visited = [z for z in hyp if z not in view.visited]
+        if len(observed_not_visited) > 0:                               # lines 9-12
+            return Decision(lowest_confidence(hyp, observed_not_visited), "observed-unvisited")
+        if view.m_found(self.thresh) < view.n_mps and not_visited:      # lines 14-16
+            return Decision(self._choose_random(not_visited), "random-fallback")
+        return Decision(lowest_confidence(hyp, list(hyp)), "lowest-confidence")   # lines 18-20
+
+
 class RandomStrategy(Strategy):
     """Unvisited zones in random order, then random weakly known ones."""
 
@@ -182,7 +221,7 @@ class OracleStrategy(Strategy):
         return Decision(min(free, key=lambda z: (view.distance(pose, z), z)), "oracle")
 
 
-STRATEGIES = {"algorithm1": Algorithm1, "random": RandomStrategy, "nearest": NearestStrategy,
+STRATEGIES = {"algorithm1": Algorithm1, "algorithm1-paper": Algorithm1Paper, "random": RandomStrategy, "nearest": NearestStrategy,
               "oracle": OracleStrategy}
 
 

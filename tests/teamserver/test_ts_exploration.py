@@ -3,8 +3,8 @@ import pytest
 
 from rll_bt import rules
 from teamserver import model as M
-from teamserver.exploration.strategies import (Algorithm1, NearestStrategy, OracleStrategy,
-                                               RandomStrategy, make_strategy)
+from teamserver.exploration.strategies import (Algorithm1, Algorithm1Paper, NearestStrategy,
+                                               OracleStrategy, RandomStrategy, make_strategy)
 from teamserver.exploration.view import ExplorationView, opposite_zone
 from teamserver.kb import KnowledgeBase
 
@@ -89,6 +89,44 @@ def test_line_19_all_found_revisits_the_lowest_confidence_zone():
     assert d.branch == "lowest-confidence"
     hyp = v.hypotheses()
     assert hyp[d.zone] == min(hyp.values())
+
+
+# -- Algorithm 1 exactly as printed ---------------------------------------------------
+
+def test_paper_lines_1_to_6_opposite_zone_then_a_seeded_random_unvisited_one():
+    kb = KnowledgeBase(P16)
+    assert Algorithm1Paper(seed=1).next_zone(view(kb)) == make_strategy("algorithm1-paper").next_zone(view(kb))
+    d = Algorithm1Paper(seed=1).next_zone(view(kb))
+    assert (d.zone, d.branch) == (4, "opposite")
+    kb.mark_visited(4, 0.0)
+    picks = {Algorithm1Paper(seed=s).next_zone(view(kb)).zone for s in range(30)}
+    assert picks <= set(CYAN_ZONES) - {4} and len(picks) > 3
+    assert Algorithm1Paper(seed=5).next_zone(view(kb)) == Algorithm1Paper(seed=5).next_zone(view(kb))
+
+
+def test_paper_line_9_takes_every_unvisited_observed_zone_even_one_a_robot_is_heading_for():
+    kb = KnowledgeBase(P16)
+    observe(kb, "C-RS1", 6, zconf=0.99, light=("RED",), lconf=0.99)   # identified from afar
+    observe(kb, "C-RS1", 6, zconf=0.99, light=("RED",), lconf=0.99, robot="R2")
+    observe(kb, "C-CS1", 10, zconf=0.5)
+    kb.mark_visited(10, 0.0)
+    d = Algorithm1Paper().next_zone(view(kb, busy={6}))
+    # the paper visits 6 (observed, not visited) although a robot heads there and it is known;
+    # the extended Algorithm 1 skips it and searches elsewhere
+    assert (d.zone, d.branch) == (6, "observed-unvisited")
+    assert Algorithm1(seed=0).next_zone(view(kb, busy={6})).zone != 6
+
+
+def test_paper_line_14_too_few_found_searches_at_random_then_line_18_lowest_confidence():
+    kb = KnowledgeBase(P16)
+    observe(kb, "C-RS1", 6, light=("GREEN",))
+    kb.mark_visited(6, 0.0)
+    d = Algorithm1Paper(seed=3).next_zone(view(kb))
+    assert d.branch == "random-fallback" and d.zone in set(CYAN_ZONES) - {6}
+    for z in CYAN_ZONES:                         # nothing unvisited: line 15 cannot search
+        kb.mark_visited(z, 0.0)
+    d = Algorithm1Paper(seed=3).next_zone(view(kb))
+    assert d.branch == "lowest-confidence" and d.zone in view(kb).hypotheses()
 
 
 def test_twin_observation_counts_for_our_machine():
