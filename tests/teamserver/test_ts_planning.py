@@ -160,3 +160,26 @@ def test_choose_respects_work_in_progress_and_budget():
     assert ch.evaluations <= 3
     full = pl.choose(world(orders, {}, max_products=2, in_progress={1: 1, 2: 1}))
     assert full.start == []                          # both slots taken
+
+
+class _TickingClock:
+    """A clock that moves on by ``step`` seconds each time it is read, so the
+    planner's wall-time budget runs out after a known number of evaluations."""
+
+    def __init__(self, step: float):
+        self.t, self.step = 0.0, step
+
+    def now(self) -> float:
+        self.t += self.step
+        return self.t
+
+
+def test_choose_stops_when_its_time_budget_is_spent():
+    orders = [order(i) for i in range(1, 9)]
+    free = ProductionPlanner(P16, "C", clock=SimClock(), budget=0.04, max_evaluations=1000)
+    unlimited = free.choose(world(orders, {}, max_products=3))
+    timed = ProductionPlanner(P16, "C", clock=_TickingClock(0.01), budget=0.04, max_evaluations=1000)
+    ch = timed.choose(world(orders, {}, max_products=3))
+    assert unlimited.evaluations > 6                 # without the budget it looks further
+    assert 1 <= ch.evaluations <= 5                  # 40 ms at 10 ms a look: the search stops
+    assert ch.points >= ch.baseline_points           # and still returns the best found so far
