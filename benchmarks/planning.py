@@ -108,7 +108,7 @@ def bench_gtpyhop(runs: int) -> list[tuple]:
         with contextlib.redirect_stdout(io.StringIO()):
             import gtpyhop
     except ImportError:
-        return [("gtpyhop", "not installed (pip install gtpyhop to compare)", "", "", "")]
+        return [("gtpyhop", "not installed (pip install -e '.[bench]' to compare)", "", "", "")]
     with contextlib.redirect_stdout(io.StringIO()):
         gtpyhop.Domain("rcll_bench")
         gtpyhop.set_verbose_level(0) if hasattr(gtpyhop, "set_verbose_level") else None
