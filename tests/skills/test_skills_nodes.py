@@ -107,3 +107,41 @@ def test_skills_service_is_built_from_the_run_context():
     sctx = ctx.service("skills")
     assert sctx.pose().distance_to(Pose2D(4.5, 2.0)) < 1e-9
     assert sctx.profile.name == "rcll2016"
+
+
+BLOCKING_CASES = {
+    "navigate_to_pose": "{goal: {x: -4.0, y: 2.5, theta: 0.0}}",
+    "navigate_to_zone": "{zone: 9}",
+    "navigate_to_station": "{machine: C-RS1, side: INPUT}",
+    "explore_zone": "{zone: 9}",
+    "approach_station": "{machine: C-BS, side: OUTPUT}",
+    "grab": "{machine: C-BS, side: OUTPUT}",
+    "put": "{machine: C-RS1, side: SLIDE}",
+    "back_off": "{distance: 0.3}",
+    "turn": "{angle: 1.5}",
+    "relocalise": "{global_search: true}",
+}
+
+
+def test_no_skill_node_waits_inside_a_tick(monkeypatch):
+    """A node starts its skill and returns at once: on a clock that does not
+    move, every action node answers RUNNING tick after tick, and nothing in
+    a tick sleeps (a sleep would hold up the whole tree and the agent)."""
+    import time as time_module
+
+    def no_sleep(seconds):
+        raise AssertionError(f"a tick slept {seconds} s")
+
+    action_types = {cls.node_type for cls in NODE_TYPES} - {"localised", "holding_workpiece"}
+    assert action_types == set(BLOCKING_CASES)          # a new action node needs a case here
+    for node_type, ports in BLOCKING_CASES.items():
+        scene = Scene(seed=4)
+        tree = tree_for(scene, f"root:\n  {node_type}: {ports}\n", {})
+        monkeypatch.setattr(time_module, "sleep", no_sleep)
+        t0 = scene.world.clock.now()
+        for _ in range(5):
+            assert tree.tick() is TreeStatus.RUNNING, node_type
+        monkeypatch.undo()
+        assert scene.world.clock.now() == t0, f"{node_type} moved the clock inside a tick"
+        tree.root.stop(TreeStatus.INVALID)
+        assert tuple(scene.robot.cmd) == (0.0, 0.0, 0.0), f"{node_type} left the robot driving"
