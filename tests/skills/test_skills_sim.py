@@ -102,7 +102,7 @@ def test_grab_from_the_base_station_and_put_onto_a_ring_station_slide(seed, numb
 
 def test_grab_from_a_shelf_and_put_onto_the_input():
     world, bot, ctx = make(seed=4)
-    world.spawn_workpiece("C-CS1", "shelf1", "BASE_CLEAR", cap="CAP_GREY")
+    world.spawn_workpiece("C-CS1", "shelf1", "BASE_BLACK", cap="CAP_GREY")
     assert run(world, GrabFrom(ctx, place_for("C-CS1", "SHELF", 1))) is Status.SUCCESS
     put = PutOnto(ctx, place_for("C-CS1", "INPUT"))
     assert run(world, put) is Status.SUCCESS, put.message
