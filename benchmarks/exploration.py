@@ -2,15 +2,18 @@
 
 For every seed and strategy (Algorithm 1 of the paper with our extensions,
 Algorithm 1 exactly as printed, random, nearest, and the oracle that knows
-where the stations stand) a lockstep game with three
-robots plays its exploration (SETUP shortened to 1 s) and stops as soon as
-every own station is correctly known and all exploration points are
-scored, or when the exploration time is over.  Measured per game: the
-exploration points, the game seconds until every own station was
-correctly known (the team server sure of its zone), and the game seconds
-until every exploration point was scored ("all points"; the game stops
-then, so this is its simulated time less SETUP, to within one step; a game
-that never scores them all counts the whole exploration window).
+where the stations stand) a lockstep game with three robots plays its
+exploration (SETUP shortened to 1 s) and stops as soon as every exploration
+point is scored, or when the exploration time is over.  Measured per game:
+the exploration points, and the time until every own station was correctly
+known: the game seconds until the refbox had accepted a correct report of
+every property it scores for every own station (2016: zone and type, the
+type read from the light code; 2025: zone and rotation), i.e. every
+exploration point was scored (a game that never scores them all counts the
+whole exploration window).  "sure" counts the games in which the team
+server's own belief reached its reporting confidence for every station and
+value before the game stopped (it may report earlier, near the deadline or
+when a value is clearly ahead).
 
     .venv/bin/python benchmarks/exploration.py [--profile rcll2016|rcll2025] [--seeds 30]
                                                [--strategies algorithm1,algorithm1-paper,random,nearest,oracle]
@@ -55,8 +58,8 @@ def main(argv=None) -> int:
 
     def done(i, row):
         g = games[i]
-        what = row.get("error") or (f"{row['exploration']['points']} pts, known after "
-                                    f"{fmt(row['exploration']['known_all_after'])} s")
+        what = row.get("error") or (f"{row['exploration']['points']} pts, all after "
+                                    f"{fmt(row['exploration']['all_points_after'])} s")
         print(f"  [{time.perf_counter() - t0:6.0f} s] {g.strategy:16} seed {g.seed:3d}: {what}",
               file=sys.stderr, flush=True)
 
@@ -68,48 +71,43 @@ def main(argv=None) -> int:
     return 0 if all("error" not in r for r in rows) else 1
 
 
-def full_after(game, row) -> float:
+def known_after(game, row) -> float:
     """Game seconds until every exploration point was scored (the window when never)."""
-    ex = row["exploration"]
-    if ex["points"] >= ex["max_points"]:
-        return max(row["sim_time"] - row["phase_lengths"]["SETUP"], 0.0)
-    return game.exploration_window()
+    t = row["exploration"]["all_points_after"]
+    return t if t is not None else game.exploration_window()
 
 
 def render(profile, strategies, seeds, games, rows, wall, per_seed=False) -> str:
-    by = {st: [r for g, r in zip(games, rows) if g.strategy == st] for st in strategies}
-    game_of = {id(r): g for g, r in zip(games, rows)}
-    oracle = median(r["exploration"]["known_all_after"] for r in by.get("oracle", []) if "error" not in r)
+    by = {st: [(g, r) for g, r in zip(games, rows) if g.strategy == st and "error" not in r] for st in strategies}
+    errors = {st: sum(1 for g, r in zip(games, rows) if g.strategy == st and "error" in r) for st in strategies}
+    oracle = median(known_after(g, r) for g, r in by.get("oracle", []))
     lines = [f"exploration, {profile}, {len(seeds)} seeds ({seeds[0]}..{seeds[-1]}), 3 robots, "
              f"oracle perception; {wall:.0f} s wall",
              "",
-             f"{'strategy':16} {'full points':>12} {'median pts':>11} {'known':>7} {'median time s':>14} "
-             f"{'vs oracle':>10} {'all points s':>13} {'errors':>7}",
-             f"{'-' * 16} {'-' * 12} {'-' * 11} {'-' * 7} {'-' * 14} {'-' * 10} {'-' * 13} {'-' * 7}"]
+             f"{'strategy':16} {'full points':>12} {'median pts':>11} {'median time s':>14} {'vs oracle':>10} "
+             f"{'mean time s':>12} {'sure':>7} {'errors':>7}",
+             f"{'-' * 16} {'-' * 12} {'-' * 11} {'-' * 14} {'-' * 10} {'-' * 12} {'-' * 7} {'-' * 7}"]
     for st in strategies:
-        ok = [r for r in by[st] if "error" not in r]
-        full = sum(1 for r in ok if r["exploration"]["points"] >= r["exploration"]["max_points"])
-        known = sum(1 for r in ok if r["exploration"]["known_all_after"] is not None)
-        # a game that never knew everything counts as taking the whole exploration time
-        times = [r["exploration"]["known_all_after"] if r["exploration"]["known_all_after"] is not None
-                 else r["phase_lengths"].get("EXPLORATION") or r["sim_time"] for r in ok]
+        ok = by[st]
+        full = sum(1 for _, r in ok if r["exploration"]["points"] >= r["exploration"]["max_points"])
+        sure = sum(1 for _, r in ok if r["exploration"]["sure_all_after"] is not None)
+        times = [known_after(g, r) for g, r in ok]
         med = median(times)
         ratio = med / oracle if med is not None and oracle else None
         share = f"{full}/{len(ok)} ({100 * full / len(ok):.0f}%)" if ok else "-"
-        all_pts = median(full_after(game_of[id(r)], r) for r in ok)
-        lines.append(f"{st:16} {share:>12} {fmt(median(r['exploration']['points'] for r in ok), '.0f'):>11} "
-                     f"{known:>3}/{len(ok):<3} {fmt(med):>14} {fmt(ratio, '.2f') + 'x' if ratio else '-':>10} "
-                     f"{fmt(all_pts):>13} {len(by[st]) - len(ok):>7}")
+        mean = sum(times) / len(times) if times else None
+        lines.append(f"{st:16} {share:>12} {fmt(median(r['exploration']['points'] for _, r in ok), '.0f'):>11} "
+                     f"{fmt(med):>14} {fmt(ratio, '.2f') + 'x' if ratio else '-':>10} {fmt(mean):>12} "
+                     f"{sure:>3}/{len(ok):<3} {errors[st]:>7}")
     if per_seed:
-        lines += ["", f"{'strategy':16} {'seed':>4} {'points':>6} {'known after s':>13} {'all points s':>12} "
-                      f"{'wall s':>7}"]
+        lines += ["", f"{'strategy':16} {'seed':>4} {'points':>6} {'all points s':>12} {'sure s':>7} {'wall s':>7}"]
         for g, r in zip(games, rows):
             if "error" in r:
                 lines.append(f"{g.strategy:16} {g.seed:4d} error: {r['error']}")
             else:
-                lines.append(f"{g.strategy:16} {g.seed:4d} {r['exploration']['points']:6d} "
-                             f"{fmt(r['exploration']['known_all_after']):>13} {fmt(full_after(g, r)):>12} "
-                             f"{fmt(r['wall_time'], '.0f'):>7}")
+                ex = r["exploration"]
+                lines.append(f"{g.strategy:16} {g.seed:4d} {ex['points']:6d} {fmt(ex['all_points_after']):>12} "
+                             f"{fmt(ex['sure_all_after']):>7} {fmt(r['wall_time'], '.0f'):>7}")
     return "\n".join(lines)
 
 

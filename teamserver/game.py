@@ -18,6 +18,7 @@ from rll_bt.game.interfaces import TeamServerHandle, TeamServerOptions
 
 from . import model as M
 from .exploration.symmetry import consistent_set
+from .exploration.view import sure_properties
 from .links import RefboxLink
 from .server import ServerConfig, TeamServer
 
@@ -80,8 +81,9 @@ class InProcessTeamServer(TeamServerHandle):
         if color is not None:
             cs = consistent_set(self.server.profile, kb.machines)
             for name, guess in (cs.machines.items() if cs else ()):
-                if guess.zone is not None and guess.zone_confidence >= self.config.explore_thresh:
-                    known[name] = int(guess.zone)
+                sure = sure_properties(self.server.profile, guess, self.config.explore_thresh)
+                if sure:
+                    known[name] = sure
         delivered = sum(1 for p in kb.products.values() if p.state == "DELIVERED")
         stations = {name: st.state for name, st in kb.stations.items()}
         return {"robots": robots, "tasks": tasks, "known": known, "delivered": delivered,

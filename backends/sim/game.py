@@ -111,8 +111,11 @@ class PyBulletGame(Simulation):
         for name in self.world.machines:
             st = self.world.station(name)
             ref = self.game.stations.get(name)
+            light = ()
+            if hasattr(self.game.exploration, "code_of"):          # 2016: the type's light code
+                light = tuple(sorted(self.profile.light_code(self.game.exploration.code_of(name))))
             out[name] = StationTruth(name, st.team, int(st.zone), int(st.rotation), st.pose,
-                                     ref.state if ref is not None else "IDLE")
+                                     ref.state if ref is not None else "IDLE", light)
         return out
 
     def orders(self) -> list[dict]:

@@ -6,8 +6,8 @@ Each game runs in a fresh process of a ``spawn`` pool (one PyBullet world
 at a time per worker) and returns its report summary (:mod:`.report`) plus
 ``wall_time``; a game that raises returns ``{"error": ...}`` instead, so one
 bad seed does not lose a long run.  ``stop="explored"`` ends a game as soon
-as every own station is correctly known and the exploration points are
-complete (the exploration benchmark's measure).  ``done(i, row)`` is called
+as every exploration point is scored, i.e. every own station is reported
+right (the exploration benchmark's measure).  ``done(i, row)`` is called
 in the parent as results arrive (progress).
 """
 from __future__ import annotations
@@ -18,17 +18,12 @@ import traceback
 from typing import Callable, Iterable
 
 from .options import GameOptions, max_exploration_points
+from .report import exploration_points
 
 
 def explored(game) -> bool:
-    """Every own station correctly known and every exploration point scored."""
-    rec = game.recorder.rec
-    if rec.known_all_at is None:
-        return False
-    want = max_exploration_points(game.options.rules)
-    got = sum(a.points for a in game.sim.awards() if a.team == "CYAN" and a.order is None
-              and (a.phase == "EXPLORATION" or " zone " in a.reason or " rotation " in a.reason))
-    return got >= want
+    """Every exploration point scored: every own station reported right."""
+    return exploration_points(game.sim.awards(), "CYAN") >= max_exploration_points(game.options.rules)
 
 
 STOPS: dict[str, Callable | None] = {"explored": explored, None: None}

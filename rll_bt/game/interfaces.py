@@ -62,7 +62,9 @@ class Award:
 @dataclass(frozen=True)
 class StationTruth:
     """A station as it really is: ``zone`` number, ``rotation`` degrees,
-    ``pose`` of its centre, ``state`` its production state."""
+    ``pose`` of its centre, ``state`` its production state, ``light`` the
+    lights it shows in exploration (2016: the colours of its type's light
+    code, sorted; empty where the profile has none)."""
 
     name: str
     team: str
@@ -70,6 +72,14 @@ class StationTruth:
     rotation: int
     pose: Pose2D
     state: str = "IDLE"
+    light: tuple[str, ...] = ()
+
+    def reported(self, properties) -> dict:
+        """The true values of the exploration report's ``properties``
+        (``zone``, ``light``, ``orientation``) as the team server's snapshot
+        gives them under ``known``."""
+        values = {"zone": self.zone, "light": tuple(sorted(self.light)), "orientation": self.rotation}
+        return {p: values[p] for p in properties}
 
 
 @dataclass(frozen=True)
@@ -178,8 +188,9 @@ class TeamServerHandle(abc.ABC):
         """Plain-data view for reports: ``robots`` {number: {"task": kind or
         None, "task_id", "status"}}, ``tasks`` [{"id", "kind", "state",
         "robot", "machine", "assigned_at", "finished_at"}], ``known``
-        {machine: zone} of the machines whose zone the server is sure of (its
-        own reporting confidence), ``stations`` {machine: state as the
+        {machine: {property: value}} of the report's properties (zone and
+        light in 2016, zone and orientation from 2017) the server is sure of
+        (its own reporting confidence), lights as sorted colour tuples, ``stations`` {machine: state as the
         server last heard it} and ``delivered`` (products delivered)."""
 
     def close(self) -> None:

@@ -3,7 +3,9 @@
 :class:`Recorder` keeps, per sample (every ``period`` s): the phase, game
 time and our score; each robot's true pose (paths); station states (on
 change); and, from the team server, when every own station became
-correctly known (zone right).  Everything is plain data for the report
+correctly known: every property its exploration report scores (zone and
+light code in 2016, zone and rotation from 2017 on) known for sure and
+right.  Everything is plain data for the report
 and the plots; times are simulation seconds.
 """
 from __future__ import annotations
@@ -41,7 +43,8 @@ class Recorder:
         self.period = period
         self.snapshot = snapshot          # () -> team server snapshot dict, or None
         self.rec = Recording(team=team)
-        self.truth = {n: s.zone for n, s in sim.stations().items() if s.team == team}
+        props = ("zone", "light") if sim.profile.exploration_reports == "type+zone" else ("zone", "orientation")
+        self.truth = {n: s.reported(props) for n, s in sim.stations().items() if s.team == team}
         self._next = -1e9
 
     def task(self, robot: int, kind: str | None, task_id: int | None = None,
@@ -90,10 +93,17 @@ class Recorder:
         if rec.known_all_at is None and self.snapshot is not None and rec.exploration_started is not None:
             snap = self.snapshot()
             known = (snap or {}).get("known", {})
-            if all(known.get(n) == z for n, z in self.truth.items()):
+            if all(_matches(known.get(n), truth) for n, truth in self.truth.items()):
                 rec.known_all_at = now
                 rec.known_all_game_time = now - rec.exploration_started
 
     @staticmethod
     def _exploring(st) -> bool:
         return st.phase in ("EXPLORATION", "PRODUCTION") and st.state == "RUNNING"
+
+
+def _matches(known, truth: dict) -> bool:
+    """The team server's sure properties of a machine hold every true value."""
+    if not known:
+        return False
+    return all(p in known and (tuple(known[p]) if p == "light" else known[p]) == v for p, v in truth.items())

@@ -2,7 +2,9 @@
 
 :func:`summarise` turns a :class:`~rll_bt.game.lockstep.GameResult` into a
 plain dict: points by phase, exploration (points, the maximum, game seconds
-until every own station was correctly known), orders delivered, and per
+until every exploration point was scored, i.e. every own station correctly
+reported, and until the team server was sure of every station), orders
+delivered, and per
 robot the busy time (s a task tree was running), tasks, failures and
 distance driven (m, ground truth).  :func:`table` renders it for a person.
 """
@@ -38,6 +40,22 @@ def _exploration(award) -> bool:
     return award.order is None and any(w in award.reason for w in (" zone ", " type ", " rotation "))
 
 
+def exploration_points(awards, team: str) -> int:
+    """The exploration points ``team`` holds among ``awards``."""
+    return sum(a.points for a in awards if a.team == team and _exploration(a))
+
+
+def all_points_after(awards, team: str, want: int) -> float | None:
+    """Game seconds (of exploration) when ``team``'s exploration points first
+    reached ``want``: every own station reported right; None if never."""
+    got = 0
+    for a in sorted((a for a in awards if a.team == team and _exploration(a)), key=lambda a: a.game_time):
+        got += a.points
+        if got >= want:
+            return round(a.game_time, 2)
+    return None
+
+
 def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float | None = None) -> dict:
     rec = result.recording
     prof = options.rules
@@ -45,7 +63,7 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
     for a in result.awards:
         if a.team == team:
             by_phase[a.phase] = by_phase.get(a.phase, 0) + a.points
-    explore_pts = sum(a.points for a in result.awards if a.team == team and _exploration(a))
+    explore_pts = exploration_points(result.awards, team)
     production_pts = sum(a.points for a in result.awards if a.team == team and a.phase == "PRODUCTION"
                          and not _exploration(a))
     ours = [d for d in result.deliveries if d.team == team]
@@ -73,8 +91,9 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
         "points": {"total": result.status.points.get(team, 0), "by_phase": by_phase,
                    "exploration": explore_pts, "production": production_pts},
         "exploration": {"points": explore_pts, "max_points": max_exploration_points(prof),
-                        "known_all_after": (round(rec.known_all_game_time, 2)
-                                            if rec.known_all_game_time is not None else None)},
+                        "all_points_after": all_points_after(result.awards, team, max_exploration_points(prof)),
+                        "sure_all_after": (round(rec.known_all_game_time, 2)
+                                           if rec.known_all_game_time is not None else None)},
         "orders_delivered": sum(1 for d in ours if d.how in SCORED),
         "deliveries": [asdict(d) for d in ours],
         "robot_stats": robots,
@@ -90,8 +109,10 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
 def table(summary: dict) -> str:
     s = summary
     ex = s["exploration"]
-    known = (f"every own station correctly known after {ex['known_all_after']:.0f} s"
-             if ex["known_all_after"] is not None else "not every own station was known")
+    known = (f"all scored after {ex['all_points_after']:.0f} s" if ex["all_points_after"] is not None
+             else "not all scored")
+    known += (f"; the team server sure of every station after {ex['sure_all_after']:.0f} s"
+              if ex["sure_all_after"] is not None else "")
     lines = [
         f"{s['profile']} seed {s['seed']}, {s['robots']} robots, strategy {s['strategy']}, "
         f"perception {s['perception']}" + (" (baseline production)" if s.get("baseline") else ""),

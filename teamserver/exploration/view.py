@@ -32,6 +32,20 @@ def identification(profile: Profile, guess: MachineGuess) -> float:
     return min(confs[p] for p in report_properties(profile))
 
 
+def sure_properties(profile: Profile, guess: MachineGuess, thresh: float) -> dict:
+    """The reported properties of ``guess`` known at confidence ``thresh`` or
+    better: {"zone": int, "light": sorted colours, "orientation": degrees}."""
+    have = {M.ZONE: (guess.zone, guess.zone_confidence),
+            M.LIGHT: (tuple(sorted(guess.light)) if guess.light is not None else None, guess.light_confidence),
+            M.ORIENTATION: (guess.orientation, guess.orientation_confidence)}
+    out = {}
+    for p in report_properties(profile):
+        value, conf = have[p]
+        if value is not None and conf >= thresh:
+            out[p] = int(value) if p != M.LIGHT else value
+    return out
+
+
 def opposite_zone(profile: Profile, team: str, zones: list[int]) -> int | None:
     """The paper's first target: the top-most left zone when the team starts
     at the right start box, the top-most right zone when it starts at the
