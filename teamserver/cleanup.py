@@ -3,7 +3,7 @@ take one from a station output and discard it, discard what a robot holds,
 or feed a spare base to a station left PREPARED for nothing.
 
 A mixin of :class:`~teamserver.production.ProductionManager` (it needs
-``kb``, ``prefix``, ``cs_caps``, ``planner`` and ``add_network()``).
+``kb``, ``prefix``, ``cs_caps``, ``planner``, ``ss_places`` and ``add_network()``).
 """
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from . import model as M
 from .caps import CLEANUP_ORDER
 from .planning.domain import CAPLESS, EXTRA
 from .planning.htn import Seq
+from .storage import place_key
 
 
 class CleanupMixin:
@@ -28,7 +29,8 @@ class CleanupMixin:
     def flush(self, machine: str, instruction: dict) -> M.Product | None:
         """A small product that feeds a spare base to ``machine``, PREPARED with
         ``instruction`` that nothing needs, so that it processes it and becomes IDLE
-        again (a ring or cap station's result is taken away and discarded)."""
+        again (a ring or cap station's result is taken away and discarded; a storage
+        station keeps the base at the STORE's place, reserved for good)."""
         kind = machine[2:4]
         bs = f"{self.prefix}-BS"
         base = "BASE_RED"
@@ -38,13 +40,16 @@ class CleanupMixin:
             feed = (M.MOUNT_RING, {"machine": machine, "cost": 0, **instruction["rs"]})
         elif kind == "CS":
             feed = (M.MOUNT_CAP, {"machine": machine, "cap_color": self.cs_caps.get(machine)})
+        elif kind == "SS" and instruction.get("ss", {}).get("operation") == "STORE":
+            feed = (M.PUT_WORKPIECE, {"machine": machine, "side": M.INPUT, "store": True})
         else:
             return None
+        only_feed = kind in ("DS", "SS")        # nothing comes out to take away
         pid = f"X{self.kb.next_id('product')}"
         product = M.Product(pid, CLEANUP_ORDER, created=self.kb.get("game_time", 0.0))
         self.kb.save_product(product)
         now = self.kb.get("game_time", 0.0)
-        ids = [self.kb.next_id("task") for _ in range(2 if kind == "DS" else 4)]
+        ids = [self.kb.next_id("task") for _ in range(2 if only_feed else 4)]
         tasks = [M.Task(ids[0], M.GET_WORKPIECE, {"machine": bs, "side": M.OUTPUT, "base": base,
                                                   "role": EXTRA},
                         product=pid, prepare={"machine": bs, "bs": {"side": M.OUTPUT,
@@ -52,8 +57,11 @@ class CleanupMixin:
                         locks=(bs,), releases=(bs,), created=now),
                  M.Task(ids[1], feed[0], {**feed[1], "carry_from": ids[0]}, product=pid,
                         deps=(ids[0],), locks=(machine,),
-                        releases=(machine,) if kind == "DS" else (), carry=True, created=now)]
-        if kind != "DS":
+                        releases=(machine,) if only_feed else (), carry=True, created=now)]
+        if kind == "SS":
+            ss = instruction["ss"]
+            self._set_ss_places({**self.ss_places, place_key(ss["shelf"], ss["slot"]): pid})
+        if not only_feed:
             tasks += [M.Task(ids[2], M.GET_WORKPIECE, {"machine": machine, "side": M.OUTPUT,
                                                        "role": EXTRA},
                              product=pid, deps=(ids[1],), locks=(machine,),

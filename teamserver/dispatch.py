@@ -5,7 +5,8 @@ results, and robots that drop out.
   locks are free (or held by its own product), its station is neither
   BROKEN nor DOWN, the game is RUNNING in PRODUCTION, the station can take
   its workpiece (:mod:`.feeding`), a delivery's robot would reach the DS
-  when the order's window opens, a ring mount's slide holds the bases its
+  when the order's window opens, a stored product's retrieval is not before
+  its ``not_before`` (shortly before the window), a ring mount's slide holds the bases its
   colour costs (:mod:`.slides`), and a cap retrieval's product has started
   its last ring mount that does not need the cap-less base (:mod:`.caps`).
 - A robot left holding a workpiece whose next step is not ready is *stuck*;
@@ -19,8 +20,10 @@ results, and robots that drop out.
   first on ties.  Locks are taken at assignment.
 - PrepareMachine is sent for an assigned task once its robot is within
   ``prepare_distance`` metres of the station or ``prepare_lead`` seconds
-  away, the station is IDLE and the game RUNNING; resent after
-  ``prepare_retry`` seconds if the station did not leave IDLE.
+  away (``retrieve_lead`` for a storage station's RETRIEVE, which takes that
+  long to bring the workpiece out), the station is IDLE and the game
+  RUNNING; resent after ``prepare_retry`` seconds if the station did not
+  leave IDLE.
 - An idle robot standing in front of a station (see :mod:`.parking`) is sent
   to a free spot (a GO_TO task).  A parking robot counts as idle: real work
   cancels its GO_TO.  A failed GO_TO waits ``park_retry`` seconds.
@@ -65,6 +68,7 @@ class DispatchConfig:
     heartbeat_timeout: float = 10.0
     prepare_distance: float = 1.5
     prepare_lead: float = 3.0
+    retrieve_lead: float = 12.0     # ... a storage station's RETRIEVE this many seconds away
     prepare_retry: float = 6.0
     speed: float = 0.5
     max_attempts: int = 3
@@ -179,6 +183,8 @@ class Dispatcher(HoldingMixin):
             return False
         if task.kind == M.DELIVER and game_time < self.deliver_from(task):
             return False
+        if task.kind != M.DELIVER and game_time < float(task.params.get("not_before", 0.0)):
+            return False                # a stored product is retrieved shortly before its window
         if not self.production.slide_ready(task):
             return False                # the ring station would break for want of bases
         if task.kind == M.RETRIEVE_CAP and (self.production.cap_buffer.get(task.machine)
@@ -355,8 +361,9 @@ class Dispatcher(HoldingMixin):
             pos = positions.get(t.prepare["machine"])
             if robot.pose is not None and pos is not None:
                 d = self.travel(robot, pos)
-                if d > self.config.prepare_distance and d / self.config.speed > \
-                        self.config.prepare_lead:
+                lead = self.config.retrieve_lead if t.prepare.get("ss", {}).get(
+                    "operation") == "RETRIEVE" else self.config.prepare_lead
+                if d > self.config.prepare_distance and d / self.config.speed > lead:
                     continue
             self._send_prepare(t, now)
             sent.append(t)

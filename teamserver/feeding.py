@@ -3,7 +3,7 @@ with, and stations left waiting for a workpiece that never came.
 
 A *feed* is a task whose robot puts a workpiece into a station's input for
 an instruction the server sent (MountRing, MountCap, RetrieveCap,
-Deliver).  A robot can report such a task done while the workpiece never
+Deliver, and a PutWorkpiece into a storage station for STORE).  A robot can report such a task done while the workpiece never
 reached the conveyor (it fell beside it).  The station then stays
 PREPARED with our instruction: the refbox accepts no new PrepareMachine
 for it until it is fed, so the next robot's workpiece is processed with the
@@ -43,7 +43,8 @@ from .kb import KnowledgeBase
 
 log = logging.getLogger("teamserver.feeding")
 
-FEED_KINDS = (M.MOUNT_RING, M.MOUNT_CAP, M.RETRIEVE_CAP, M.DELIVER)
+#: (a PutWorkpiece feeds only with a prepare: a storage station's STORE)
+FEED_KINDS = (M.MOUNT_RING, M.MOUNT_CAP, M.RETRIEVE_CAP, M.DELIVER, M.PUT_WORKPIECE)
 #: station states in which it takes a new PrepareMachine now or in a moment
 ACCEPTING = ("IDLE", "WAIT-IDLE")
 
@@ -198,7 +199,7 @@ class FeedMonitor:
         made = []
         wanted: dict[str, list[dict]] = {}
         for t in self.kb.open_tasks():
-            if is_feed(t):
+            if is_feed(t) or (t.prepare and "ss" in t.prepare):     # (a RETRIEVE too)
                 wanted.setdefault(t.prepare["machine"], []).append(t.prepare)
         for machine, wants in wanted.items():
             instr = self.instruction(machine)

@@ -147,7 +147,8 @@ class Station(Record):
     cap_buffered: bool = False          # a CS holds a retrieved cap (our bookkeeping)
     since: float = 0.0                  # server time of the last state change
     fed_at: float = 0.0                 # server time it last took a workpiece (left PREPARED)
-    _tuples = ("ring_colors",)
+    shelf: tuple[str, ...] = ()         # a storage station's filled places ("shelf,slot")
+    _tuples = ("ring_colors", "shelf")
 
 
 @dataclass

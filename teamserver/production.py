@@ -9,7 +9,8 @@ station that broke with its workpiece inside, a robot lost with it) is
 *repaired*: its open tasks are cancelled and the rest of the product is
 planned again from what exists (the workpiece as it is, bases already on a
 slide, a cap already buffered); if nothing can be made of it, it is
-abandoned and a station output it blocks is cleared.
+abandoned and a station output it blocks is cleared.  With a storage station
+a finished product may wait there for its window (:mod:`.storage`).
 """
 from __future__ import annotations
 
@@ -23,6 +24,7 @@ from .cleanup import CleanupMixin
 from .health import StationHealth
 from .kb import KnowledgeBase
 from .slides import SlidesMixin
+from .storage import StorageMixin
 from .planning.domain import CAP_LOCK, CAPLESS, EXTRA, MAIN, Progress
 from .planning.estimate import SimRobot, SimTask
 from .planning.htn import Network, PlanningFailed
@@ -33,7 +35,7 @@ log = logging.getLogger("teamserver.production")
 DELIVERED, ABANDONED, ACTIVE = "DELIVERED", "ABANDONED", "ACTIVE"
 
 
-class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
+class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin, StorageMixin):
     """Products, their tasks and workpieces, kept in the knowledge base."""
 
     def __init__(self, kb: KnowledgeBase, planner: ProductionPlanner, prefix: str, *,
@@ -144,16 +146,23 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
                 out[oid] = min(n, delivered[oid] - o.delivered)
         return out
 
-    def world(self, game_time: float, horizon: float) -> World:
+    def world(self, game_time: float, horizon: float, exclude: str | None = None) -> World:
+        """The planning world now (``exclude``: a product whose tasks are left out, the
+        one being planned again)."""
         orders = [o for o in self.kb.orders.values() if o.open > 0]
         in_progress = self.unconfirmed(game_time)
         making = 0
         active, done = [], set()
         for p in self.active_products():
             in_progress[p.order_id] = in_progress.get(p.order_id, 0) + 1
-            making += p.order_id != CLEANUP_ORDER
+            tasks = self.kb.tasks_of(p.tasks)
+            # a stored product needs no robot until it is retrieved
+            making += p.order_id != CLEANUP_ORDER and not (
+                self.is_stored(p) and not any(t.state == M.ASSIGNED for t in tasks))
+            if p.id == exclude:
+                continue
             order = self.kb.orders.get(p.order_id)
-            for t in self.kb.tasks_of(p.tasks):
+            for t in tasks:
                 if t.state == M.CANCELLED or t.state == M.FAILED:
                     continue
                 if t.state == M.DONE:
@@ -170,10 +179,13 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
             pos = (r.pose[0], r.pose[1]) if r.pose else self._start_position()
             robots.append(SimRobot(str(r.number), pos, game_time))
         n = self.max_products if self.max_products is not None else max(len(robots), 1)
+        unusable = self.unusable()
+        if self.planner.ss is not None and not self.storage_open():
+            unusable |= {self.planner.ss}
         return World(orders, robots, self.positions(), self.rs_colors(),
                      dict(self.kb.get("ring_costs") or {}), self.cs_caps, game_time, horizon,
                      active=active, done=done, owned=self.locks, in_progress=in_progress,
-                     unusable=self.unusable(), max_products=n, making=making)
+                     unusable=unusable, max_products=n, making=making)
 
     def _start_position(self) -> tuple[float, float]:
         from rll_bt.rules import CYAN, MAGENTA
@@ -193,6 +205,8 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
         for p in self.active_products():
             if p.repair:
                 cancels += self.repair(p)
+            else:
+                self.redecide(p)
         if not self.ready_to_plan():
             return cancels, None
         self.adopt_free_caps()
@@ -233,6 +247,7 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
             tasks.append(t)
         product.tasks = tuple(product.tasks) + tuple(ids)
         self.kb.save_product(product)
+        self.fill_places(product, tasks)
         return tasks
 
     # -- progress ---------------------------------------------------------------------
@@ -253,6 +268,10 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
         for cs, owner in self.cap_buffer.items():
             if owner == product.id:
                 pr.cap_ready = cs
+        if pr.location is not None and pr.location.endswith(":" + M.SHELF):
+            pr.stored_at = self.stored_at(product.id)
+            if self.brought_out(product):
+                pr.location = f"{self.planner.ss}:{M.OUTPUT}"
         return pr
 
     def _workpiece_exists(self, wp: M.Workpiece) -> bool:
@@ -262,6 +281,8 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
         if loc.startswith("robot:"):
             r = self.kb.robots.get(int(loc[6:]))
             return r is not None and r.status == M.ACTIVE
+        if loc.endswith(":" + M.SHELF):
+            return True                 # a broken storage station keeps its shelf
         st = self.kb.stations.get(loc.split(":")[0])
         return st is None or st.state not in ("BROKEN",)
 
@@ -280,6 +301,10 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
                 if other.params.get("carry_from") == task.id and other.state == M.PENDING:
                     other.holder = robot.number
                     self.kb.save_task(other)
+            if machine == self.planner.ss and product is not None:
+                self.free_place(product.id)     # retrieved
+            elif product is not None and wp.cap is not None and role == MAIN:
+                self.redecide(product)          # finished: store it after all, or not
         elif kind == M.RETRIEVE_CAP:
             wp = M.Workpiece(f"{task.product}/capless{task.id}", base="?", cap=None,
                              location=f"{machine}:{M.OUTPUT}", product=task.product)
@@ -298,6 +323,10 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
                     self._set_cap_buffer(buf)
                 wp.location = f"{machine}:{M.OUTPUT}"
                 self.kb.save_workpiece(wp)
+            robot.holding = None
+        elif kind == M.PUT_WORKPIECE and task.params.get("store"):
+            self.stored(task, self.kb.workpieces.get(
+                (product.workpiece if product is not None else None) or robot.holding or ""))
             robot.holding = None
         elif kind in (M.PUT_WORKPIECE, M.DELIVER, M.DISCARD):
             wp = self.kb.workpieces.get(robot.holding or "")
@@ -372,9 +401,10 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
             log.info("%s needs repair: %s", p.id, why)
 
     def station_broke(self, machine: str) -> None:
-        """A BROKEN station loses what it holds: workpieces inside, a buffered cap."""
+        """A BROKEN station loses what it holds: workpieces inside, a buffered cap (but
+        not the storage station's shelf)."""
         for wp in self.kb.workpieces.values():
-            if wp.location.startswith(machine + ":"):
+            if wp.location.startswith(machine + ":") and not wp.location.endswith(M.SHELF):
                 wp.location = "gone"
                 self.kb.save_workpiece(wp)
                 self.needs_repair(wp.product, f"{machine} broke with its workpiece")
@@ -392,32 +422,38 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
     def repair(self, product: M.Product) -> list[M.Task]:
         """Cancel the product's open tasks and plan the rest again; returns the
         tasks that were assigned (the robots must be told to stop)."""
+        cancels = self.restart(product)
+        product.repair, product.repairs = None, product.repairs + 1
+        order = self.kb.orders.get(product.order_id)
+        net = None
+        if order is not None and order.open > 0 and product.repairs <= self.max_repairs:
+            try:
+                net = self.plan_rest(product, order)
+            except PlanningFailed as exc:
+                log.info("%s cannot be repaired: %s", product.id, exc)
+        if net is None:
+            self.abandon(product)
+        else:
+            self.add_network(product, net)
+            self.kb.save_product(product)
+        return cancels
+
+    def restart(self, product: M.Product) -> list[M.Task]:
+        """Cancel the product's open tasks and keep only the locks of what exists of it
+        (a buffered cap, the station output its workpiece is on); returns the tasks
+        that were assigned."""
         cancels = self.cancel_open(product)
         pr = self.progress(product)
         self.release(product.id)
         owned = {}
         if pr.cap_ready:
             owned[pr.cap_ready + CAP_LOCK] = product.id
-        if pr.location and not pr.location.startswith("robot:"):
+        if pr.location and pr.location.endswith(":" + M.OUTPUT):
             owned[pr.location.split(":")[0]] = product.id
         if owned:
             locks = self.locks
             locks.update(owned)
             self._set_locks(locks)
-        product.repair, product.repairs = None, product.repairs + 1
-        order = self.kb.orders.get(product.order_id)
-        net = None
-        if order is not None and order.open > 0 and product.repairs <= self.max_repairs:
-            world = self.world(float(self.kb.get("game_time", 0.0)), 0.0)
-            try:
-                net = self.planner.decompose(self.planner.context(world, order, pr))
-            except PlanningFailed as exc:
-                log.info("%s cannot be repaired: %s", product.id, exc)
-        if net is None:
-            self.abandon(product, pr)
-        else:
-            self.add_network(product, net)
-            self.kb.save_product(product)
         return cancels
 
     def cancel_open(self, product: M.Product) -> list[M.Task]:
@@ -443,8 +479,13 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin):
         for cs in [cs for cs, owner in buf.items() if owner == product.id]:
             buf[cs] = FREE              # a retrieved cap another product can mount
         self._set_cap_buffer(buf)
-        if pr.location and not pr.location.startswith("robot:"):
+        if pr.location and pr.location.endswith(":" + M.SHELF):
+            pass                        # it stays on the shelf; so does its reservation
+        elif pr.location and not pr.location.startswith("robot:"):
             self.clear_output(pr.location.split(":")[0])
+            self.free_place(product.id)
+        else:
+            self.free_place(product.id)
         log.info("abandoned %s", product.id)
 
     def feed_lost(self, task: M.Task) -> None:

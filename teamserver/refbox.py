@@ -180,6 +180,8 @@ class RefboxClient:
                 st.zone = int(m.zone)
             if "rotation" in m.DESCRIPTOR.fields_by_name and m.HasField("rotation"):
                 st.rotation = int(m.rotation)
+            if "status_ss" in m.DESCRIPTOR.fields_by_name and m.status_ss:
+                st.shelf = tuple(f"{p.shelf},{p.slot}" for p in m.status_ss if p.is_filled)
             if old is not None and old.state != st.state:
                 st.since = now
                 if st.state in FED_STATES or (old.state == "PREPARED" and st.state in (
@@ -265,6 +267,10 @@ class RefboxClient:
         elif "cs" in prepare:
             op_enum = "CsOp" if "CsOp" in self.ms.enums else "CSOp"
             pm.instruction_cs.operation = self.ms.enum(op_enum).Value(prepare["cs"]["operation"])
+        elif "ss" in prepare:
+            ss = prepare["ss"]
+            pm.instruction_ss.operation = self.ms.enum("SSOp").Value(ss["operation"])
+            pm.instruction_ss.shelf, pm.instruction_ss.slot = int(ss["shelf"]), int(ss["slot"])
         elif "ds" in prepare:
             ds = prepare["ds"]
             if "order_id" in pm.instruction_ds.DESCRIPTOR.fields_by_name:

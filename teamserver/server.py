@@ -37,7 +37,7 @@ from .exploration.symmetry import consistent_set
 from .exploration.view import ExplorationView
 from .kb import KnowledgeBase
 from .planning.estimate import Durations
-from .planning.planner import make_planner
+from .planning.planner import StoragePolicy, make_planner
 from .production import ProductionManager
 from .refbox import RefboxClient
 from .store import Store
@@ -64,6 +64,7 @@ class ServerConfig:
     plan_max_evaluations: int = 60
     max_products: int | None = None             # default: one per robot
     prefill_caps: bool = True                   # retrieve caps ahead into idle cap stations
+    storage: StoragePolicy | None = None        # storing early products (None: the planner's)
     cs_caps: dict[str, str] = field(default_factory=lambda: dict(DEFAULT_CS_CAPS))
     durations: Durations = field(default_factory=Durations)
     dispatch: DispatchConfig = field(default_factory=DispatchConfig)
@@ -106,7 +107,9 @@ class TeamServer:
                                     durations=self.config.durations,
                                     budget=self.config.plan_budget,
                                     max_evaluations=self.config.plan_max_evaluations,
-                                    clock=clock)
+                                    clock=clock,
+                                    **({} if self.config.storage is None
+                                       else {"storage": self.config.storage}))
         self.production: ProductionManager | None = None
         self.dispatcher: Dispatcher | None = None
         self.reporter: Reporter | None = None

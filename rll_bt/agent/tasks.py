@@ -29,7 +29,10 @@ report_machines  entries (list of {name, type, zone, rotation}); run by the agen
 
 ``face`` is the station face the robot works at (the shelf and the slide
 are on the input face) and ``place`` the spot on it, as the navigation
-skills name them.
+skills name them.  The 2025 storage station needs no kind of its own: the
+team server stores a product with put_workpiece to its INPUT and retrieves
+it with get_workpiece from its OUTPUT (it sends the STORE / RETRIEVE
+PrepareMachine itself).
 """
 from __future__ import annotations
 

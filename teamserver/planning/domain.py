@@ -22,6 +22,20 @@ each needs and the station locks they take and release.  A step whose
 robot must already hold the workpiece (PutWorkpiece, MountRing, MountCap,
 Deliver, Discard) is ``carry``: it goes to the robot that made the pickup
 before it (or to ``holder`` when a repair starts from a held workpiece).
+
+The finished product is *handed over* (``hand_over``) one of two ways:
+
+    direct        = Deliver
+    via_storage   = PutWorkpiece(SS input, STORE) -> GetWorkpiece(SS output,
+                    RETRIEVE, not before the window opens - retrieve_lead) -> Deliver
+
+``via_storage`` applies only with a storage station (rcll2025) and when it
+pays (:func:`storage_pays`): the product is expected ready at least
+``Storage.min_wait`` seconds before its order's window opens, so a robot
+would otherwise hold it (or leave it blocking the cap station's output) for
+that long.  The shelf place is left open (None); the production manager
+gives each product one.  A repair also starts from a finished product (in a
+gripper, at a cap station's output or on the storage shelf).
 """
 from __future__ import annotations
 
@@ -53,6 +67,25 @@ class Progress:
     location: str | None = None
     slide_credit: dict[str, int] = field(default_factory=dict)
     cap_ready: str | None = None
+    stored_at: tuple[int, int] | None = None    # (shelf, slot) when on the storage shelf
+
+
+@dataclass(frozen=True)
+class Storage:
+    """The storage station as the planner may use it for one product.
+
+    ``machine``: the SS ("C-SS"); ``min_wait``: game seconds the finished product
+    must wait for its window before storing pays (the detour through the SS costs
+    robots about ``min_wait`` minus a margin); ``retrieve_lead``: the retrieval
+    may start this long before the window opens; ``ready_at``: the game time the
+    product is expected finished (in a gripper), None while unknown (then
+    nothing is stored).
+    """
+
+    machine: str
+    min_wait: float
+    retrieve_lead: float = 45.0
+    ready_at: float | None = None
 
 
 @dataclass
@@ -63,7 +96,8 @@ class ProductionContext:
     ``ring_costs``: ring colour -> additional bases; ``cs_caps``: CS machine
     name -> cap colour on its shelf; ``unusable``: stations not to plan with
     (``"<RS>:SLIDE"``: only that ring station's slide);
-    ``ds_by_order``: True from 2017 on (DS prepared with the order id).
+    ``ds_by_order``: True from 2017 on (DS prepared with the order id);
+    ``storage``: the storage station to use where it pays, None without one.
     """
 
     team_prefix: str
@@ -75,6 +109,7 @@ class ProductionContext:
     unusable: frozenset[str] = frozenset()
     ds_by_order: bool = False
     reuse_capless_base: bool = True
+    storage: Storage | None = None
 
     @property
     def bs(self) -> str:
@@ -95,6 +130,19 @@ class ProductionContext:
     def cs_for(self, cap: str) -> list[str]:
         return [cs for cs in sorted(self.cs_caps)
                 if self.cs_caps[cs] == cap and cs not in self.unusable]
+
+
+def storage_pays(ctx: ProductionContext) -> bool:
+    """Store the finished product in the storage station: there is one, it is usable,
+    and the product is expected ready ``min_wait`` s or more before its window opens."""
+    st = ctx.storage
+    return (st is not None and st.ready_at is not None and st.machine not in ctx.unusable
+            and ctx.order is not None and ctx.order.begin - st.ready_at >= st.min_wait)
+
+
+def _ss_place(place) -> dict:
+    shelf, slot = place if place is not None else (None, None)
+    return {"shelf": shelf, "slot": slot}
 
 
 def _step(kind: str, params: dict, *, prepare: dict | None = None, locks=(), releases=(),
@@ -164,6 +212,30 @@ def op_deliver(ctx: ProductionContext, holder: str | None = None):
                  locks=(ctx.ds,), releases=(ctx.ds,), carry=True, holder=holder)
 
 
+@DOMAIN.operator("store")
+def op_store(ctx: ProductionContext, holder: str | None = None):
+    """Put the finished product into the storage station (STORE at a shelf place the
+    production manager fills in)."""
+    ss = ctx.storage.machine
+    return _step(M.PUT_WORKPIECE, {"machine": ss, "side": M.INPUT, "store": True},
+                 prepare={"machine": ss, "ss": {"operation": "STORE", **_ss_place(None)}},
+                 locks=(ss,), releases=(ss,), carry=True, holder=holder)
+
+
+@DOMAIN.operator("retrieve")
+def op_retrieve(ctx: ProductionContext, place: tuple[int, int] | None = None):
+    """Take the stored product from the storage station's output (RETRIEVE), not before
+    ``retrieve_lead`` s before the window opens."""
+    st = ctx.storage
+    if st is None:
+        return None
+    return _step(M.GET_WORKPIECE, {"machine": st.machine, "side": M.OUTPUT, "role": MAIN,
+                                   "not_before": max(ctx.order.begin - st.retrieve_lead, 0.0)},
+                 prepare={"machine": st.machine, "ss": {"operation": "RETRIEVE",
+                                                        **_ss_place(place)}},
+                 locks=(st.machine,), releases=(st.machine,))
+
+
 @DOMAIN.operator("discard")
 def op_discard(ctx: ProductionContext, holder: str | None = None):
     return _step(M.DISCARD, {}, carry=True, holder=holder)
@@ -175,8 +247,12 @@ def m_product(ctx: ProductionContext):
     """Make ctx.order from what exists (nothing, or a partial workpiece)."""
     o, pr = ctx.order, ctx.progress
     if pr.base is not None and (pr.base != o.base or tuple(pr.rings) != tuple(o.rings)[
-            :len(pr.rings)] or pr.cap is not None):
+            :len(pr.rings)]):
         return None                     # the workpiece cannot become this product
+    if pr.cap is not None:
+        if pr.cap == o.cap and tuple(pr.rings) == tuple(o.rings):
+            yield _finished_spec(ctx)   # only to be handed over
+        return None
     stations = [ctx.rs_for(c) for c in o.rings[len(pr.rings):]]
     if any(rs is None for rs in stations):
         return None
@@ -252,7 +328,31 @@ def _product_spec(ctx: ProductionContext, cs: str, reuse_for: int | None):
         cap = Seq(("retrieve_cap", cs), ("pickup", cs, False, CAPLESS), ("discard",))
     cap_holder = holder if chain is None else None
     parts = [p for p in (chain, cap) if p]
-    return Seq(Par(*parts), ("mount_cap", cs, cap_holder), ("pickup", cs, True), ("deliver",))
+    return Seq(Par(*parts), ("mount_cap", cs, cap_holder), ("pickup", cs, True), ("hand_over",))
+
+
+def _finished_spec(ctx: ProductionContext):
+    """Hand over a finished product from where it is."""
+    pr = ctx.progress
+    machine, _, side = (pr.location or "").partition(":")
+    if machine == "robot":
+        return ("hand_over", side)
+    if side == M.SHELF:
+        return Seq(("retrieve", pr.stored_at), ("deliver",))
+    return Seq(("pickup", machine, True), ("hand_over",))
+
+
+@DOMAIN.method("hand_over", "via_storage")
+def m_hand_over_stored(ctx: ProductionContext, holder: str | None = None):
+    """Store the product until shortly before its window opens (when that pays)."""
+    if not storage_pays(ctx):
+        return None
+    return Seq(("store", holder), ("retrieve",), ("deliver",))
+
+
+@DOMAIN.method("hand_over", "direct")
+def m_hand_over_direct(ctx: ProductionContext, holder: str | None = None):
+    return ("deliver", holder)
 
 
 def _any_base(ctx: ProductionContext) -> str:

@@ -29,6 +29,7 @@ class Durations:
     rs: float = 25.0            # ring mounting
     cs: float = 15.0            # cap retrieve / mount
     ds: float = 5.0
+    ss: float = 10.0            # storage station store / retrieve
     discard: float = 5.0
 
     def handling(self, kind: str) -> float:
@@ -45,6 +46,8 @@ class Durations:
             return self.ds
         if kind == M.GET_WORKPIECE and machine and machine.endswith("BS"):
             return self.bs
+        if kind in (M.GET_WORKPIECE, M.PUT_WORKPIECE) and machine and machine.endswith("SS"):
+            return self.ss
         return 0.0
 
 

@@ -9,16 +9,23 @@ ones) on the robots; the best set found when the budget runs out wins.
 The budget is a wall-time limit measured on ``clock`` and a cap on
 simulations, so in a lockstep run (a simulated clock) the result depends
 only on the cap and the run stays deterministic.
+
+With a storage station (rcll2025) a product expected ready long before its
+order's window opens is stored there meanwhile (:class:`StoragePolicy`,
+``docs/planning.md``): :meth:`ProductionPlanner.decompose` first plans the
+direct hand-over, simulates it with the work in progress to estimate when the
+product is ready, and plans again with that estimate.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 
 from rll_bt.clock import Clock, WallClock
 from rll_bt.rules import Profile
 
 from .. import model as M
-from .domain import DOMAIN, ProductionContext, Progress
+from .domain import DOMAIN, ProductionContext, Progress, Storage, storage_pays
 from .estimate import Durations, SimRobot, SimTask, simulate
 from .htn import Network, Planner, PlanningFailed
 
@@ -67,6 +74,25 @@ class World:
         return max(self.max_products - making, 0)
 
 
+@dataclass(frozen=True)
+class StoragePolicy:
+    """When finished products go into the storage station (profiles that have one).
+
+    A product expected ready ``min_wait`` s or more before its order's window
+    opens is stored, where ``min_wait`` is what the detour costs robots
+    (:meth:`ProductionPlanner.storage_cost`) plus ``margin`` (the estimate's
+    slack, and the freed robot must find work).  ``retrieve_lead``: the
+    retrieval starts this long before the window opens.  ``min_wait`` given:
+    that threshold instead (-inf: store every product).  ``enabled`` False:
+    never store (a product already stored is still retrieved).
+    """
+
+    enabled: bool = True
+    margin: float = 30.0
+    retrieve_lead: float = 45.0
+    min_wait: float | None = None
+
+
 @dataclass
 class Choice:
     """Result of :meth:`ProductionPlanner.choose`."""
@@ -81,8 +107,9 @@ class Choice:
 class ProductionPlanner:
     def __init__(self, profile: Profile, team_prefix: str, *, durations: Durations = Durations(),
                  budget: float = 0.04, max_evaluations: int = 60, clock: Clock | None = None,
-                 max_expansions: int = 5000):
+                 max_expansions: int = 5000, storage: StoragePolicy = StoragePolicy()):
         self.profile = profile
+        self.storage = storage
         self.prefix = team_prefix
         self.durations = durations
         self.budget = budget
@@ -95,11 +122,69 @@ class ProductionPlanner:
                 ) -> ProductionContext:
         return ProductionContext(self.prefix, world.rs_colors, world.ring_costs, world.cs_caps,
                                  order, progress or Progress(), world.unusable,
-                                 ds_by_order=self.profile.year >= 2017)
+                                 ds_by_order=self.profile.year >= 2017,
+                                 storage=self.storage_for(world))
 
-    def decompose(self, ctx: ProductionContext) -> Network:
-        """The task network for ``ctx.order``; raises :class:`PlanningFailed`."""
-        return self.htn.plan(ctx, ("product",))
+    @property
+    def ss(self) -> str | None:
+        """Our storage station, None when the profile has none."""
+        return f"{self.prefix}-SS" if "SS" in self.profile.machine_types else None
+
+    def storage_for(self, world: World) -> Storage | None:
+        """The storage station as the domain sees it (no ``ready_at`` yet)."""
+        if self.ss is None:
+            return None
+        pol = self.storage
+        if not pol.enabled:
+            wait = math.inf
+        elif pol.min_wait is not None:
+            wait = pol.min_wait
+        else:
+            wait = self.storage_cost(world.positions) + pol.margin
+        return Storage(self.ss, wait, pol.retrieve_lead)
+
+    def storage_cost(self, positions: dict[str, tuple[float, float]]) -> float:
+        """Robot seconds the detour through the storage station costs beyond a direct
+        delivery: a put and a pickup, driving cap station -> SS twice (the robot that
+        retrieves comes from about there) and SS -> DS instead of cap station -> DS
+        (averaged over our cap stations; 20 s of driving while positions are unknown)."""
+        d = self.durations
+        ss, ds = positions.get(self.ss), positions.get(f"{self.prefix}-DS")
+        css = [positions[c] for c in sorted(positions) if c.startswith(f"{self.prefix}-CS")]
+        if ss is None or ds is None or not css:
+            drive = 20.0
+        else:
+            drive = sum(2 * math.dist(c, ss) + math.dist(ss, ds) - math.dist(c, ds)
+                        for c in css) / len(css) / d.speed
+        return d.put + d.pickup + max(drive, 0.0)
+
+    def decompose(self, ctx: ProductionContext, world: World | None = None) -> Network:
+        """The task network for ``ctx.order``; raises :class:`PlanningFailed`.  With a
+        ``world`` and a storage station, the product's ready time is estimated from
+        the direct plan (:meth:`ready_time`) and the storage steps are planned where
+        they pay (``ctx.storage.ready_at`` given: that estimate is used as is)."""
+        net = self.htn.plan(ctx, ("product",))
+        st = ctx.storage
+        if st is None or st.ready_at is not None or world is None or \
+                ctx.order.begin - world.now < st.min_wait:
+            return net                  # (it cannot be ready any earlier than now)
+        ctx = replace(ctx, storage=replace(st, ready_at=self.ready_time(net, ctx.order, world)))
+        return self.htn.plan(ctx, ("product",)) if storage_pays(ctx) else net
+
+    def ready_time(self, net: Network, order: M.Order, world: World) -> float | None:
+        """Game time the product of ``net`` (a direct hand-over) is expected in a gripper,
+        finished: the work in progress and this product list-scheduled on the robots
+        (None: not within the simulation)."""
+        deliver = [i for i, s in enumerate(net.steps) if s.fields["kind"] == M.DELIVER]
+        if not deliver:
+            return None
+        before = net.predecessors(deliver[0])
+        if not before:
+            return world.now                     # in a gripper already
+        tasks = list(world.active) + sim_tasks(net, "ready?", order)
+        r = simulate(self.profile, tasks, world.robots, world.positions, world.now,
+                     math.inf, self.durations, world.done, world.owned)
+        return r.finish.get(("ready?", before[0]))
 
     # -- which orders ----------------------------------------------------------
     def candidates(self, world: World) -> list[Candidate]:
@@ -109,7 +194,7 @@ class ProductionPlanner:
             if units <= 0 or o.end + self.profile.scoring.delivery_late_grace <= world.now:
                 continue
             try:
-                net = self.decompose(self.context(world, o))
+                net = self.decompose(self.context(world, o), world)
             except PlanningFailed:
                 continue
             for u in range(units):
@@ -184,7 +269,11 @@ def sim_tasks(net: Network, product: str, order: M.Order | None,
 
 class GreedyPlanner(ProductionPlanner):
     """The baseline: one product at a time, for the plannable order with the earliest
-    deadline, no look-ahead."""
+    deadline, no look-ahead (so nothing stored for later either)."""
+
+    def __init__(self, profile: Profile, team_prefix: str, **options):
+        options.setdefault("storage", StoragePolicy(enabled=False))
+        super().__init__(profile, team_prefix, **options)
 
     def choose(self, world: World) -> Choice:
         if sum(world.in_progress.values()) > 0 or not world.slots:

@@ -199,18 +199,24 @@ RS_2016 = {"C-RS1": ("RING_BLUE", "RING_GREEN"), "C-RS2": ("RING_ORANGE", "RING_
 COSTS_2016 = {"RING_BLUE": 2, "RING_GREEN": 0, "RING_ORANGE": 1, "RING_YELLOW": 0}
 
 
-def production_setup(ls, orders, t=0.0, states=None):
-    """Our colour, PRODUCTION running, known machines, ring costs, idle stations (but
-    ``states``: machine -> state), orders."""
+def machines_known(ls, places, costs, t=0.0):
+    """Our colour, PRODUCTION running at game time ``t``, the machines seen in their
+    zones (``places``: machine -> zone), ring ``costs``; ``ls.station_states`` all IDLE."""
     for a in ls.agents:
         a.hello()
         a.status()
     ls.refbox.game_state("PRODUCTION", "RUNNING", t)
     ls.step()
-    for name, z in PLACES_2016.items():
+    for name, z in places.items():
         ls.agents[0].observe(name, zone=z, zconf=0.99)
-    ls.refbox.rings(COSTS_2016)
-    ls.station_states = {m: "IDLE" for m in PLACES_2016}
+    ls.refbox.rings(costs)
+    ls.station_states = {m: "IDLE" for m in places}
+
+
+def production_setup(ls, orders, t=0.0, states=None):
+    """Our colour, PRODUCTION running, known machines, ring costs, idle stations (but
+    ``states``: machine -> state), orders."""
+    machines_known(ls, PLACES_2016, COSTS_2016, t)
     ls.station_states.update(states or {})
     ls.refbox.machines(ls.station_states, RS_2016)
     bc, cc = ls.refbox.ms.enum("BaseColor"), ls.refbox.ms.enum("CapColor")
@@ -367,7 +373,8 @@ def play(ls, until, *, t0=0.0, dt=0.5, steps=800, fail=None, drop=None, drive=3)
                         st.fed(machine, gt, t.task_id)      # failed after it got there
                     a.result(t.task_id, "FAILED", **outcome)
                     continue
-                if kind in FEEDS and not (drop and drop(a, t)):
+                into = kind in FEEDS or (kind == "put_workpiece" and t.put_workpiece.side != SLIDE)
+                if into and not (drop and drop(a, t)):
                     st.fed(machine, gt, t.task_id)
                 elif kind == "put_workpiece" and t.put_workpiece.side == SLIDE and not (
                         drop and drop(a, t)):
