@@ -35,7 +35,8 @@ class LightReader:
 
     def __init__(self, detector: TowerDetector, classifier: Mlp, checker: Mlp | None = None,
                  max_detections: int = 3, reject: float = 0.5, candidates: int = 40,
-                 region_threshold: float | None = None):
+                 region_threshold: float | None = None, jitter: bool = True):
+        self.jitter = jitter          # read each tower from a few shifted crops and average
         self.detector = detector
         self.classifier = classifier
         self.checker = checker
@@ -78,8 +79,17 @@ class LightReader:
         return net.probabilities(net.features([crop_window(image, b, net.size) for b in boxes]).astype(np.float64))
 
     def classify(self, image: np.ndarray, boxes) -> np.ndarray:
-        """Probabilities over the eight states for each tower box (x, y, w, h) of ``image``."""
-        return self._run(self.classifier, image, boxes)
+        """Probabilities over the eight states for each tower box (x, y, w, h) of
+        ``image``; with ``jitter``, the geometric mean over the box and its
+        :data:`JITTER` variants (a box a pixel off must not change the reading),
+        normalised."""
+        if not self.jitter or len(boxes) == 0:
+            return self._run(self.classifier, image, boxes)
+        variants = [jittered(b, j) for b in boxes for j in JITTER]
+        p = self._run(self.classifier, image, variants).reshape(len(boxes), len(JITTER), -1)
+        logp = np.log(np.clip(p, 1e-12, 1.0)).mean(axis=1)
+        q = np.exp(logp - logp.max(axis=1, keepdims=True))
+        return q / q.sum(axis=1, keepdims=True)
 
     def no_tower(self, image: np.ndarray, boxes) -> np.ndarray:
         """The tower check's probability that each box is not a tower (zeros without a check)."""
@@ -110,6 +120,18 @@ class LightReader:
 
 
 REFINE_HEIGHTS = (1.0, 0.82, 0.68)
+
+#: (dx, dy, scale) of the crops a tower is read from: dx of its width, dy of its height
+JITTER = ((0.0, 0.0, 1.0), (-0.12, 0.0, 1.0), (0.12, 0.0, 1.0), (0.0, -0.04, 1.0), (0.0, 0.04, 1.0),
+          (0.0, 0.0, 0.92), (0.0, 0.0, 1.08))
+
+
+def jittered(box, j) -> tuple[float, float, float, float]:
+    """``box`` shifted by (dx * w, dy * h) and scaled by ``scale`` about its centre."""
+    dx, dy, k = j
+    x, y, w, h = (float(v) for v in box)
+    cx, cy = x + w / 2 + dx * w, y + h / 2 + dy * h
+    return (cx - w * k / 2, cy - h * k / 2, w * k, h * k)
 
 
 def refine_box(box, k: float) -> tuple[float, float, float, float]:
