@@ -155,14 +155,11 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin, StorageMixin):
         active, done = [], set()
         for p in self.active_products():
             in_progress[p.order_id] = in_progress.get(p.order_id, 0) + 1
-            tasks = self.kb.tasks_of(p.tasks)
-            # a stored product needs no robot until it is retrieved
-            making += p.order_id != CLEANUP_ORDER and not (
-                self.is_stored(p) and not any(t.state == M.ASSIGNED for t in tasks))
+            making += p.order_id != CLEANUP_ORDER
             if p.id == exclude:
                 continue
             order = self.kb.orders.get(p.order_id)
-            for t in tasks:
+            for t in self.kb.tasks_of(p.tasks):
                 if t.state == M.CANCELLED or t.state == M.FAILED:
                     continue
                 if t.state == M.DONE:
@@ -269,7 +266,7 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin, StorageMixin):
             if owner == product.id:
                 pr.cap_ready = cs
         if pr.location is not None and pr.location.endswith(":" + M.SHELF):
-            pr.stored_at = self.stored_at(product.id)
+            pr.stored_at = self.place_of(product.id)
             if self.brought_out(product):
                 pr.location = f"{self.planner.ss}:{M.OUTPUT}"
         return pr

@@ -19,13 +19,15 @@ keeps the books:
 - once a product is finished, the choice between storing it and handing it
   over directly is made again from the clock (:meth:`StorageMixin.redecide`):
   at the pickup from the cap station and at every planning round while no
-  robot is on its way with it;
-- a stored product needs no robot until its retrieval: it does not count
-  against ``max_products``.
+  robot is on its way with it.
+
+A stored product still counts against ``max_products``: its robot helps
+the products under way instead of one more starting (with three robots
+on four products, fewer were finished).
 
 A mixin of :class:`~teamserver.production.ProductionManager` (it needs
-``kb``, ``planner``, ``clock``, ``active_products()``, ``progress()``,
-``world()``, ``add_network()`` and ``restart()``).  The places live in the
+``kb``, ``planner``, ``progress()``, ``world()``, ``add_network()`` and
+``restart()``).  The places live in the
 knowledge base (``ss_places``: ``"shelf,slot"`` -> product id).
 """
 from __future__ import annotations
@@ -61,10 +63,10 @@ class StorageMixin:
 
     def storage_place(self, product_id: str) -> tuple[int, int] | None:
         """The shelf place for ``product_id`` (reserved now), None when all are taken."""
+        mine = self.place_of(product_id)
+        if mine is not None:
+            return mine
         places = self.ss_places
-        for key, owner in sorted(places.items()):
-            if owner == product_id:
-                return tuple(int(v) for v in key.split(","))
         ss = self.kb.stations.get(self.planner.ss or "")
         filled = set(ss.shelf if ss is not None else ())
         for shelf in range(SHELVES):
@@ -85,9 +87,9 @@ class StorageMixin:
         taken = set(self.ss_places) | set(ss.shelf if ss is not None else ())
         return len(taken) < SHELVES * SLOTS
 
-    def stored_at(self, product_id: str) -> tuple[int, int] | None:
-        """Where ``product_id``'s workpiece is stored (its reserved place), if it is."""
-        for key, owner in self.ss_places.items():
+    def place_of(self, product_id: str) -> tuple[int, int] | None:
+        """The place reserved for ``product_id`` (where its workpiece is stored, if it is)."""
+        for key, owner in sorted(self.ss_places.items()):
             if owner == product_id:
                 return tuple(int(v) for v in key.split(","))
         return None
