@@ -14,8 +14,9 @@ EXPLORE_AWARD = re.compile(r"correct (zone|rotation) (\S+) for (\S+)$")
 
 
 def test_a_short_2025_game_scores_zone_and_rotation_and_delivers_by_order_id(tmp_path):
-    # 40 s of exploration at the start of a 300 s PRODUCTION; stop at the first delivery
-    with short_game(seed=3, profile="rcll2025", production=300.0, out=tmp_path) as game:
+    # 40 s of exploration at the start of PRODUCTION; stop at the first delivery (about
+    # 200 s in: order windows scale with the phase, 600 s leave room for a slower game)
+    with short_game(seed=3, profile="rcll2025", production=600.0, out=tmp_path) as game:
         prof = game.options.rules
         result = game.run(stop=lambda g: any(d.team == "CYAN" for d in g.sim.deliveries()))
         truth = {n: s for n, s in game.sim.stations().items() if s.team == "CYAN"}
