@@ -49,6 +49,16 @@ class Strategy:
     def _choose_random(self, zones: list[int]) -> int:
         return self.rng.choice(sorted(zones))
 
+    def _first_look(self, view: ExplorationView, not_visited: list[int]) -> Decision | None:
+        """Algorithm 1, lines 2-6 (no observation yet): the opposite zone,
+        else a random unvisited one."""
+        opposite = view.opposite_zone()
+        if opposite is not None and opposite in not_visited:
+            return Decision(opposite, "opposite")
+        if not_visited:
+            return Decision(self._choose_random(not_visited), "random-start")
+        return None
+
 
 def lowest_confidence(hyp: dict[int, float], zones) -> int:
     """getZoneWithLowestConfidence (ties: the lower zone number)."""
@@ -104,12 +114,7 @@ class Algorithm1(Strategy):
         not_visited = view.not_visited()
         hyp = view.hypotheses()
         if not hyp:                                                     # line 1
-            opposite = view.opposite_zone()
-            if opposite is not None and opposite in not_visited:        # line 2
-                return Decision(opposite, "opposite")
-            if not_visited:                                             # line 5
-                return Decision(self._choose_random(not_visited), "random-start")
-            return None
+            return self._first_look(view, not_visited)
         observed = self._observed_unvisited(view, hyp)
         if observed is not None:                                        # line 9
             return observed
@@ -168,12 +173,7 @@ class Algorithm1Paper(Strategy):
         not_visited = view.not_visited()
         hyp = view.hypotheses()
         if not hyp:                                                     # line 1
-            opposite = view.opposite_zone()
-            if opposite is not None and opposite in not_visited:        # lines 2-3
-                return Decision(opposite, "opposite")
-            if not_visited:                                             # lines 5-6
-                return Decision(self._choose_random(not_visited), "random-start")
-            return None
+            return self._first_look(view, not_visited)
         observed_not_visited = [z for z in hyp if z not in view.visited]
         if len(observed_not_visited) > 0:                               # lines 9-12
             return Decision(lowest_confidence(hyp, observed_not_visited), "observed-unvisited")
