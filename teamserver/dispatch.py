@@ -30,6 +30,11 @@ results, and robots that drop out.
 - A failed discard (without a station) is not resent at once: the robot
   waits ``discard_backoff`` seconds (doubling per failure in a row, at most
   4x) and may be parked meanwhile, so the next try happens somewhere else.
+- A task whose station goes BROKEN or DOWN before its PrepareMachine went
+  out, its robot carrying nothing for it, goes back to the pool and the
+  robot is free again (:meth:`Dispatcher.release_unusable`); tasks that
+  free a stuck robot (the pending predecessors of its next step) are
+  preferred by ``unblock`` metres in the assignment.
 - A robot silent for ``heartbeat_timeout`` seconds is dropped: its task goes
   back to the pool (or, if it carried a workpiece, the product is repaired).
 
@@ -78,6 +83,7 @@ class DispatchConfig:
     feed_confirm: float = 10.0      # a fed station reports the workpiece within this time
     pickup_time: float = 30.0       # a pickup's drive and grab, for "ready once held"
     urgency: float = 0.01           # metres of drive a second of an order's slack is worth
+    unblock: float = 20.0           # metres of drive that freeing a stuck robot is worth
     park: bool = True
     park_retry: float = 15.0
     discard_backoff: float = 5.0
@@ -150,6 +156,27 @@ class Dispatcher(HoldingMixin):
         for t in self.kb.open_tasks():
             if t.holder == robot.number and t.state == M.PENDING:
                 self.production.needs_repair(t.product, f"robot {robot.number} lost")
+
+    def release_unusable(self) -> list[M.Task]:
+        """Assigned tasks whose station went BROKEN or DOWN before their
+        PrepareMachine went out, and whose robot carries nothing for it, go back
+        to the pool: the robot is told to stop and is free for other work
+        instead of waiting at the station.  Returns the tasks released."""
+        out = []
+        for t in self.kb.open_tasks():
+            if (t.state != M.ASSIGNED or t.carry or t.prepared_at is not None
+                    or t.kind in (M.GO_TO, M.EXPLORE_ZONE) or self.station_usable(t.machine)):
+                continue
+            robot = self.kb.robots.get(t.robot) if t.robot is not None else None
+            state = self.kb.stations[t.machine].state
+            self.outbox.append(("cancel", t, f"{t.machine} is {state}"))
+            self._back_to_pool(t, f"{t.machine} {state} before it was prepared")
+            if robot is not None and robot.task_id == t.id:
+                robot.task_id = None
+                self.kb.save_robot(robot)
+            log.info("task %d released: %s is %s", t.id, t.machine, state)
+            out.append(t)
+        return out
 
     def _back_to_pool(self, task: M.Task, why: str) -> None:
         task.state, task.robot, task.assigned_at, task.prepared_at = M.PENDING, None, None, None
@@ -230,11 +257,13 @@ class Dispatcher(HoldingMixin):
         if not pool:
             return assigned
         positions = self.production.positions()
+        frees = self.unblocking(game_time) if stuck else set()
         cost = np.zeros((len(free), len(pool)))
         for i, r in enumerate(free):
             for j, t in enumerate(pool):
                 cost[i, j] = (self.travel(r, positions.get(t.machine)) + 1e-3 * _age(t)
-                              + self.config.urgency * self._slack(t, game_time))
+                              + self.config.urgency * self._slack(t, game_time)
+                              - self.config.unblock * (t.id in frees))
         rows, cols = linear_sum_assignment(cost)
         for i, j in sorted(zip(rows, cols), key=lambda ij: cost[ij[0], ij[1]]):
             t, r = pool[j], free[i]

@@ -69,3 +69,22 @@ class HoldingMixin:
             elif r.holding and r.number in bound:
                 n += not self.ready(bound[r.number], game_time)
         return n
+
+    def unblocking(self, game_time: float | None) -> set[int]:
+        """Pending tasks the next step of a stuck robot waits for (its predecessors,
+        transitively): doing them frees that robot, so they go first."""
+        bound = {t.holder: t for t in self.kb.open_tasks()
+                 if t.carry and t.state == M.PENDING and t.holder is not None}
+        out: set[int] = set()
+        for r in self.kb.active_robots():
+            nxt = bound.get(r.number) if r.holding else None
+            if nxt is None or self.ready(nxt, game_time):
+                continue
+            todo = list(nxt.deps)
+            while todo:
+                d = todo.pop()
+                t = self.kb.tasks.get(d)
+                if t is not None and t.state == M.PENDING and d not in out:
+                    out.add(d)
+                    todo.extend(t.deps)
+        return out

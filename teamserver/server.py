@@ -395,6 +395,7 @@ class TeamServer:
                 self.dispatcher.outbox.append(("cancel", t, "its workpiece was lost"))
             self._last["plan"] = now
         self.dispatcher.feeds.unstick()
+        self.dispatcher.release_unusable()
         self.dispatcher.discard_orphans()
         self._look_for_rotations()
         for t in self.dispatcher.assign(gt):

@@ -4,7 +4,7 @@ import pytest
 
 from teamserver import model as M
 from teamserver.server import ServerConfig
-from ts_harness import Lockstep, production_setup, task_kinds
+from ts_harness import RS_2016, Lockstep, production_setup, task_kinds
 
 
 #: these tests look at the dispatch of one product's steps: no caps retrieved ahead
@@ -183,3 +183,70 @@ def test_new_order_is_planned_at_once():
                            delivery_period_begin=0, delivery_period_end=900, delivery_gate=3)])
     ls.step(n=2)
     assert [p.order_id for p in ls.server.kb.products.values() if p.order_id] == [5]
+
+
+def test_a_station_going_down_before_its_prepare_frees_the_robot_sent_there(tcp):
+    ls = tcp
+    place(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])     # far from the BS
+    production_setup(ls, [dict(id=1)])
+    ls.step(n=5)
+    kb = ls.server.kb
+    [bs] = [t for t in kb.tasks.values() if t.machine == "C-BS" and t.state == M.ASSIGNED]
+    agent = next(a for a in ls.agents if a.number == bs.robot)
+    assert bs.prepared_at is None                                  # still on its way
+    ls.station_states["C-BS"] = "DOWN"
+    ls.refbox.machines(ls.station_states)
+    ls.step(n=3)
+    assert kb.tasks[bs.id].state == M.PENDING and kb.tasks[bs.id].robot is None
+    assert kb.robots[agent.number].task_id != bs.id
+    assert [c.task_id for c in agent.cancels()] == [bs.id]          # the robot was told to stop
+    assert not [p for p in prepares(ls) if p.machine == "C-BS"]
+    ls.station_states["C-BS"] = "IDLE"                             # back up: work goes on
+    ls.refbox.machines(ls.station_states)
+    ls.step(n=5)
+    assert any(t.machine == "C-BS" and t.state == M.ASSIGNED and t.kind == M.GET_WORKPIECE
+               for t in kb.tasks.values())
+
+
+def test_a_prepared_station_going_down_keeps_its_task(tcp):
+    ls = tcp
+    place(ls, [(5.0, 1.2, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])      # one at the BS
+    production_setup(ls, [dict(id=1)])
+    ls.step(n=5)
+    kb = ls.server.kb
+    [bs] = [t for t in kb.tasks.values() if t.machine == "C-BS" and t.state == M.ASSIGNED]
+    assert bs.prepared_at is not None                      # the station has its instruction
+    ls.station_states["C-BS"] = "DOWN"
+    ls.refbox.machines(ls.station_states)
+    ls.step(n=3)
+    assert kb.tasks[bs.id].state == M.ASSIGNED             # the base comes out after DOWN
+
+
+def test_work_that_frees_a_stuck_robot_goes_first():
+    """Robot 1 holds a base whose cap mount waits for its cap retrieval at C-CS2
+    (DOWN until now); the only free robot stands next to C-CS1 where another
+    product's cap retrieval waits, yet it goes for the one that frees robot 1."""
+    ls = Lockstep(robots=2, config=ALONE)
+    place(ls, [(5.0, 1.2, 0.0), (-5.0, 5.5, 0.0)])
+    production_setup(ls, [dict(id=1)], states={"C-CS2": "DOWN"})
+    kb, d = ls.server.kb, ls.server.dispatcher
+    ls.step(n=3)
+    [get] = [t for t in kb.tasks.values() if t.machine == "C-BS" and t.state == M.ASSIGNED]
+    assert get.robot == 1
+    ls.agents[0].result(get.id, holding=True)                       # robot 1 holds the base
+    ls.step(n=3)
+    [retrieve] = [t for t in kb.tasks.values() if t.kind == M.RETRIEVE_CAP]
+    assert retrieve.state == M.PENDING                              # C-CS2 is DOWN
+    assert retrieve.id in d.unblocking(0.0)
+    # a second order: its cap retrieval at C-CS1 is right next to the free robot ...
+    x, y = ls.server.production.positions()["C-CS1"][:2]
+    ls.agents[1].pose = (x + 0.8, y, 0.0)
+    ls.agents[1].status()
+    grey = ls.refbox.ms.enum("CapColor").Value("CAP_GREY")
+    ls.refbox.orders(ls.order_msgs + [dict(ls.order_msgs[0], id=2, delivery_gate=2, cap_color=grey)])
+    ls.station_states["C-CS2"] = "IDLE"
+    ls.refbox.machines(ls.station_states, RS_2016)
+    ls.step(n=3)
+    # ... but the retrieval that frees robot 1 goes first
+    assert kb.tasks[retrieve.id].state == M.ASSIGNED and kb.tasks[retrieve.id].robot == 2
+    assert not any(t.machine == "C-CS1" and t.state == M.ASSIGNED for t in kb.tasks.values())
