@@ -399,6 +399,11 @@ def _gyro_data(fw, d):
         fw._produce(T.GyroData(((fw.t_ms & 0xFFFFFFFF, fw.twist[2]),)))
 
 
+def _gyro_get_param(fw, d):
+    if fw.fw_major < 2:
+        fw._produce(T.GyroParam(*fw.gyro_param))
+
+
 def _charger_id(fw, name, c) -> bool:
     if c > 2:
         fw._error(f"{name} invalid charger ID {c}")
@@ -419,6 +424,8 @@ def _get_gpain(fw, d):
 
 
 def _gyro_set_param(fw, d):
+    if fw.fw_major >= 2:              # the gyro was removed in 2.0.0
+        return
     value = _f32(d, 1)
     if d[0] == 0:
         fw.gyro_param = (value, fw.gyro_param[1])
@@ -507,5 +514,5 @@ _HANDLERS: dict[int, tuple[str, int | None, object]] = {
     91: ("TAG_GET_GPAIN", 1, _get_gpain),
     93: ("TAG_GET_VERSIONBITS", None, _reply(lambda fw: T.VersionBits(0, 0))),
     95: ("TAG_GYRO_SET_PARAM", 5, _gyro_set_param),
-    96: ("TAG_GYRO_GET_PARAM", None, _reply(lambda fw: T.GyroParam(*fw.gyro_param))),
+    96: ("TAG_GYRO_GET_PARAM", None, _gyro_get_param),
 }

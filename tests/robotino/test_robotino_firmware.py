@@ -136,13 +136,17 @@ def test_emergency_bumper_stops_motors():
     assert fw.motors[0].setpoint == 0 and fw.motors[0].ss == 0
 
 
-def test_fw2_ignores_the_gyro_request():
+def test_fw2_ignores_the_gyro_requests():
     fw = BaseFirmware(sw_version="2.1.0")
-    fw.receive(frame_of(T.GetGyroZAngle()), 0.0)
-    assert reply_tags(fw) is None
+    for tag in (T.GetGyroZAngle(), T.GyroGetParam(), T.GyroSetParam(0, 0.5)):
+        fw.receive(frame_of(tag), 0.0)
+        assert reply_tags(fw) is None                  # the gyro was removed in 2.0.0
+    assert fw.gyro_param[0] != 0.5
     fw1 = BaseFirmware()
     fw1.receive(frame_of(T.GetGyroZAngle()), 0.0)
     assert isinstance(reply_tags(fw1)[0], T.GyroZAngle)
+    fw1.receive(frame_of(T.GyroSetParam(0, 0.5), T.GyroGetParam()), 0.0)
+    assert reply_tags(fw1)[0] == T.GyroParam(0.5, fw1.gyro_param[1])
 
 
 def test_charger_info_and_version_on_demand():
