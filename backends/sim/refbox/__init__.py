@@ -17,7 +17,11 @@ Layers (each usable alone):
   ``RefboxGame(..., mockup=True)`` (:mod:`.mockup`) has virtual robots take
   products off outputs and feed each team's prepared stations with the
   workpiece its preparations built, so a team playing by PrepareMachine alone
-  can produce and deliver.  Off by default (games with robots).
+  can produce and deliver.  Off by default (games with robots).  With
+  ``--world remote:HOST:PORT`` it drives the stations of a world in another
+  process over the station link (:mod:`.link`), as ``rll-bt sim
+  --processes`` runs it; :mod:`.view` reads the game as ``rll-bt sim``
+  reports it, live or from the ``--snapshot`` file.
 
 Lockstep (one process, one simulated clock, the PyBullet world)::
 

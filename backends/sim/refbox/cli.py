@@ -10,12 +10,25 @@ with ``--quit-after-game``).  Its world has no robots, so by default
 (``--mockup auto``) stations run in mockup mode (:mod:`.mockup`): virtual
 robots take products off outputs and feed prepared stations, and a team
 playing by PrepareMachine alone can produce and deliver.  Exit codes: 0 ok, 2 bad arguments, 3 a port or
-PyBullet could not be opened.
+PyBullet could not be opened, or the remote world was lost.
+
+With ``--world remote:HOST:PORT`` the refbox has no world of its own: it
+drives the stations of a world served over the station link
+(:mod:`.link`), as ``rll-bt sim --processes`` runs it, and takes the
+world's operator commands (start, a station DOWN) from that link.  If the
+world closes the link (its process ended) or stops answering, the refbox
+says so in one line and exits 3.  ``--snapshot FILE`` rewrites FILE with
+the game as plain JSON (:mod:`.view`) every ``--snapshot-period`` s and at
+exit; ``--message-log FILE`` writes every message sent and received as
+JSON lines on the monotonic clock (the schema of ``rll-bt sim``'s
+``messages.jsonl``; ``from`` is "refbox", a beacon's peer name, or the
+sender's HOST:PORT).
 """
 from __future__ import annotations
 
 import signal
 import sys
+from pathlib import Path
 
 from rll_bt.errors import Unavailable, UserError
 
@@ -33,7 +46,8 @@ def register(cli) -> None:
                     "wire protocol (public channel plain, team channels AES-128-CBC with each "
                     "team's key, TCP control stream plain). Prints a line per phase change "
                     "with the score; stop it with Ctrl-C.",
-        epilog="exit codes: 0 ok, 2 bad arguments, 3 a port or PyBullet could not be opened")
+        epilog="exit codes: 0 ok, 2 bad arguments, 3 a port or PyBullet could not be opened, or the "
+               "remote world was lost")
     p.add_argument("--profile", default="rcll2016",
                    help="rules profile: rcll2016 (default) or rcll2025")
     p.add_argument("--team-cyan", required=True, metavar="NAME", help="team playing cyan")
@@ -48,31 +62,48 @@ def register(cli) -> None:
                    help="fixes field, light codes, orders, ring costs, down times (default 0)")
     p.add_argument("--host", default="127.0.0.1",
                    help="address to send to, e.g. a broadcast address (default 127.0.0.1)")
-    p.add_argument("--ports", choices=("competition", "sim"), default="sim",
+    p.add_argument("--ports", default="sim", metavar="LAYOUT",
                    help="UDP layout: sim = the refbox's split local ports (send 4444/4441/4442, "
-                        "listen 4445/4446/4447; default), competition = one port per channel")
+                        "listen 4445/4446/4447; default), competition = one port per channel, or "
+                        "public=SEND/LISTEN,cyan=SEND/LISTEN,magenta=SEND/LISTEN")
     p.add_argument("--port-offset", type=int, default=0, metavar="N",
                    help="add N to every UDP and TCP port (several refboxes on one host)")
     p.add_argument("--no-stream", action="store_true", help="do not open the TCP control stream")
     p.add_argument("--start", choices=("now", "command"), default="now",
                    help="now: start the game at once (default); command: wait for "
                         "SetGameState RUNNING (and SetTeamName) on the TCP stream or the public "
-                        "channel")
+                        "channel, or with --world remote the world's start on the station link")
     p.add_argument("--speed", type=float, default=1.0, metavar="X",
                    help="game seconds per wall second (default 1)")
     p.add_argument("--phase-lengths", default="", metavar="SPEC",
                    help="e.g. setup=10,exploration=60,production=300,overtime=60 (seconds); "
                         "with rcll2025, exploration is the reporting time inside production")
-    p.add_argument("--world", choices=("bullet", "table"), default="bullet",
-                   help="bullet: a headless PyBullet world (default); table: in memory only")
+    p.add_argument("--world", type=_world_choice, default="bullet", metavar="WORLD",
+                   help="bullet: a headless PyBullet world (default); table: in memory only; "
+                        "remote:HOST:PORT: the stations of a world in another process, over the "
+                        "station link (rll-bt sim --processes)")
     p.add_argument("--mockup", choices=("auto", "on", "off"), default="auto",
                    help="mockup stations: a prepared station is fed the team's product by a "
                         "virtual robot and its output emptied after a while, so production "
                         "works without robots; auto (default): on when the world has no robots "
-                        "(always so here)")
+                        "(its own world never has; a remote one says)")
     p.add_argument("--quit-after-game", action="store_true",
                    help="exit once the game reaches POST_GAME")
+    p.add_argument("--snapshot", metavar="FILE",
+                   help="rewrite FILE with the game as JSON (status, points, awards, deliveries, "
+                        "station states, orders) every --snapshot-period s and at exit")
+    p.add_argument("--snapshot-period", type=float, default=1.0, metavar="S",
+                   help="seconds between two snapshots (default 1)")
+    p.add_argument("--message-log", metavar="FILE",
+                   help="write every message sent and received to FILE as JSON lines")
     p.set_defaults(func=cmd_sim)
+
+
+def _world_choice(text: str) -> str:
+    import argparse
+    if text in ("bullet", "table") or text.startswith("remote:"):
+        return text
+    raise argparse.ArgumentTypeError(f"expected bullet, table or remote:HOST:PORT, not {text!r}")
 
 
 def _settings(args):
@@ -121,6 +152,8 @@ def _settings(args):
 
 def _layout(args):
     from rll_bt.comm import COMPETITION, SIM, Layout, PeerPorts
+    if args.ports not in ("competition", "sim"):
+        return _explicit_layout(args.ports, SIM.stream + args.port_offset)
     base = COMPETITION if args.ports == "competition" else SIM
     o = args.port_offset
 
@@ -128,6 +161,27 @@ def _layout(args):
         return PeerPorts(pp.send + o, pp.recv + o)
     return Layout(f"{base.name}+{o}" if o else base.name, shift(base.public), shift(base.cyan),
                   shift(base.magenta), base.stream + o)
+
+
+def _explicit_layout(spec: str, stream: int):
+    """``public=S/L,cyan=S/L,magenta=S/L`` (the refbox's send and listen ports) as a Layout."""
+    from rll_bt.comm import Layout, PeerPorts
+    ports = {}
+    for item in spec.split(","):
+        name, _, pair = item.partition("=")
+        send, _, listen = pair.partition("/")
+        try:
+            pp = PeerPorts(int(send), int(listen))
+        except ValueError:
+            pp = None
+        if name not in ("public", "cyan", "magenta") or pp is None or \
+                not all(0 < p < 65536 for p in (pp.send, pp.recv)):
+            raise UserError(f"expected sim, competition or public=SEND/LISTEN,cyan=SEND/LISTEN,"
+                            f"magenta=SEND/LISTEN, not {spec!r}", where="--ports")
+        ports[name] = pp
+    if len(ports) != 3:
+        raise UserError(f"give the ports of public, cyan and magenta, not {spec!r}", where="--ports")
+    return Layout("explicit", ports["public"], ports["cyan"], ports["magenta"], stream)
 
 
 def mockup_wanted(choice: str, world) -> bool:
@@ -142,29 +196,66 @@ def _score(game) -> str:
     return f"{c} {game.points('CYAN')} : {game.points('MAGENTA')} {m}"
 
 
+def _open_world(args, prof):
+    """The refbox's world: PyBullet, a table, or a remote world's stations."""
+    from .world import TableWorld, WorldLost
+    if args.world == "table":
+        return TableWorld.generated(prof, args.seed)
+    if args.world.startswith("remote:"):
+        from .link import RemoteWorld
+        try:
+            world = RemoteWorld(args.world[len("remote:"):])
+        except WorldLost as exc:
+            raise Unavailable(str(exc), where="--world") from None
+        if world.layout.profile != prof.name:
+            world.close()
+            raise UserError(f"the world plays {world.layout.profile}, not {prof.name}", where="--world")
+        return world
+    try:
+        from backends.sim.world import World
+        return World(prof, seed=args.seed)
+    except Exception as exc:  # noqa: BLE001 - PyBullet missing or failing
+        raise Unavailable(f"cannot build the PyBullet world: {exc}",
+                          hint="use --world table to run without PyBullet") from None
+
+
+def _message_log(path, game):
+    """A tap writing the node's messages to ``path`` (JSON lines, the game's clock)."""
+    from rll_bt.game.msglog import MessageLog
+    from .node import RefboxNode
+    log = MessageLog(path, game.clock, {}, RefboxNode.registry(game), line_buffered=True)
+
+    def record(channel, source, msg):
+        if source != "refbox":
+            if msg.DESCRIPTOR.name == "BeaconSignal" and msg.peer_name:
+                source = msg.peer_name
+            elif isinstance(source, tuple):
+                source = f"{source[0]}:{source[1]}"
+        log.record(channel, source, msg)
+    return log, record
+
+
 def cmd_sim(args) -> int:
     from rll_bt.clock import WallClock
     from .game import RefboxGame
     from .node import RefboxNode
     from .stations import StationConfig
-    from .world import TableWorld
+    from .world import WorldLost
 
     prof, timing, keys = _settings(args)
     lay = _layout(args)
+    if not args.snapshot_period > 0:
+        raise UserError(f"must be a positive number, not {args.snapshot_period}", where="--snapshot-period")
     clock = WallClock()
-    world = None
+    world = _open_world(args, prof)
+    remote = args.world.startswith("remote:")
     try:
-        if args.world == "bullet":
-            from backends.sim.world import World
-            world = World(prof, seed=args.seed)
-        else:
-            world = TableWorld.generated(prof, args.seed)
-    except Exception as exc:  # noqa: BLE001 - PyBullet missing or failing
-        raise Unavailable(f"cannot build the PyBullet world: {exc}",
-                          hint="use --world table to run without PyBullet") from None
-    game = RefboxGame(prof, clock, world, seed=args.seed, team_cyan=args.team_cyan,
-                      team_magenta=args.team_magenta, timing=timing, config=StationConfig(),
-                      mockup=mockup_wanted(args.mockup, world))
+        game = RefboxGame(prof, clock, world, seed=args.seed, team_cyan=args.team_cyan,
+                          team_magenta=args.team_magenta, timing=timing, config=StationConfig(),
+                          mockup=mockup_wanted(args.mockup, world))
+    except WorldLost as exc:
+        _close(world)
+        raise Unavailable(str(exc), where="--world") from None
     try:
         node = RefboxNode.on_udp(game, host=args.host, layout=lay, keys=keys,
                                  stream_port=-1 if args.no_stream else lay.stream,
@@ -173,6 +264,32 @@ def cmd_sim(args) -> int:
         _close(world)
         raise Unavailable(f"cannot open the refbox ports ({lay.name} layout, host {args.host}): "
                           f"{exc}", hint="another refbox running? try --port-offset") from None
+    msglog = None
+    if args.message_log:
+        msglog, record = _message_log(args.message_log, game)
+        node.tap(record)
+    view = None
+    if args.snapshot:
+        import os
+        from rll_bt.game.child import write_snapshot
+        from .view import GameView, snapshot
+        view, pid = GameView(game), os.getpid()
+
+        def write() -> None:
+            write_snapshot(Path(args.snapshot), {**snapshot(view), "pid": pid, "now": clock.now()})
+    if remote:
+        def on_command(cmd: dict) -> None:
+            try:
+                if cmd.get("op") == "start":
+                    if game.phase == "PRE_GAME":
+                        game.start()
+                elif cmd.get("op") == "down":
+                    game.station_down(cmd["machine"], float(cmd["seconds"]))
+                else:
+                    print(f"unknown command from the world: {cmd}", file=sys.stderr, flush=True)
+            except (KeyError, ValueError, RuntimeError) as exc:
+                print(f"command {cmd} refused: {exc}", file=sys.stderr, flush=True)
+        world.on_command(on_command)
 
     stop = []
 
@@ -186,16 +303,21 @@ def cmd_sim(args) -> int:
           + f"; UDP to {args.host} send/listen public {pp('public')}, cyan {pp('cyan')}, "
             f"magenta {pp('magenta')}"
           + ("" if args.no_stream else f"; TCP stream {lay.stream}")
+          + (f"; stations of the world at {world.address} (station link)" if remote else "")
           + f"; mockup stations {'on' if game.mockup else 'off'}", file=out, flush=True)
     if args.start == "now":
         game.start()
     else:
-        print("waiting for SetGameState RUNNING (TCP stream or public channel)", file=out,
-              flush=True)
+        print("waiting for SetGameState RUNNING (TCP stream or public channel"
+              + (", or the world's start" if remote else "") + ")", file=out, flush=True)
     seen = 0
+    lost = None
     start = last_wall = clock.now()
+    next_snap = start
     try:
         while not stop:
+            if remote:
+                world.pump()
             node.step()
             now = clock.now()
             if hasattr(world, "step"):
@@ -210,16 +332,28 @@ def cmd_sim(args) -> int:
                     print(f"[{clock.now() - start:7.1f} s] {ev.text}  {_score(game)}", file=out,
                           flush=True)
             seen = len(game.events)
+            if view is not None and now >= next_snap:
+                next_snap = now + args.snapshot_period
+                write()
             if args.quit_after_game and game.phase == "POST_GAME":
                 break
             node.channels.public.wait(LOOP_PERIOD)
+    except WorldLost as exc:
+        lost = exc
     finally:
         for s, h in old.items():
             signal.signal(s, h)
         node.close()
         _close(world)
+        if view is not None:
+            write()
+        if msglog is not None:
+            msglog.close()
     print(f"final score: {_score(game)} ({game.phase}"
-          + (f", stopped by signal {stop[0]}" if stop else "") + ")", file=out, flush=True)
+          + (f", stopped by signal {stop[0]}" if stop else "")
+          + (", the world was lost" if lost else "") + ")", file=out, flush=True)
+    if lost is not None:
+        raise Unavailable(f"{lost}; the refbox stops", where="--world")
     return 0
 
 

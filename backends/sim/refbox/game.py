@@ -35,7 +35,7 @@ from .ruleset import rules_for
 from .stations import CapStation, Station, StationConfig, make_station
 from .timing import (EXPLORATION, INIT, PAUSED, PHASES, POST_GAME, PRE_GAME, PRODUCTION, RUNNING,
                      SETUP, STATES, WAIT_START, Timing)
-from .world import ALL_OFF, PUT, SHELF_SLOTS, TableWorld, Workpiece
+from .world import ALL_OFF, PUT, SHELF_SLOTS, TableWorld, Workpiece, WorldLost
 
 log = logging.getLogger("backends.sim.refbox")
 
@@ -241,6 +241,19 @@ class RefboxGame:
             return st
         st.reset(f"Machine {machine} resetted by the team {team_color}")
         return "broken"
+
+    def station_down(self, machine: str, seconds: float) -> None:
+        """The operator takes ``machine`` DOWN now for ``seconds`` of game time (one of
+        the refbox's own down periods, ahead of time); only in PRODUCTION."""
+        st = self.stations.get(machine)
+        if st is None:
+            raise ValueError(f"no station {machine!r}")
+        if self.phase != PRODUCTION:
+            raise RuntimeError(f"stations go DOWN only in PRODUCTION (now {self.phase})")
+        now = self.game_time
+        st.down, st.down_done = (now, now + float(seconds)), False
+        self.tick()
+        st.update(self.game_time)
 
     def _team_machine(self, what: str, team_color: str, machine: str, channel_team):
         """The station ``machine`` of ``team_color`` for a team request, or why it is
@@ -531,6 +544,8 @@ class RefboxGame:
                     st.on_put(ev.slot, ev.workpiece)
                 else:
                     st.on_take(ev.slot, ev.workpiece)
+            except WorldLost:
+                raise
             except Exception:  # noqa: BLE001 - a world quirk must not stop the game
                 log.exception("slot event %s failed", ev)
 

@@ -50,6 +50,7 @@ from rll_bt.rules import CYAN, MAGENTA, TEAMS
 
 from . import events as E
 from .messages import Messages, enum_name, sent_at
+from .world import WorldLost
 
 log = logging.getLogger("backends.sim.refbox.node")
 
@@ -193,6 +194,15 @@ class RefboxNode:
     def close(self) -> None:
         self.channels.close()
 
+    def tap(self, fn) -> None:
+        """Call ``fn(channel, source, message)`` for every message sent ("refbox" the
+        source) or received from now on; ``channel``: "public", "cyan", "magenta", "stream"."""
+        ch = self.channels
+        ch.public = _Tapped(ch.public, PUBLIC, fn)
+        ch.team = {color: _Tapped(t, color.lower(), fn) for color, t in ch.team.items()}
+        if ch.stream is not None:
+            ch.stream = _Tapped(ch.stream, STREAM, fn)
+
     # -- the loop body -------------------------------------------------------------
     def step(self) -> None:
         """Receive and handle everything, tick the game, send what is due."""
@@ -215,6 +225,8 @@ class RefboxNode:
             handler = getattr(self, f"_on_{name}", None)
             if handler is None or not handler(rec.msg, rec, label, team):
                 self.ignored[name] += 1
+        except WorldLost:
+            raise
         except Exception:  # noqa: BLE001 - a bad message must never stop the refbox
             self.ignored[name] += 1
             log.exception("%s on %s could not be handled", name, label)
@@ -361,3 +373,25 @@ class RefboxNode:
                     self._team_send(color, ri)
         if streaming and self.machine_info_stream.due(now):
             self._send(ch.stream, m.machine_info(g, None))
+
+
+class _Tapped:
+    """A refbox transport that shows ``fn`` every message it sends and receives."""
+
+    def __init__(self, inner, channel: str, fn):
+        self._inner, self._channel, self._fn = inner, channel, fn
+
+    def send(self, msg, *args, **kw):
+        sent = self._inner.send(msg, *args, **kw)
+        if sent:
+            self._fn(self._channel, "refbox", msg)
+        return sent
+
+    def receive(self):
+        got = self._inner.receive()
+        for rec in got:
+            self._fn(self._channel, rec.source, rec.msg)
+        return got
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)

@@ -82,6 +82,11 @@ class SlotEvent:
     workpiece: object = None
 
 
+class WorldLost(RuntimeError):
+    """The world can no longer be reached (its process ended, the link
+    broke): the refbox stops.  Never taken for a world quirk and swallowed."""
+
+
 @runtime_checkable
 class RefboxWorld(Protocol):
     """What the refbox needs from a world (the PyBullet world's station API).
