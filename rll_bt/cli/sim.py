@@ -2,13 +2,14 @@
 
     rll-bt sim --seed 3                       # lockstep, headless, 2016 rules
     rll-bt sim --profile rcll2025 --out game/ # + messages.jsonl, report.json, PNGs
-    rll-bt sim --processes                    # refbox/world, team server, agents as processes
+    rll-bt sim --processes                    # refbox, world, team server, agents as processes
 
 By default everything runs in one process on one simulated clock (refbox,
 world, team server and agents; messages cross an in-process bus as encoded
-frames).  ``--processes`` runs the team server and every agent as its own
-process talking over loopback UDP and TCP on the wall clock, the world
-serving the agents' backends over TCP.  The SETUP phase is shortened to
+frames).  ``--processes`` runs the simulated refbox, the team server and
+every agent as processes of their own talking over loopback UDP and TCP on
+the wall clock, as in a real game; this process keeps the world, serving
+the agents' backends and the refbox's stations (the station link) over TCP.  The SETUP phase is shortened to
 ``--setup`` seconds (default 10): nothing happens in it in simulation.
 
 Exit codes: 0 the game finished, 1 it did not, 2 bad arguments, 3 no display
@@ -69,8 +70,10 @@ def register(cli) -> None:
     g.add_argument("--out", type=Path, metavar="DIR",
                    help="write messages.jsonl, report.json, field.png, timeline.png, score.png here")
     g.add_argument("--processes", action="store_true",
-                   help="refbox+world, team server and each agent as its own process over loopback "
-                        "UDP/TCP on the wall clock (a whole game takes the game's real length)")
+                   help="the refbox, the team server and each agent as its own process over loopback "
+                        "UDP/TCP on the wall clock, this process keeping the world (serving the "
+                        "agents' backends and the refbox's stations over TCP); a whole game takes "
+                        "the game's real length, --out keeps each process's log")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     g = gp.add_argument_group("speed knobs")
     g.add_argument("--dt", type=_positive, default=0.05, metavar="S", help="lockstep step (default 0.05 s)")

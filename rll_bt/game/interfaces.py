@@ -8,7 +8,12 @@ interface below.
 - :class:`Simulation` (``rll_bt.simulators``): the world, its robots and the
   simulated referee box on one :class:`~rll_bt.clock.SimClock`.  The
   factory is called as ``factory(profile=..., seed=..., team_name=...,
-  key=..., perception=..., gui=..., phases={...}, world_step=...)``.
+  key=..., perception=..., gui=..., phases={...}, world_step=...,
+  robot_options={...})``, and with ``refbox="process"`` for a game whose
+  refbox runs as its own process (``rll-bt sim --processes``): the
+  simulation then holds the world only, gives the command line of the
+  refbox process (:meth:`Simulation.refbox_command`) and reads the game
+  from what that process writes.
 - :class:`TeamServerHandle` (``rll_bt.teamservers``): an in-process team
   server.  Called as ``factory(profile=..., team_name=..., key=...,
   clock=..., refbox_public=..., refbox_team=..., agents=..., state=...,
@@ -24,6 +29,7 @@ from __future__ import annotations
 
 import abc
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Callable
 
 from ..backend import Backend, Pose2D
@@ -104,14 +110,19 @@ class Simulation(abc.ABC):
         """Put the refbox on an in-process :class:`rll_bt.comm.Bus`: channels
         "public", "cyan", "magenta" and the control stream at "refbox"."""
 
-    @abc.abstractmethod
-    def attach_udp(self, host: str, port_layout: str) -> None:
-        """Put the refbox on UDP (``port_layout`` "sim": split local ports)."""
-
-    def tap(self, fn: Callable[[str, str, Any], None]) -> None:
-        """Call ``fn(channel, source, message)`` for every message the refbox
-        receives or sends from now on (after :meth:`attach_bus` / :meth:`attach_udp`)."""
+    def refbox_command(self, *, host: str, layout, snapshot: Path, message_log: Path | None = None) -> list[str]:
+        """With ``refbox="process"``: the ``rll-bt`` arguments of the refbox
+        process, on UDP sending to ``host`` on ``layout`` (a
+        :class:`rll_bt.comm.Layout`, the refbox's view), rewriting the
+        ``snapshot`` file the status, awards, deliveries, stations and orders
+        are read from, and logging every message it sends and receives to
+        ``message_log`` (JSON lines of :mod:`.msglog`, on the monotonic wall
+        clock).  :meth:`refbox_step` then serves that process."""
         raise NotImplementedError
+
+    def refbox_ready(self) -> bool:
+        """Whether the refbox is up (with ``refbox="process"``: it wrote its first snapshot)."""
+        return True
 
     def refbox_registry(self):
         """The refbox message registry (for logging what its channels carry)."""
@@ -127,7 +138,8 @@ class Simulation(abc.ABC):
 
     @abc.abstractmethod
     def refbox_step(self) -> None:
-        """The refbox receives, ticks its game and sends what is due."""
+        """The refbox receives, ticks its game and sends what is due (with
+        ``refbox="process"``: the refbox process's calls on the world are served)."""
 
     # -- robots ------------------------------------------------------------------
     @abc.abstractmethod

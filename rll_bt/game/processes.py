@@ -4,26 +4,34 @@
     result = game.run()                 # or run_until / run_for and faults in between
     game.close()
 
-This process holds the world and the simulated refbox: the refbox talks UDP
-(broadcast to ``127.255.255.255`` on free local ports, the ``sim`` style of
-split send/receive ports), and the world serves each robot's backend over
-TCP (:mod:`.remote`).  The team server runs as ``python -m
-rll_bt.game.child`` (TCP for the agents, UDP to the refbox) and each robot
-as a real ``rll-bt agent --backend remote`` process.  Everything runs on the
-wall clock: the world advances by the wall time that passed (at most 0.1 s
-a step, so it may fall behind), so a game takes its real length.  The team
-server's view reaches this process through the snapshot file it rewrites
-every second.
+This process holds the world: PyBullet, the robots and the stations'
+physical state.  It serves each robot's backend over TCP (:mod:`.remote`)
+and the stations to the refbox over the simulator's station link (TCP
+too).  The simulated refbox is its own process (the command line the
+simulator gives, for PyBullet ``rll-bt refbox sim --world remote:...``):
+it talks UDP (broadcast to ``127.255.255.255`` on free local ports, the
+``sim`` style of split send/receive ports) and sees the stations only
+through the link.  The team server runs as ``python -m rll_bt.game.child``
+(TCP for the agents, UDP to the refbox) and each robot as a real ``rll-bt
+agent --backend remote`` process.  Everything runs on the wall clock: the
+world advances by the wall time that passed (at most 0.1 s a step, so it
+may fall behind), so a game takes its real length.  The refbox's view
+(status, points, awards, deliveries, station states) reaches this process
+through the snapshot file it rewrites (``refbox.json``, 4 times a second),
+the team server's through ``teamserver.json`` (every second).  The refbox
+comes up first (the recorder needs its stations' light codes), then the
+team server and the agents.
 
-The message log holds what the refbox sends and receives (logged here on
-the simulation clock) and every message of the team server's link to the
-agents (logged by the team server process on the wall clock, mapped onto
-the simulation clock and merged in time order at the end, :mod:`.teamlog`).
+The message log holds what the refbox sends and receives (logged by the
+refbox process) and every message of the team server's link to the agents
+(logged by the team server process), both on the wall clock, mapped onto
+the simulation clock and merged in time order at the end (:mod:`.teamlog`).
 Each robot's task intervals (busy time, timeline) are read from those team
 messages.  Faults as in lockstep: :meth:`kill_agent` (SIGKILL),
 :meth:`start_agent`, :meth:`restart_teamserver` (SIGKILL and a new process on
-the same database), :meth:`station_down`.  Times given to :meth:`run_for`
-and :meth:`run_until` are simulated seconds (about wall seconds).
+the same database), :meth:`station_down` (an operator command to the refbox
+process over the station link).  Times given to :meth:`run_for` and
+:meth:`run_until` are simulated seconds (about wall seconds).
 """
 from __future__ import annotations
 
@@ -43,7 +51,7 @@ from .remote import BackendServer, free_ports
 from .teamlog import WallToSim, merge_into, read_lines, task_runs
 
 BROADCAST = "127.255.255.255"
-AGENT_MAIN = "import sys; from rll_bt.cli import main; sys.exit(main())"
+CLI_MAIN = "import sys; from rll_bt.cli import main; sys.exit(main())"
 
 
 def shift_recording(rec, t0: float) -> None:
@@ -65,18 +73,19 @@ class ChildExited(RuntimeError):
     """A process of the game ended on its own (or never came up)."""
 
 
-def udp_sender(source: str, msg) -> str:
-    """Who sent what the refbox got over UDP, named as lockstep names them.
+def udp_sender(entry: dict) -> str:
+    """Who sent a message the refbox logged, named as lockstep names them.
 
     On loopback every robot and the team server send from the same address
     (each binds the shared receive port), so the address tells nobody
     apart: a beacon names its robot (``peer_name``, else ``R<number>``), and
     everything else reaching the refbox here comes from the team server
     (reports, machine instructions).  The refbox's own sends keep "refbox"."""
-    if source == "refbox":
-        return source
-    if msg.DESCRIPTOR.name == "BeaconSignal":
-        return msg.peer_name or f"R{msg.number}"
+    if entry["from"] == "refbox":
+        return "refbox"
+    if entry.get("type") == "BeaconSignal":
+        msg = entry.get("msg") or {}
+        return msg.get("peer_name") or f"R{msg.get('number', 0)}"
     return "teamserver"
 
 
@@ -96,27 +105,23 @@ class ProcessGame:
         self.dir.mkdir(parents=True, exist_ok=True)
         self.sim = load_simulator(o.simulator)(
             profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key, perception=o.perception,
-            gui=o.gui, phases=o.phases(), world_step=o.world_step, robot_options={"laser_rate": o.laser_rate})
+            gui=o.gui, phases=o.phases(), world_step=o.world_step, robot_options={"laser_rate": o.laser_rate},
+            refbox="process")
         self.clock = self.sim.clock
         self.time_map = WallToSim()
         p = free_ports(6)
         self.layout = Layout("game", public=PeerPorts(send=p[0], recv=p[1]), cyan=PeerPorts(send=p[2], recv=p[3]),
                              magenta=PeerPorts(send=p[4], recv=p[5]), stream=-1)
-        self.sim.attach_udp(BROADCAST, self.layout)
-        self.log = None
-        if o.out is not None:
-            from .msglog import MessageLog
-            self.log = MessageLog(self.dir / "messages.jsonl", self.clock, {}, self.sim.refbox_registry(), key=o.key)
-            log = self.log
-            self.sim.tap(lambda channel, source, msg: log.record(channel, udp_sender(source, msg), msg))
         self.robots = list(range(1, o.robots + 1))
         self.backends = {n: self.sim.backend(TEAM, n) for n in self.robots}
         self.server = BackendServer(lambda team, n: self.backends[int(n)] if team == TEAM else None,
                                     self.clock.now)
         self.snapshot_file = self.dir / "teamserver.json"
+        self.refbox_file = self.dir / "refbox.json"
+        self._refbox_log = self.dir / "refbox-messages.jsonl" if o.out is not None else None
         self._snap: dict = {}
         self.procs: dict[str, subprocess.Popen] = {}
-        self.recorder = Recorder(self.sim, TEAM, self.robots, o.sample_period, snapshot=self.snapshot)
+        self.recorder: Recorder | None = None
         self._logs = []
         self._team_logs: list[Path] = []
         self._kills: list[tuple[float, int]] = []     # (sim time, robot) of killed agents
@@ -137,13 +142,20 @@ class ProcessGame:
         self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
 
     def _start_children(self) -> None:
+        """The refbox first (the recorder needs its truth), then the team server and the agents."""
         o = self.options
         self._ts_port = free_ports(1, tcp=True)[0]
         state = self.dir / "teamserver.sqlite"
-        for old in [state, *self.dir.glob("teamserver.sqlite-*"), *self.dir.glob("teamserver-messages*.jsonl")]:
+        for old in [state, self.refbox_file, self.snapshot_file, self.dir / "messages.jsonl",
+                    *self.dir.glob("teamserver.sqlite-*"),
+                    *self.dir.glob("teamserver-messages*.jsonl"), *self.dir.glob("refbox-messages*.jsonl")]:
             old.unlink(missing_ok=True)
-        for name in ("teamserver", *(f"agent{n}" for n in self.robots)):
+        for name in ("refbox", "teamserver", *(f"agent{n}" for n in self.robots)):
             (self.dir / f"{name}.log").unlink(missing_ok=True)
+        self._spawn("refbox", [sys.executable, "-c", CLI_MAIN, *self.sim.refbox_command(
+            host=BROADCAST, layout=self.layout, snapshot=self.refbox_file, message_log=self._refbox_log)])
+        self._wait_for(self.sim.refbox_ready, "the refbox")
+        self.recorder = Recorder(self.sim, TEAM, self.robots, o.sample_period, snapshot=self.snapshot)
         robot = {ch: (self.layout.robot(ch).send, self.layout.robot(ch).recv) for ch in ("public", "cyan", "magenta")}
         self._ts_cfg = {
             "profile": o.profile, "team": o.team_name, "key": o.key, "refbox_host": BROADCAST,
@@ -154,6 +166,15 @@ class ProcessGame:
         self._spawn_teamserver()
         for n in self.robots:
             self._spawn_agent(n, first_start=True)
+
+    def _wait_for(self, ready: Callable[[], bool], what: str) -> None:
+        """Until ``ready()`` (the world runs meanwhile); :class:`ChildExited` if a process ends or time runs out."""
+        start = last = self.wall.now()
+        while not ready():
+            if self.wall.now() - start > self.connect_timeout:
+                raise ChildExited(f"{what} did not come up in {self.connect_timeout:g} s; see the logs in {self.dir}")
+            last = self._tick(last)
+            self._check_children()
 
     def _spawn_teamserver(self) -> None:
         k = len(self._team_logs)
@@ -168,7 +189,7 @@ class ProcessGame:
         pub, team = self.layout.robot("public"), self.layout.robot("cyan")
         pose = self.sim.robot_pose(TEAM, n)
         self._spawn(f"agent{n}", [
-            sys.executable, "-c", AGENT_MAIN, "agent", "--robot", str(n), "--team", o.team_name,
+            sys.executable, "-c", CLI_MAIN, "agent", "--robot", str(n), "--team", o.team_name,
             "--key", o.key, "--profile", o.profile, "--backend", "remote",
             "--backend-opt", f"address=127.0.0.1:{self.server.port}", "--backend-opt", f"robot={n}",
             "--teamserver", f"127.0.0.1:{self._ts_port}", "--refbox-host", BROADCAST, "--layout", "sim",
@@ -177,12 +198,17 @@ class ProcessGame:
             "--start-pose", f"{pose.x},{pose.y},{pose.theta}", "--hz", str(o.hz),
             "--localisation", o.localisation, "-q"] + (["--first-start"] if first_start else []))
 
+    def _serve(self, timeout: float) -> None:
+        """Answer the agents' backend calls (up to ``timeout`` s) and the refbox's station calls."""
+        self.server.poll(timeout)
+        self.sim.refbox_step()
+
     def _kill(self, name: str) -> None:
         p = self.procs.pop(name, None)
         if p is not None and p.poll() is None:
             p.kill()
-            while p.poll() is None:          # keep the backends answered meanwhile
-                self.server.poll(0.01)
+            while p.poll() is None:          # keep the backends and the stations answered meanwhile
+                self._serve(0.01)
 
     # -- faults ------------------------------------------------------------------------------
     def kill_agent(self, number: int) -> None:
@@ -225,8 +251,8 @@ class ProcessGame:
 
     # -- running ---------------------------------------------------------------------------------
     def _tick(self, last: float) -> float:
-        """Serve backend calls for a moment, then advance the world by the wall time passed."""
-        self.server.poll(0.005)
+        """Serve backend and station calls for a moment, then advance the world by the wall time passed."""
+        self._serve(0.005)
         now = self.wall.now()
         dt = min(now - last, 0.1)
         if dt >= self.options.world_step * 0.5:
@@ -245,15 +271,14 @@ class ProcessGame:
 
     def _wait_for_robots(self) -> bool:
         """Until the team server has every robot (the world runs meanwhile, the game does not)."""
-        start = last = self.wall.now()
-        while self.wall.now() - start < self.connect_timeout:
-            last = self._tick(last)
+        def ready() -> bool:
             robots = self.snapshot().get("robots", {})
-            if all(robots.get(str(n), {}).get("status") == "ACTIVE" for n in self.robots):
-                return True
-            if len(self._alive()) < len(self.procs):
-                return False
-        return False
+            return all(robots.get(str(n), {}).get("status") == "ACTIVE" for n in self.robots)
+        try:
+            self._wait_for(ready, "the team server's robots")
+        except ChildExited:
+            return False
+        return True
 
     def start(self) -> bool:
         """Wait for every process to come up, then start the game; whether they came up."""
@@ -304,8 +329,9 @@ class ProcessGame:
             limit = o.expected_duration() + o.rules.phases.overtime + 60.0
         end = self.clock.now() + limit
         while self.clock.now() < end and not self.finished():
-            if "teamserver" not in self._alive():
-                self.recorder.note("the team server process died", log=str(self.dir / "teamserver.log"))
+            dead = [name for name in ("refbox", "teamserver") if name not in self._alive()]
+            if dead:
+                self.recorder.note(f"the {dead[0]} process died", log=str(self.dir / f"{dead[0]}.log"))
                 break
             self._last = self._tick(self._last)
         return self.result(self.finished())
@@ -335,10 +361,10 @@ class ProcessGame:
                     run["end"], run["outcome"] = t, "agent killed"
         shift_recording(rec, t0)
         messages = 0
-        if self.log is not None:
-            self.log.close()
-            messages = merge_into(self.dir / "messages.jsonl", team, shift=t0)
-            for path in self._team_logs:
+        if self._refbox_log is not None:
+            refbox = [{**e, "from": udp_sender(e)} for e in read_lines(self._refbox_log, self.time_map)]
+            messages = merge_into(self.dir / "messages.jsonl", refbox, team, shift=t0)
+            for path in [self._refbox_log, *self._team_logs]:
                 path.unlink(missing_ok=True)
         return GameResult(finished=finished, status=self.sim.status(), recording=rec, awards=self.sim.awards(),
                           deliveries=self.sim.deliveries(), snapshot=snap, stations=self.sim.stations(),
@@ -353,7 +379,7 @@ class ProcessGame:
                 p.terminate()
         start = self.wall.now()
         while self._alive() and self.wall.now() - start < timeout:
-            self.server.poll(0.01)
+            self._serve(0.01)
         for p in self.procs.values():
             if p.poll() is None:
                 p.kill()
@@ -364,8 +390,6 @@ class ProcessGame:
         for log in self._logs:
             log.close()
         self.server.close()
-        if self.log is not None:
-            self.log.close()
         self.sim.close()
         self._tmp.cleanup()
 

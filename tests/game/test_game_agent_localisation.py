@@ -58,6 +58,7 @@ def test_the_processes_game_starts_its_agents_with_the_games_preset(tmp_path, mo
     from rll_bt.game.processes import ProcessGame
     cmds = {}
     monkeypatch.setattr(ProcessGame, "_spawn", lambda self, name, cmd: cmds.__setitem__(name, cmd))
+    monkeypatch.setattr(ProcessGame, "_wait_for", lambda self, ready, what: None)    # no refbox to wait for
     game = ProcessGame(GameOptions(robots=2, processes=True, localisation="standard", out=tmp_path))
     try:
         for n in (1, 2):

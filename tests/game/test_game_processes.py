@@ -1,6 +1,7 @@
-"""``rll-bt sim --processes``: the remote backend, and a short game with the team
-server and an agent as their own processes over loopback UDP and TCP."""
+"""``rll-bt sim --processes``: the remote backend, and a short game with the refbox, the
+team server and an agent as their own processes over loopback UDP and TCP."""
 import json
+import os
 import threading
 
 import numpy as np
@@ -115,3 +116,84 @@ def test_a_short_game_in_processes_scores_exploration_and_logs_both_links(tmp_pa
     assert sent[0]["t"] >= next(x["t"] for x in log if x["type"] == "GameState"
                                 and x["msg"]["phase"] == "EXPLORATION" and x["msg"]["state"] == "RUNNING")
     assert not list(out.glob("teamserver-messages*.jsonl"))           # merged into messages.jsonl
+    assert not list(out.glob("refbox-messages*.jsonl"))
+    # the refbox ran as a process of its own on the world's stations, and stopped cleanly
+    refbox = json.loads((out / "refbox.json").read_text())
+    assert refbox["pid"] != os.getpid() and refbox["status"]["phase"] == "POST_GAME"
+    assert refbox["status"]["points"]["CYAN"] == rep["points"]["total"]
+    text = (out / "refbox.log").read_text()
+    assert text.startswith("refbox sim: rcll2016") and "stations of the world at 127.0.0.1:" in text
+    assert "final score" in text and "Traceback" not in text
+
+
+
+def _prepare(game, machine: str, **instruction) -> None:
+    """A PrepareMachine as a team sends it: UDP to the refbox, on the encrypted team channel."""
+    from google.protobuf.json_format import ParseDict
+    from rll_bt import msgs
+    from rll_bt.comm import MessageRegistry, UdpPeer
+    ms = msgs.message_set(game.options.profile)
+    pm = ParseDict({"team_color": "CYAN", "machine": machine, **instruction}, ms.get("PrepareMachine")())
+    ports = game.layout.robot("cyan")
+    peer = UdpPeer("127.0.0.1", ports.send, ports.recv, registry=MessageRegistry.from_message_set(ms),
+                   channel="team", key=game.options.key)
+    try:
+        assert peer.send(pm)
+    finally:
+        peer.close()
+
+
+def test_production_across_the_station_link(tmp_path):
+    """The team server prepares a cap station in the refbox process; the test then plays the
+    team's robot in the world (its agent killed) and its team server for the base station:
+    a base dispensed, taken off the BS, a cap carrier taken off the CS shelf and fed to its
+    input, the cap retrieved.  Every step crosses the station link: the refbox's spawns into
+    the world, the robot's takes and puts back to the refbox."""
+    from rll_bt.game import GameOptions
+    from rll_bt.game.processes import ProcessGame
+    opts = GameOptions(seed=3, robots=1, setup=1.0, exploration=3.0, production=300.0, strategy="oracle",
+                       processes=True, out=tmp_path / "game")
+    game = ProcessGame(opts)
+
+    def state(machine):
+        return game.sim.stations()[machine].state
+
+    def retrieving(g):
+        return next((e["machine"] for e in reversed(g.sim.station_log()) if e["machine"].startswith("C-CS")
+                     and e["to"] == "PREPARED" and "RETRIEVE_CAP" in e["reason"]), None)
+    try:
+        assert game.run_until(retrieving, limit=60.0), "the team server prepared no cap station"
+        cs = retrieving(game)
+        game.kill_agent(1)
+        game.run_for(1.5)                                  # its last drive command times out
+        if state("C-BS") == "IDLE":
+            _prepare(game, "C-BS", instruction_bs={"side": "OUTPUT", "color": "BASE_RED"})
+        assert game.run_until(lambda g: state("C-BS") == "READY-AT-OUTPUT", limit=15.0)
+        world = game.sim.world
+        robot = world.robot("CYAN", 1)
+        base = world.workpiece_at("C-BS", "output")
+        assert base is not None and base.base.startswith("BASE_")     # dispensed by the refbox process
+
+        def gripper(op, machine, slot):
+            world.teleport("CYAN", 1, world.station(machine).approach_pose(slot))
+            robot.gripper.command(op, now=world.time)
+            game.run_for(3.0)
+
+        gripper("close", "C-BS", "output")
+        assert world.held_workpiece("CYAN", 1).base == base.base
+        assert game.run_until(lambda g: state("C-BS") != "READY-AT-OUTPUT", limit=5.0)
+        assert any(e["machine"] == "C-BS" and e["reason"] == "product taken" for e in game.sim.station_log())
+        gripper("open", "C-BS", "input")                  # back on the BS input, out of the way
+        gripper("close", cs, "shelf1")
+        carrier = world.held_workpiece("CYAN", 1)
+        assert carrier is not None and carrier.cap is not None
+        gripper("open", cs, "input")
+        assert any(e["machine"] == cs and e["to"] == "PROCESSING" for e in game.sim.station_log())
+        assert game.run_until(lambda g: state(cs) == "READY-AT-OUTPUT", limit=20.0)
+        out = world.workpiece_at(cs, "output")
+        assert out is not None and out.cap is None         # the cap retrieved, the carrier put out by the refbox
+        result = game.result(False)
+    finally:
+        game.close()
+    states = {m: [s for _, s in h] for m, h in result.recording.stations.items()}
+    assert "WAIT-IDLE" in states["C-BS"] and "READY-AT-OUTPUT" in states[cs]     # recorded here, from the snapshot

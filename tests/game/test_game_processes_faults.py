@@ -1,7 +1,9 @@
-"""Faults in a ``--processes`` game: a team server process and two ``rll-bt agent``
-processes on loopback TCP/UDP, the world and the refbox in the test's process.
-One short game takes the faults in turn (each process start costs seconds)."""
+"""Faults in a ``--processes`` game: a refbox process, a team server process and two
+``rll-bt agent`` processes on loopback TCP/UDP, the world in the test's process serving
+the robots' backends and the refbox's stations.  One short game takes the faults in turn
+(each process start costs seconds)."""
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -28,6 +30,10 @@ def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
                        processes=True, out=tmp_path / "game")
     game = ProcessGame(opts)
     try:
+        # the refbox is a process of its own, neither this one (the world's) nor another child
+        refbox = game.procs["refbox"].pid
+        assert refbox != os.getpid() and refbox not in {p.pid for n, p in game.procs.items() if n != "refbox"}
+        assert json.loads(game.refbox_file.read_text())["pid"] == refbox
         assert game.run_until(lambda g: bool(_working(g)), limit=60.0), "no production task was handed out"
 
         # an agent process dies without a goodbye: its task goes back, the game goes on
@@ -82,3 +88,5 @@ def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
     hellos = [x for x in log if x["type"] == "RobotHello" and x["from"] == f"R{victim}"]
     assert len(hellos) >= 2 and any(x["msg"]["restarted"] for x in hellos[1:])   # the new agent came back
     assert [x["t"] for x in log] == sorted(x["t"] for x in log)
+    assert "DOWN" in {s for _, s in result.recording.stations["C-BS"]}   # the refbox process's states, recorded here
+    assert "Traceback" not in (opts.out / "refbox.log").read_text()
