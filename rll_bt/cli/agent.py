@@ -189,8 +189,9 @@ def cmd_agent(args) -> int:
         backend.close()
 
 
-class _Stop(Exception):
-    pass
+class _Stop(BaseException):
+    """SIGTERM, raised wherever the agent is (as KeyboardInterrupt): no tree's
+    ``except Exception`` takes it for a failing node."""
 
 
 def _loop(args, agent, clock, host: str, port: int) -> int:
