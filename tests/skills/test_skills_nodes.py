@@ -132,6 +132,7 @@ def test_no_skill_node_waits_inside_a_tick(monkeypatch):
     def no_sleep(seconds):
         raise AssertionError(f"a tick slept {seconds} s")
 
+    default_registry()                # names the node classes (registration sets node_type)
     action_types = {cls.node_type for cls in NODE_TYPES} - {"localised", "holding_workpiece"}
     assert action_types == set(BLOCKING_CASES)          # a new action node needs a case here
     for node_type, ports in BLOCKING_CASES.items():
