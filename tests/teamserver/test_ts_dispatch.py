@@ -185,13 +185,20 @@ def test_new_order_is_planned_at_once():
     assert [p.order_id for p in ls.server.kb.products.values() if p.order_id] == [5]
 
 
-def test_a_station_going_down_before_its_prepare_frees_the_robot_sent_there(tcp):
-    ls = tcp
-    place(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])     # far from the BS
+def bs_task_after_setup(ls, poses):
+    """Robots placed at ``poses``, one order: (the knowledge base, the
+    assigned base-station task)."""
+    place(ls, poses)
     production_setup(ls, [dict(id=1)])
     ls.step(n=5)
     kb = ls.server.kb
     [bs] = [t for t in kb.tasks.values() if t.machine == "C-BS" and t.state == M.ASSIGNED]
+    return kb, bs
+
+
+def test_a_station_going_down_before_its_prepare_frees_the_robot_sent_there(tcp):
+    ls = tcp
+    kb, bs = bs_task_after_setup(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])  # far from the BS
     agent = next(a for a in ls.agents if a.number == bs.robot)
     assert bs.prepared_at is None                                  # still on its way
     ls.station_states["C-BS"] = "DOWN"
@@ -210,11 +217,7 @@ def test_a_station_going_down_before_its_prepare_frees_the_robot_sent_there(tcp)
 
 def test_a_prepared_station_going_down_keeps_its_task(tcp):
     ls = tcp
-    place(ls, [(5.0, 1.2, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])      # one at the BS
-    production_setup(ls, [dict(id=1)])
-    ls.step(n=5)
-    kb = ls.server.kb
-    [bs] = [t for t in kb.tasks.values() if t.machine == "C-BS" and t.state == M.ASSIGNED]
+    kb, bs = bs_task_after_setup(ls, [(5.0, 1.2, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])  # one at the BS
     assert bs.prepared_at is not None                      # the station has its instruction
     ls.station_states["C-BS"] = "DOWN"
     ls.refbox.machines(ls.station_states)
