@@ -49,7 +49,13 @@ def start_emulator(args):
 
     def finish():
         proc.send_signal(signal.SIGINT)
-        out, _ = proc.communicate(timeout=10)
+        try:
+            out, _ = proc.communicate(timeout=30)
+        except subprocess.TimeoutExpired:     # its counts are lost, the host's are not
+            proc.kill()
+            out, _ = proc.communicate()
+            print("the emulator did not exit within 30 s of SIGINT: killed, its counts are unknown",
+                  file=sys.stderr)
         for line in out.splitlines():
             if line.startswith("summary: "):
                 return json.loads(line[len("summary: "):])
