@@ -52,6 +52,8 @@ def start_emulator(args):
         try:
             out, _ = proc.communicate(timeout=30)
         except subprocess.TimeoutExpired:     # its counts are lost, the host's are not
+            proc.send_signal(signal.SIGUSR1)   # its stacks to stderr: where it hangs
+            time.sleep(1.0)
             proc.kill()
             out, _ = proc.communicate()
             print("the emulator did not exit within 30 s of SIGINT: killed, its counts are unknown",

@@ -2,8 +2,10 @@
 from __future__ import annotations
 
 import argparse
+import faulthandler
 import json
 import math
+import signal
 import sys
 
 from rll_bt.backend import BackendError, BackendUnavailable
@@ -40,7 +42,7 @@ def register(cli) -> None:
                        description="Open a pty pair that behaves like the Robotino 3 base firmware "
                                    "(and with --gripper a second one like the RCLL gripper Arduino), "
                                    "print the device paths (stdout, one per line, base first) and "
-                                   "serve until Ctrl-C; a JSON summary line follows at exit.")
+                                   "serve until Ctrl-C or SIGTERM; a JSON summary line follows at exit.")
     p.add_argument("--gripper", action="store_true", help="also emulate the gripper Arduino")
     p.add_argument("--corrupt", type=_probability, default=0.0, metavar="P",
                    help="per-byte probability of corrupting a byte (both directions)")
@@ -86,6 +88,21 @@ def register(cli) -> None:
 
 # -- emulate ----------------------------------------------------------------------
 
+def _serve(emu, args) -> None:
+    """Serve for ``--duration`` seconds (0: until interrupted), a line of
+    counts on stderr every ``--report`` seconds."""
+    start = CLOCK.now()
+    next_report = start + args.report if args.report > 0 else math.inf
+    while args.duration <= 0 or CLOCK.now() - start < args.duration:
+        CLOCK.sleep(0.05)
+        if CLOCK.now() >= next_report:
+            next_report += args.report
+            s, pose = emu.stats(), emu.ground_truth()
+            print(f"t={CLOCK.now() - start:6.1f}s frames={s['frames']} replies={s['replies']} "
+                  f"checksum_errors={s['checksum_errors']} watchdog_trips={s['watchdog_trips']} "
+                  f"pose=({pose[0]:.3f}, {pose[1]:.3f}, {pose[2]:.3f})", file=sys.stderr, flush=True)
+
+
 def _emulate(args) -> int:
     from .emulator import RobotinoEmulator
     from .faults import Faults
@@ -95,6 +112,8 @@ def _emulate(args) -> int:
         faults = Faults(args.corrupt, args.drop, args.delay, args.close_every, args.closed_for, args.seed)
     except ValueError as exc:
         raise UserError(str(exc)) from None
+    # SIGUSR1 prints every thread's stack to stderr: how to see where a hung emulator is
+    faulthandler.register(signal.SIGUSR1, file=sys.__stderr__, all_threads=True)
     clock = CLOCK
     firmware = BaseFirmware(sw_version=args.firmware, start=clock.now())
     try:
@@ -102,30 +121,29 @@ def _emulate(args) -> int:
                                clock=clock, firmware=firmware).start()
     except OSError as exc:
         raise UserError(f"cannot create the emulator's ptys: {exc}", where=args.link_dir) from None
-    # stdout: the device paths, one per line (base first), then the summary at exit;
-    # stderr: what a person watching wants to read
-    print(emu.device, flush=True)
-    if emu.gripper_device:
-        print(emu.gripper_device, flush=True)
-    print(f"Robotino 3 base emulator (firmware {args.firmware}) running", file=sys.stderr)
-    print(f"  base:    {emu.device}", file=sys.stderr)
-    if emu.gripper_device:
-        print(f"  gripper: {emu.gripper_device}", file=sys.stderr)
-    print("press Ctrl-C to stop", file=sys.stderr, flush=True)
-    start = CLOCK.now()
-    next_report = start + args.report if args.report > 0 else math.inf
+    # stop on SIGINT and SIGTERM alike, also when started in the background of a
+    # non-interactive shell (which starts it with SIGINT ignored); installed before
+    # the device paths go out, as whoever reads them may stop it at once
+    def on_signal(signum, frame):
+        raise KeyboardInterrupt
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
-        while args.duration <= 0 or CLOCK.now() - start < args.duration:
-            CLOCK.sleep(0.05)
-            if CLOCK.now() >= next_report:
-                next_report += args.report
-                s, pose = emu.stats(), emu.ground_truth()
-                print(f"t={CLOCK.now() - start:6.1f}s frames={s['frames']} replies={s['replies']} "
-                      f"checksum_errors={s['checksum_errors']} watchdog_trips={s['watchdog_trips']} "
-                      f"pose=({pose[0]:.3f}, {pose[1]:.3f}, {pose[2]:.3f})", file=sys.stderr, flush=True)
+        # stdout: the device paths, one per line (base first), then the summary at exit;
+        # stderr: what a person watching wants to read
+        print(emu.device, flush=True)
+        if emu.gripper_device:
+            print(emu.gripper_device, flush=True)
+        print(f"Robotino 3 base emulator (firmware {args.firmware}) running", file=sys.stderr)
+        print(f"  base:    {emu.device}", file=sys.stderr)
+        if emu.gripper_device:
+            print(f"  gripper: {emu.gripper_device}", file=sys.stderr)
+        print("press Ctrl-C to stop", file=sys.stderr, flush=True)
+        _serve(emu, args)
     except KeyboardInterrupt:
         pass
     finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)
         stats = emu.stats()
         emu.stop()
     print("summary: " + json.dumps(stats, sort_keys=True), flush=True)

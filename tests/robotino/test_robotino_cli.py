@@ -78,3 +78,28 @@ def test_help(sub, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["robotino", sub, "--help"])
     assert exc.value.code == 0 and "usage" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("signame", ["SIGINT", "SIGTERM"])
+def test_emulate_process_stops_on_a_signal_with_its_summary(signame):
+    """Started as a background job (SIGINT ignored, as a non-interactive shell
+    starts one), the emulator still stops on SIGINT, and on SIGTERM, and
+    prints its summary."""
+    import signal
+    import subprocess
+    import sys
+
+    cmd = [sys.executable, "-c", "import sys; from rll_bt.cli import main; sys.exit(main())",
+           "robotino", "emulate"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
+    try:
+        device = proc.stdout.readline().strip()
+        assert device.endswith("robotino-base")
+        proc.send_signal(getattr(signal, signame))
+        out, _ = proc.communicate(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0
+    assert out.splitlines()[-1].startswith("summary: {")
