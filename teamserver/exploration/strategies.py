@@ -103,9 +103,10 @@ class Algorithm1(Strategy):
     the type is read from the light up close, so every observed zone needs
     a visit anyway; there line 9 takes every observed, unvisited zone as the
     paper does, and robots converge on observed zones instead of being sent
-    blindly elsewhere by line 15 (measured over seeds 1..10: all points
-    after 33.4 s median with the paper's line 9, 41.8 s with the extensions;
-    in 2025 41.8 s with them, 50.2 s without; ``benchmarks/README.md``).
+    blindly elsewhere by line 15 (measured over seeds 1..10 in 2016: all
+    points after 33.4 s median with the paper's line 9, 41.8 s with the
+    extensions; over 30 seeds in 2025: 40.3 s with them, 50.2 s without;
+    ``benchmarks/README.md``).
     """
 
     name = "algorithm1"
