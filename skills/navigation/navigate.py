@@ -8,7 +8,9 @@ unexplained laser points near the robot (not walls or known stations:
 other robots, unknown stations) go into the costmap for
 ``obstacle_ttl`` seconds and the path is replanned; while no path exists
 the robot waits, and after ``max_blocked`` seconds it fails with
-``NAVIGATION_FAILED``.  A robot that does not move (by odometry) although
+``NAVIGATION_FAILED``.  A navigation that finds no path at its start
+clears those remembered obstacles (they were seen on an earlier way) and
+plans again before it gives up.  A robot that does not move (by odometry) although
 commanded counts as blocked too (something the laser does not see).  Losing localisation fails with
 ``LOCALISATION_LOST``; the time limit with ``TIMEOUT``.
 """
@@ -57,6 +59,7 @@ class Navigate(Activity):
         self.follower: PathFollower | None = None
         self.replans = 0
         self.adjusted = 0.0              # metres the goal was moved to where the robot fits
+        self.cleared = 0                 # earlier laser obstacles cleared at the start (no path with them)
         self.blocked_time = 0.0
         self._blocked_since: float | None = None
         self._last_poll: float | None = None
@@ -89,7 +92,19 @@ class Navigate(Activity):
         try:
             self._plan(start)
         except NoPath as exc:
-            raise SkillFailure(SkillError.NAVIGATION_FAILED, str(exc)) from None
+            # obstacles seen on an earlier way (robots, mostly) may have moved
+            # on within their ttl: clear them, as Nav2's clear-costmap recovery
+            # does, and try once more; the laser still stops the robot for
+            # what is really there, and it replans around that
+            seen = len(self.ctx.costmap.temporary_obstacles)
+            if not seen:
+                raise SkillFailure(SkillError.NAVIGATION_FAILED, str(exc)) from None
+            self.ctx.costmap.clear_obstacles()
+            try:
+                self._plan(start)
+            except NoPath:
+                raise SkillFailure(SkillError.NAVIGATION_FAILED, str(exc)) from None
+            self.cleared = seen
 
     def _plan(self, start: Pose2D) -> None:
         self.ctx.costmap.expire(self.ctx.clock.now())

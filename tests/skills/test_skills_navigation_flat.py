@@ -109,3 +109,15 @@ def test_a_robot_that_does_not_move_counts_as_blocked():
     nav = Navigate(scene.ctx, PoseGoal(Pose2D(-4.0, 2.5, 0.0)), max_blocked=5.0)
     assert scene.run(nav, limit=60.0) is Status.FAILURE
     assert nav.error is SkillError.NAVIGATION_FAILED and "does not move" in nav.message
+
+
+def test_obstacles_remembered_from_an_earlier_way_do_not_fail_a_new_navigation():
+    """Robots seen while blocked stay in the costmap for a few seconds; a
+    navigation started meanwhile that finds no path with them clears them
+    and drives (they may have moved on), instead of failing at once."""
+    scene = Scene(seed=2, start=Pose2D(-2.0, 1.2, 0.0))
+    wall = [(x, y) for x in (-0.5,) for y in [i * 0.05 - 1.0 for i in range(161)]]   # across the field
+    scene.ctx.costmap.add_obstacles(wall, scene.world.clock.now(), 4.0)
+    nav = Navigate(scene.ctx, PoseGoal(Pose2D(2.0, 1.2, 0.0)))
+    assert scene.run(nav) is Status.SUCCESS, nav.message
+    assert nav.cleared == len(wall) and scene.world.collisions == 0
