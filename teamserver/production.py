@@ -499,12 +499,18 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin, StorageMixin):
         buf = self.cap_buffer
         if task.kind == M.MOUNT_CAP and product is not None:
             buf[machine] = product.id               # the cap is still in the station
-        elif task.kind == M.RETRIEVE_CAP and buf.get(machine) == task.product:
-            del buf[machine]                        # the carrier never got there
+        elif task.kind == M.RETRIEVE_CAP:
+            # the carrier never got there: the cap :meth:`task_done` booked in the
+            # station is not there either, whoever has claimed it since
+            owner = buf.pop(machine, None)
+            if owner not in (None, FREE, task.product):
+                self.needs_repair(owner, f"{machine} never got the cap it was to mount")
         self._set_cap_buffer(buf)
-        if product is None or product.order_id == CLEANUP_ORDER:
+        if product is None:
             return
         if product.state == DELIVERED:
             product.state, product.delivered_at = ACTIVE, None
             self.kb.save_product(product)
+        # a clean-up product has no order: its repair cancels what is left of it and
+        # frees its locks (its tasks would wait for a station output that never comes)
         self.needs_repair(product.id, f"{machine} never took the workpiece of task {task.id}")

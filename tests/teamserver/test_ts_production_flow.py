@@ -224,3 +224,42 @@ def test_a_full_slide_takes_no_more_bases_until_a_mount_uses_some():
                        **{"C-RS1": {"loaded_with": 1}})
     ls.step()
     assert pm.slide_ready(put) and not pm.slide_ready(mount)
+
+
+def test_a_cap_retrieved_ahead_that_the_station_never_took_blocks_nothing():
+    """A clean-up product (a cap retrieved ahead into an idle cap station) whose
+    carrier never reached the station: what it booked is undone (no cap in the
+    station for anyone to mount), its open tasks are cancelled and its locks freed,
+    and the order is still made (it used to wait for that station for good)."""
+    ls = Lockstep()
+    production_setup(ls, [dict(id=1)])
+    kb = ls.server.kb
+    dropped = []
+
+    def drop(agent, t):
+        task = kb.tasks[t.task_id]
+        p = kb.products.get(task.product or "")
+        if t.WhichOneof("kind") == "retrieve_cap" and p is not None and p.order_id == 0 \
+                and not dropped:
+            dropped.append((task.id, p.id, task.machine))
+            return True
+        return False
+    def fail(agent, t):                  # nothing comes out of the station: nothing to grab
+        if t.WhichOneof("kind") == "get_workpiece" and dropped \
+                and kb.tasks[t.task_id].product == dropped[0][1]:
+            return dict(error="GRAB_FAILED", holding=False)
+        return None
+    made = delivered(ls, 1)
+
+    def settled(gt):
+        return made(gt) and dropped and kb.products[dropped[0][1]].state != "ACTIVE" \
+            and not kb.get("feeds")              # every feed checked
+    assert play(ls, settled, drop=drop, fail=fail)
+    [(task_id, cleanup, cs)] = dropped
+    assert kb.tasks[task_id].state == M.FAILED
+    x = kb.products[cleanup]
+    assert x.state == "ABANDONED"
+    assert not [t for t in kb.tasks_of(x.tasks) if t.state in M.OPEN_STATES]
+    assert cleanup not in ls.server.production.locks.values()
+    assert cs not in ls.server.production.cap_buffer          # no cap there to mount
+    assert [g for _, g in ls.stations.deliveries] == [1]
