@@ -56,11 +56,15 @@ class HoldingMixin:
             return game_time + self.config.pickup_time >= self.deliver_from(task)
         return True
 
+    def _next_carries(self) -> dict[int, M.Task]:
+        """Robot number -> the pending step that carries what it holds."""
+        return {t.holder: t for t in self.kb.open_tasks()
+                if t.carry and t.state == M.PENDING and t.holder is not None}
+
     def stuck(self, game_time: float | None) -> int:
         """Robots holding a workpiece whose next step is not ready, or on their way to
         pick up one (see :meth:`blocks`)."""
-        bound = {t.holder: t for t in self.kb.open_tasks()
-                 if t.carry and t.state == M.PENDING and t.holder is not None}
+        bound = self._next_carries()
         n = 0
         for r in self.kb.active_robots():
             t = self.kb.tasks.get(r.task_id) if r.task_id is not None else None
@@ -73,8 +77,7 @@ class HoldingMixin:
     def unblocking(self, game_time: float | None) -> set[int]:
         """Pending tasks the next step of a stuck robot waits for (its predecessors,
         transitively): doing them frees that robot, so they go first."""
-        bound = {t.holder: t for t in self.kb.open_tasks()
-                 if t.carry and t.state == M.PENDING and t.holder is not None}
+        bound = self._next_carries()
         out: set[int] = set()
         for r in self.kb.active_robots():
             nxt = bound.get(r.number) if r.holding else None
