@@ -65,6 +65,9 @@ def register(cli) -> None:
                    help="rendered training frames (default 1000; --quick: 60)")
     t.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
     t.add_argument("--quick", action="store_true", help="a tiny run (for tests and trying things out)")
+    t.add_argument("--members", type=_int_at_least(1), default=None, metavar="K",
+                   help="networks per ensemble, for the tower check and the light network "
+                        "(default 3; --quick: 2)")
     t.add_argument("--workers", type=_int_at_least(1), default=min(2, os.cpu_count() or 1), metavar="W",
                    help="worker processes (default: 2 or the number of cores if fewer)")
     t.set_defaults(func=cmd_train_light)
@@ -78,6 +81,9 @@ def register(cli) -> None:
     li.add_argument("--models", metavar="DIR", help="model directory (default: the shipped models)")
     li.add_argument("--region", type=_region, metavar="X,Y,W,H",
                     help="search only this image region (pixels), e.g. where a tag says the tower is")
+    li.add_argument("--min-confidence", type=_probability, default=None, metavar="P",
+                    help="report a tower only when its most probable state has at least this "
+                         "probability (default 0.75; 0 reports every tower found)")
     li.set_defaults(func=cmd_light)
 
     tg = sub.add_parser(
@@ -95,13 +101,24 @@ def register(cli) -> None:
     tg.set_defaults(func=cmd_tags)
 
 
+def _probability(text: str) -> float:
+    try:
+        p = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 <= p <= 1.0:
+        raise argparse.ArgumentTypeError(f"must be between 0 and 1, not {p}")
+    return p
+
+
 # -- train-light -------------------------------------------------------------
 def cmd_train_light(args) -> int:
     from .light.evaluation import confusion_table
     from .light.training import TrainOptions, train_light
     samples = args.samples if args.samples is not None else (60 if args.quick else 1000)
+    members = args.members if args.members is not None else (2 if args.quick else 3)
     opts = TrainOptions(out=args.out, samples=samples, seed=args.seed, quick=args.quick, workers=args.workers,
-                        **({"iterations": 60, "rounds": 1} if args.quick else {}))
+                        members=members, **({"iterations": 60, "rounds": 1} if args.quick else {}))
     report = train_light(opts, progress=lambda s: print(s, file=sys.stderr, flush=True))
     h = report["heldout"]
     d = report["detector"]
@@ -175,6 +192,8 @@ def cmd_light(args) -> int:
     from rll_bt.clock import WallClock
     from .light.reader import LightReader
     reader = LightReader.load(args.models)
+    if args.min_confidence is not None:
+        reader.min_confidence = args.min_confidence
     clock = WallClock()
     images = _Images(args.images)
     for path, img in images:

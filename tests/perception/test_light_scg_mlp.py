@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from scipy.optimize import rosen, rosen_der
 
-from skills.perception.light.mlp import Mlp
+from skills.perception.light.mlp import Ensemble, Mlp
 from skills.perception.light.scg import scg
 
 
@@ -56,3 +56,43 @@ def test_mlp_learns_three_bit_patterns(tmp_path):
     again = Mlp.load(tmp_path / "m.npz")
     assert np.allclose(again.probabilities(x[600:]), net.probabilities(x[600:]), atol=1e-5)
     assert np.allclose(again.probabilities(x[:3]).sum(axis=1), 1.0)
+
+
+def _bits_task(seed, n, noise=0.15):
+    rng = np.random.default_rng(seed)
+    y = rng.integers(0, 8, n)
+    bits = ((y[:, None] >> np.arange(3)) & 1).astype(float)
+    return np.repeat(bits, 4, axis=1) * 0.6 + rng.normal(0, noise, (n, 12)) - 0.3, y
+
+
+def test_ensemble_reads_like_its_members_and_round_trips(tmp_path):
+    x, y = _bits_task(4, 900, noise=0.3)
+    members = []
+    for k in range(3):
+        m = Mlp.create(12, 10, seed=k)
+        m.train(x[:300 * k + 300][-300:], y[:300 * k + 300][-300:], max_iter=150)
+        members.append(m)
+    ens = Ensemble(members)
+    xt, yt = _bits_task(5, 1000, noise=0.3)
+    p = ens.probabilities(xt)
+    assert np.allclose(p.sum(axis=1), 1.0)
+    # the normalised geometric mean: a state all members favour stays favoured
+    agree = np.all([m.predict(xt) == members[0].predict(xt) for m in members], axis=0)
+    assert np.array_equal(ens.predict(xt)[agree], members[0].predict(xt)[agree])
+    # it reads at least as well as its average member on new samples
+    acc = (ens.predict(xt) == yt).mean()
+    assert acc >= np.mean([(m.predict(xt) == yt).mean() for m in members])
+    ens.save(tmp_path / "e.npz")
+    again = Ensemble.load(tmp_path / "e.npz")
+    assert len(again.members) == 3 and again.n_out == 8
+    assert np.allclose(again.probabilities(xt), p, atol=1e-5)
+
+
+def test_a_single_network_file_loads_as_an_ensemble_of_one(tmp_path):
+    x, y = _bits_task(6, 300)
+    net = Mlp.create(12, 10, seed=0)
+    net.train(x, y, max_iter=100)
+    net.save(tmp_path / "m.npz")
+    one = Ensemble.load(tmp_path / "m.npz")
+    assert len(one.members) == 1
+    assert np.allclose(one.probabilities(x), net.probabilities(x), atol=1e-5)

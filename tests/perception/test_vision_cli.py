@@ -116,3 +116,13 @@ def test_tags_with_a_bad_camera_file_exits_2(rendered, tmp_path, capsys):
     f.write_text("[1, 2]\n")
     assert main(["vision", "tags", str(path), "--camera", str(f)]) == 2
     assert "camera file" in capsys.readouterr().err
+
+
+def test_min_confidence_must_be_a_probability(rendered, capsys):
+    path, _, _, _ = rendered
+    with pytest.raises(SystemExit) as exc:
+        main(["vision", "light", str(path), "--min-confidence", "1.5"])
+    assert exc.value.code == 2
+    assert "between 0 and 1" in capsys.readouterr().err
+    assert main(["vision", "light", str(path), "--json", "--min-confidence", "1"]) == 0
+    assert json.loads(capsys.readouterr().out)["detections"] == []     # no reading is that sure

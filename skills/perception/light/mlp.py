@@ -102,6 +102,10 @@ class Mlp:
     def predict(self, x: np.ndarray) -> np.ndarray:
         return self.probabilities(x).argmax(axis=1)
 
+    @property
+    def n_out(self) -> int:
+        return self.w2.shape[1]
+
     def loss_and_grad(self, theta: np.ndarray, x: np.ndarray, y: np.ndarray, decay: float):
         """Loss and gradient at ``theta``; the products run in ``x``'s precision
         (float32 during training: twice as fast), the sums in float64."""
@@ -157,3 +161,53 @@ class Mlp:
             return cls(d["w1"].astype(np.float64), d["b1"].astype(np.float64),
                        d["w2"].astype(np.float64), d["b2"].astype(np.float64),
                        tuple(int(v) for v in d["size"]), kind)
+
+
+@dataclass
+class Ensemble:
+    """Networks of one input kind trained from different starts (and
+    resamples of the training set), read together: the normalised
+    geometric mean of their probabilities.  One network's quirks (a lit
+    lens it learnt from a few crops) are outvoted; a crop they disagree on
+    gets a flat distribution.  Stored as one file of stacked weights."""
+    members: list[Mlp]
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.members[0].size
+
+    @property
+    def kind(self) -> str:
+        return self.members[0].kind
+
+    @property
+    def n_out(self) -> int:
+        return self.members[0].w2.shape[1]
+
+    def features(self, crops) -> np.ndarray:
+        return self.members[0].features(crops)
+
+    def probabilities(self, x: np.ndarray) -> np.ndarray:
+        logp = np.mean([np.log(np.clip(m.probabilities(x), 1e-12, 1.0)) for m in self.members], axis=0)
+        q = np.exp(logp - logp.max(axis=1, keepdims=True))
+        return q / q.sum(axis=1, keepdims=True)
+
+    def predict(self, x: np.ndarray) -> np.ndarray:
+        return self.probabilities(x).argmax(axis=1)
+
+    def save(self, path) -> None:
+        m0 = self.members[0]
+        stack = {k: np.stack([getattr(m, k) for m in self.members]).astype(np.float32)
+                 for k in ("w1", "b1", "w2", "b2")}
+        np.savez_compressed(path, **stack, size=np.array(m0.size), kind=np.array(m0.kind))
+
+    @classmethod
+    def load(cls, path) -> "Ensemble":
+        """An ensemble file, or a single network's file (an ensemble of one)."""
+        with np.load(path) as d:
+            kind = str(d["kind"]) if "kind" in d else "pixels"
+            size = tuple(int(v) for v in d["size"])
+            w1, b1, w2, b2 = (d[k].astype(np.float64) for k in ("w1", "b1", "w2", "b2"))
+        if w1.ndim == 2:
+            w1, b1, w2, b2 = w1[None], b1[None], w2[None], b2[None]
+        return cls([Mlp(w1[i], b1[i], w2[i], b2[i], size, kind) for i in range(len(w1))])

@@ -19,8 +19,8 @@ import numpy as np
 from rll_bt.backend import LightDetection
 from rll_bt.errors import UserError
 
-from .hog import TowerDetector, crop_window
-from .mlp import Mlp
+from .hog import TOWER_H, TOWER_W, TowerDetector, crop_window
+from .mlp import Ensemble, Mlp
 
 MODEL_DIR = Path(__file__).with_name("models")
 DETECTOR_FILE = "tower_hog_svm.npz"
@@ -33,10 +33,19 @@ class LightReader:
     """Detector, the tower check (a small network saying whether a hit is
     a tower: optional) and the light network (8 states)."""
 
-    def __init__(self, detector: TowerDetector, classifier: Mlp, checker: Mlp | None = None,
+    def __init__(self, detector: TowerDetector, classifier: Mlp | Ensemble, checker: Mlp | Ensemble | None = None,
                  max_detections: int = 3, reject: float = 0.5, candidates: int = 40,
-                 region_threshold: float | None = None, jitter: bool = True):
+                 region_threshold: float | None = None, jitter: bool = True,
+                 snap: float | None = 0.15, min_confidence: float = 0.75):
         self.jitter = jitter          # read each tower from a few shifted crops and average
+        # with an expected tower height (a tag-given region): how far (a fraction) a box's
+        # height may be off it; boxes of that height anchored at the hit's top, middle and
+        # bottom are offered to the tower check too.  None: no snapping
+        self.snap = snap
+        # a tower whose most probable state has less than this probability is not reported:
+        # an unsure reading (a lens half lit by its neighbour's glow, a tinted hall) is left
+        # to the next frame rather than risked
+        self.min_confidence = min_confidence
         self.detector = detector
         self.classifier = classifier
         self.checker = checker
@@ -60,22 +69,23 @@ class LightReader:
             with np.load(det_path) as f:
                 vector = f["detector"]
                 settings = json.loads(str(f["settings"])) if "settings" in f else {}
-            classifier = Mlp.load(net_path)
-            checker = Mlp.load(check_path) if check_path.is_file() else None
+            classifier = Ensemble.load(net_path)
+            checker = Ensemble.load(check_path) if check_path.is_file() else None
         except (OSError, ValueError, KeyError) as exc:
             raise UserError(f"cannot read the light models in {d}: {exc}") from None
         reject = float(settings.pop("reject", 0.5))
+        reader_options = {k: settings.pop(k) for k in ("snap", "min_confidence") if k in settings}
         region_threshold = settings.pop("region_threshold", None)
         settings.update(detector_options)
         if "threshold" in detector_options:
             region_threshold = None
         return cls(TowerDetector(vector, **settings), classifier, checker, reject=reject,
-                   region_threshold=region_threshold)
+                   region_threshold=region_threshold, **reader_options)
 
     @staticmethod
-    def _run(net: Mlp, image: np.ndarray, boxes) -> np.ndarray:
+    def _run(net: Mlp | Ensemble, image: np.ndarray, boxes) -> np.ndarray:
         if len(boxes) == 0:
-            return np.zeros((0, net.w2.shape[1]))
+            return np.zeros((0, net.n_out))
         return net.probabilities(net.features([crop_window(image, b, net.size) for b in boxes]).astype(np.float64))
 
     def classify(self, image: np.ndarray, boxes) -> np.ndarray:
@@ -97,29 +107,55 @@ class LightReader:
             return np.zeros(len(boxes))
         return self._run(self.checker, image, boxes)[:, 1]
 
+    def check(self, image: np.ndarray, boxes, tower_height: float | None = None
+              ) -> tuple[list[list[tuple]], np.ndarray]:
+        """The box variants of each detector hit (x, y, w, h) and the tower
+        check's "no tower" probability of each (hits x variants).
+
+        The detector's box is often too tall (the tower's mount continues its
+        outline): the check looks at shorter, top-anchored variants too
+        (:data:`REFINE_HEIGHTS`).  With an expected ``tower_height`` (from a
+        tag) and ``snap``, boxes of that height anchored at the hit's top,
+        middle and bottom are offered as well, and a variant whose height is
+        more than ``snap`` off it counts as no tower: the tag gives the
+        height to a few per cent, a box far off it is misplaced and would be
+        read shifted."""
+        heights = REFINE_HEIGHTS if self.checker is not None else (1.0,)
+        variants = [[refine_box(b, k) for k in heights] for b in boxes]
+        if self.checker is None or not variants:
+            return variants, np.zeros((len(variants), len(heights)))
+        snap = bool(tower_height) and self.snap is not None
+        if snap:
+            variants = [vs + snapped(b, tower_height) for vs, b in zip(variants, boxes)]
+        n = len(variants[0])
+        p_no = self.no_tower(image, [v for vs in variants for v in vs]).reshape(len(variants), n)
+        if snap:
+            off = np.abs(np.array([[v[3] for v in vs] for vs in variants]) / tower_height - 1.0)
+            p_no = np.where(off > self.snap, 1.0, p_no)
+        return variants, p_no
+
     def read(self, image: np.ndarray, region: tuple[int, int, int, int] | None = None,
              tower_height: float | None = None, camera: str = "front") -> list[LightDetection]:
         """Signal towers in a BGR image with their light states, best first.
-        Hits the tower check calls "no tower" are dropped."""
+        Hits the tower check calls "no tower" are dropped, and so are towers
+        read with less than ``min_confidence``."""
         thr = self.region_threshold if region is not None and tower_height is not None else None
         boxes = self.detector.detect(image, region=region, tower_height=tower_height, threshold=thr)
         boxes = boxes[: self.candidates]
         if not boxes:
             return []
-        # the detector's box is often too tall (the tower's mount continues its outline):
-        # the check looks at shorter, top-anchored variants and keeps the most tower-like
-        heights = REFINE_HEIGHTS if self.checker is not None else (1.0,)
-        variants = [refine_box(b.xywh, k) for b in boxes for k in heights]
-        p_no = self.no_tower(image, variants).reshape(len(boxes), len(heights))
-        picks = choose(_chunks(variants, len(heights)), p_no, self.reject, self.max_detections)
+        variants, p_no = self.check(image, [b.xywh for b in boxes], tower_height)
+        picks = choose(variants, p_no, self.reject, self.max_detections)
         chosen = [(boxes[i], v) for i, v in picks]
         probs = self.classify(image, [v for _, v in chosen])
         return [LightDetection(box=tuple(int(round(c)) for c in v), state=int(p.argmax()), score=b.score,
                                probabilities=tuple(float(x) for x in p), camera=camera)
-                for (b, v), p in zip(chosen, probs)]
+                for (b, v), p in zip(chosen, probs) if p.max() >= self.min_confidence]
 
 
 REFINE_HEIGHTS = (1.0, 0.82, 0.68)
+#: where a box of the expected height is put against a hit: its top, middle, bottom
+SNAP_ANCHORS = (0.0, 0.5, 1.0)
 
 #: (dx, dy, scale) of the crops a tower is read from: dx of its width, dy of its height
 JITTER = ((0.0, 0.0, 1.0), (-0.12, 0.0, 1.0), (0.12, 0.0, 1.0), (0.0, -0.04, 1.0), (0.0, 0.04, 1.0),
@@ -132,6 +168,16 @@ def jittered(box, j) -> tuple[float, float, float, float]:
     x, y, w, h = (float(v) for v in box)
     cx, cy = x + w / 2 + dx * w, y + h / 2 + dy * h
     return (cx - w * k / 2, cy - h * k / 2, w * k, h * k)
+
+
+def snapped(box, tower_height: float) -> list[tuple[float, float, float, float]]:
+    """Boxes ``tower_height`` high (the tower's width for that height),
+    centred on ``box`` across and anchored at its top, middle and bottom
+    (:data:`SNAP_ANCHORS`)."""
+    x, y, w, h = (float(v) for v in box)
+    nh = float(tower_height)
+    nw = nh * TOWER_W / TOWER_H
+    return [(x + w / 2 - nw / 2, y + a * (h - nh), nw, nh) for a in SNAP_ANCHORS]
 
 
 def refine_box(box, k: float) -> tuple[float, float, float, float]:
@@ -164,10 +210,6 @@ def overlap_of_smaller(a, b) -> float:
     ix = max(0.0, min(a[0] + a[2], b[0] + b[2]) - max(a[0], b[0]))
     iy = max(0.0, min(a[1] + a[3], b[1] + b[3]) - max(a[1], b[1]))
     return ix * iy / max(min(a[2] * a[3], b[2] * b[3]), 1e-9)
-
-
-def _chunks(items: list, n: int) -> list[list]:
-    return [items[i:i + n] for i in range(0, len(items), n)]
 
 
 def save_detector(path: str | Path, vector: np.ndarray, **settings) -> None:

@@ -9,9 +9,10 @@ Steps (progress is reported through ``progress(text)``):
    (false detections on the training frames: rendered halls, photographs,
    procedural backdrops) and train again, ``rounds`` times;
 3. train the tower check (tower / no tower) on truth crops, badly placed
-   crops and the detector's own hits, true and false, and the light network
-   on truth crops and the detector's true hits, both with scaled conjugate
-   gradient;
+   crops and the detector's own hits, true and false (also on further
+   composed tower-free frames), and the light network on truth crops and the
+   detector's true hits, both with scaled conjugate gradient, each an
+   ensemble of ``members`` networks from different starts;
 4. calibrate the detector's score threshold and the check's rejection level
    on frames the detector never mined (with extra composed tower-free
    frames): no false detection on rendered tower-free frames, then the most
@@ -41,7 +42,7 @@ from rll_bt.errors import UserError
 from .dataset import ChunkResult, ChunkSpec, PackedFrame, free_frames, make_chunk
 from .evaluation import LightScore
 from .hog import TowerDetector, crop_window, iou, make_hog, select, train_svm, window_features, window_for_tower
-from .mlp import DEFAULT_SIZE, N_STATES, NO_TOWER, Mlp
+from .mlp import DEFAULT_SIZE, N_STATES, NO_TOWER, Ensemble, Mlp
 from .photos import photos
 from .reader import (CHECKER_FILE, CLASSIFIER_FILE, DETECTOR_FILE, REFINE_HEIGHTS, REPORT_FILE, LightReader,
                      choose, refine_box, save_detector)
@@ -61,6 +62,7 @@ class TrainOptions:
     hidden: int = 32               # the light network's hidden units
     check_hidden: int = 32         # the tower check's
     iterations: int = 300          # SCG iterations (each network)
+    members: int = 3               # networks per ensemble (the check's and the light network's)
     heldout: int | None = None     # rendered held-out frames (default samples / 3)
 
     def __post_init__(self):
@@ -68,6 +70,8 @@ class TrainOptions:
             raise UserError(f"--samples must be at least 10, not {self.samples}")
         if self.workers < 1:
             raise UserError(f"--workers must be at least 1, not {self.workers}")
+        if self.members < 1:
+            raise UserError(f"--members must be at least 1, not {self.members}")
 
 
 def plan(opts: TrainOptions) -> tuple[list[ChunkSpec], list[ChunkSpec]]:
@@ -139,6 +143,17 @@ def _mine_job(args) -> list[FrameHits]:
     return out
 
 
+def train_ensemble(x: np.ndarray, y: np.ndarray, hidden: int, n_out: int, seed: int, opts: TrainOptions,
+                   callback=None) -> Ensemble:
+    """``opts.members`` networks on the same crops from different starts."""
+    members = []
+    for i in range(opts.members):
+        m = Mlp.create(x.shape[1], hidden, DEFAULT_SIZE, seed=seed + 17 * i, n_out=n_out)
+        m.train(x, y, max_iter=opts.iterations, decay=1e-3, callback=callback)
+        members.append(m)
+    return Ensemble(members)
+
+
 def _pool(workers: int):
     ctx = multiprocessing.get_context("fork") if "fork" in multiprocessing.get_all_start_methods() else None
     return ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
@@ -186,12 +201,14 @@ def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[n
                                      "train_frames": score.frames, "train_free_frames": score.free_frames}
 
 
-def calibrate_region(vector: np.ndarray, checker: Mlp, frames: list[PackedFrame], low: float,
+def calibrate_region(vector: np.ndarray, checker: Mlp | Ensemble, frames: list[PackedFrame], low: float,
                      threshold: float, reject: float) -> tuple[float, dict]:
     """The detector threshold inside a tag-given region: the lowest (most
     recall) at which reading each required tower's region gives no more
-    false first detections than at the full-frame ``threshold``."""
+    false first detections than at the full-frame ``threshold``.  The hits'
+    variants are the reader's for a tag-given region (:meth:`LightReader.check`)."""
     det = TowerDetector(vector, threshold=low)
+    reader = LightReader(det, None, checker)
     reads = []                         # per tower: (truth, scores, p_no, variants)
     for f in frames:
         img = None
@@ -200,10 +217,8 @@ def calibrate_region(vector: np.ndarray, checker: Mlp, frames: list[PackedFrame]
                 continue
             img = f.image if img is None else img
             kept = det.detect(img, region=t.region, tower_height=t.tower_height)[:40]
-            vs = [[refine_box(k.xywh, v) for v in REFINE_HEIGHTS] for k in kept]
-            flat = [crop_window(img, b, DEFAULT_SIZE) for row in vs for b in row]
-            p = checker.probabilities(checker.features(flat).astype(np.float64))[:, 1] if flat else np.zeros(0)
-            reads.append((t, np.array([k.score for k in kept]), p.reshape(len(kept), len(REFINE_HEIGHTS)), vs))
+            vs, p = reader.check(img, [k.xywh for k in kept], t.tower_height)
+            reads.append((t, np.array([k.score for k in kept]), p, vs))
 
     def count(t_region):
         hits = false = 0
@@ -275,6 +290,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         rng = np.random.default_rng(opts.seed)
         order = rng.permutation(len(frames))
         n_mine, n_towers, n_free = (40, 20, 10) if opts.quick else (500, 400, 400)
+        n_extra, n_clutter = (10, 200) if opts.quick else (600, 6000)
         mine = [frames[i] for i in order[:n_mine]]
         # calibration: frames the detector never mined, every tower-free one of them
         # and extra composed tower-free frames (false detections are what it must rule out)
@@ -308,6 +324,13 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
             say(f"SVM round {r + 1} trained with {len(hard_all)} hard negatives")
         calib, cal_hits = detect_all(calib)
         say(f"{sum(len(h.scores) for h in cal_hits)} hits on {len(calib)} calibration frames")
+        # more clutter for the check: the detector's hits on further composed tower-free
+        # frames (cheap: no rendering), apart from the calibration frames
+        extra = [f for part in pool.map(_free_job, [(opts.seed * 7919 + 777_000 + k, n_extra // opts.workers)
+                                                     for k in range(opts.workers)]) for f in part]
+        _, extra_hits = detect_all(extra)
+        clutter = [c for h in extra_hits for k in np.flatnonzero(h.false) for c in h.crops[k]]
+        say(f"{len(clutter)} false hit crops on {len(extra)} more tower-free frames")
 
     # -- the check and the light network learn from truth crops and the detector's own hits --
     # the check learns each true hit's best variant as a tower (it is to pick the best-placed box),
@@ -335,25 +358,26 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
     not_towers = [crops_a[states_a == NO_TOWER]]
     if bad:
         not_towers.append(np.stack([bad[i] for i in rng.permutation(len(bad))[: 3 * len(towers)]]))
+    if clutter:
+        not_towers.append(np.stack([clutter[i] for i in rng.permutation(len(clutter))[:n_clutter]]))
     not_towers = np.concatenate(not_towers)
 
     def tick(k, _, fx):
         if k % 100 == 0:
             say(f"  SCG iteration {k}: loss {fx:.4f}")
 
-    checker = Mlp.create(1, 1, DEFAULT_SIZE, n_out=2)
-    x_check = np.concatenate([checker.features(towers), checker.features(not_towers)])
+    features = Mlp.create(1, 1, DEFAULT_SIZE, n_out=2).features
+    x_check = np.concatenate([features(towers), features(not_towers)])
     y_check = np.concatenate([np.zeros(len(towers), np.int64), np.ones(len(not_towers), np.int64)])
-    checker = Mlp.create(x_check.shape[1], opts.check_hidden, DEFAULT_SIZE, seed=opts.seed + 1, n_out=2)
-    say(f"training the tower check ({x_check.shape[1]} inputs, {opts.check_hidden} hidden, tower / no tower) on "
-        f"{len(towers)} tower and {len(not_towers)} other crops with SCG, {opts.iterations} iterations")
-    checker.train(x_check, y_check, max_iter=opts.iterations, decay=1e-3, callback=tick)
-    x = np.concatenate([x_check[:len(true_boxes)], checker.features(fits)]) if fits else x_check[:len(true_boxes)]
+    say(f"training the tower check ({x_check.shape[1]} inputs, {opts.members} x {opts.check_hidden} hidden, "
+        f"tower / no tower) on {len(towers)} tower and {len(not_towers)} other crops with SCG, "
+        f"{opts.iterations} iterations")
+    checker = train_ensemble(x_check, y_check, opts.check_hidden, 2, opts.seed + 1, opts, tick)
+    x = np.concatenate([x_check[:len(true_boxes)], features(fits)]) if fits else x_check[:len(true_boxes)]
     y = np.concatenate([tower_states[:len(true_boxes)], np.asarray(fit_states, np.int64)])
-    net = Mlp.create(x.shape[1], opts.hidden, DEFAULT_SIZE, seed=opts.seed)
-    say(f"training the light network ({x.shape[1]} inputs, {opts.hidden} hidden, 8 states) on {len(x)} "
-        f"tower crops with SCG, {opts.iterations} iterations")
-    net.train(x, y, max_iter=opts.iterations, decay=1e-3, callback=tick)
+    say(f"training the light network ({x.shape[1]} inputs, {opts.members} x {opts.hidden} hidden, 8 states) "
+        f"on {len(x)} tower crops with SCG, {opts.iterations} iterations")
+    net = train_ensemble(x, y, opts.hidden, N_STATES, opts.seed, opts, tick)
     no_tower = []
     for h in cal_hits:
         if len(h.crops):
@@ -384,7 +408,8 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         "options": {k: (str(v) if isinstance(v, Path) else v) for k, v in asdict(opts).items()},
         "detector": {**cal, "min_support": support, "windows_pos": int(len(pos_f)), "windows_neg": int(len(neg_f)),
                      "hard_negatives": int(len(hard_all))},
-        "network": {"crops": int(len(x)), "train_accuracy": train_acc, "hidden": opts.hidden},
+        "network": {"crops": int(len(x)), "train_accuracy": train_acc, "hidden": opts.hidden,
+                    "members": opts.members},
         "tower_check": {"crops": int(len(x_check)),
                         "train_accuracy": float((checker.predict(x_check) == y_check).mean())},
         "heldout": score.metrics(),
