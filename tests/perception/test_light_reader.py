@@ -73,3 +73,13 @@ def test_an_unsure_reading_is_not_reported(shipped, scene):
     assert len(got) == 1 and max(got[0].probabilities) == pytest.approx(1 / 8)
     sure = LightReader(FixedDetector([truth]), shipped.classifier, shipped.checker, reject=0.9)
     assert [d.state for d in sure.read(img)] == [5]
+
+
+def test_inside_a_tag_given_region_the_check_has_its_own_rejection_level(shipped, scene):
+    img, truth = scene
+    x, y, w, h = truth
+    reader = LightReader(FixedDetector([truth]), shipped.classifier, shipped.checker, reject=1e-9,
+                         region_reject=0.9)
+    assert reader.read(img) == []                       # the full-frame level drops every hit
+    got = reader.read(img, region=(x - 3 * w, y - h, 7 * w, 3 * h), tower_height=float(h))
+    assert [d.state for d in got] == [5]

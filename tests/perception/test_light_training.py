@@ -23,6 +23,9 @@ def test_tiny_training_run_writes_loadable_models(tmp_path):
     assert report["network"]["crops"] > 0 and report["detector"]["windows_pos"] > 0
     assert any("SVM round 1" in s for s in lines) and any("held-out" in s for s in lines)
     reader = LightReader.load(tmp_path)
+    assert reader.region_reject == saved["detector"]["region_reject"]
+    assert reader.region_threshold == saved["detector"]["region_threshold"]
+    assert len(reader.classifier.members) == len(reader.checker.members) == 3
     dets = reader.read(np.full((240, 320, 3), 90, np.uint8))
     assert isinstance(dets, list)
 

@@ -36,7 +36,8 @@ class LightReader:
     def __init__(self, detector: TowerDetector, classifier: Mlp | Ensemble, checker: Mlp | Ensemble | None = None,
                  max_detections: int = 3, reject: float = 0.5, candidates: int = 40,
                  region_threshold: float | None = None, jitter: bool = True,
-                 snap: float | None = 0.15, min_confidence: float = 0.75):
+                 snap: float | None = 0.15, min_confidence: float = 0.75,
+                 region_reject: float | None = None):
         self.jitter = jitter          # read each tower from a few shifted crops and average
         # with an expected tower height (a tag-given region): how far (a fraction) a box's
         # height may be off it; boxes of that height anchored at the hit's top, middle and
@@ -54,6 +55,8 @@ class LightReader:
         self.candidates = candidates  # detector hits the networks look at, strongest first
         # the detector's threshold inside a tag-given region (a tower is expected there)
         self.region_threshold = detector.threshold if region_threshold is None else region_threshold
+        # the check's "no tower" level there (default: ``reject``)
+        self.region_reject = region_reject
 
     @classmethod
     def load(cls, directory: str | Path | None = None, **detector_options) -> "LightReader":
@@ -76,11 +79,12 @@ class LightReader:
         reject = float(settings.pop("reject", 0.5))
         reader_options = {k: settings.pop(k) for k in ("snap", "min_confidence") if k in settings}
         region_threshold = settings.pop("region_threshold", None)
+        region_reject = settings.pop("region_reject", None)
         settings.update(detector_options)
         if "threshold" in detector_options:
             region_threshold = None
         return cls(TowerDetector(vector, **settings), classifier, checker, reject=reject,
-                   region_threshold=region_threshold, **reader_options)
+                   region_threshold=region_threshold, region_reject=region_reject, **reader_options)
 
     @staticmethod
     def _run(net: Mlp | Ensemble, image: np.ndarray, boxes) -> np.ndarray:
@@ -139,13 +143,15 @@ class LightReader:
         """Signal towers in a BGR image with their light states, best first.
         Hits the tower check calls "no tower" are dropped, and so are towers
         read with less than ``min_confidence``."""
-        thr = self.region_threshold if region is not None and tower_height is not None else None
+        in_region = region is not None and tower_height is not None
+        thr = self.region_threshold if in_region else None
         boxes = self.detector.detect(image, region=region, tower_height=tower_height, threshold=thr)
         boxes = boxes[: self.candidates]
         if not boxes:
             return []
         variants, p_no = self.check(image, [b.xywh for b in boxes], tower_height)
-        picks = choose(variants, p_no, self.reject, self.max_detections)
+        reject = self.region_reject if in_region and self.region_reject is not None else self.reject
+        picks = choose(variants, p_no, reject, self.max_detections)
         chosen = [(boxes[i], v) for i, v in picks]
         probs = self.classify(image, [v for _, v in chosen])
         return [LightDetection(box=tuple(int(round(c)) for c in v), state=int(p.argmax()), score=b.score,
@@ -215,5 +221,5 @@ def overlap_of_smaller(a, b) -> float:
 def save_detector(path: str | Path, vector: np.ndarray, **settings) -> None:
     """Write a detector vector, its :class:`TowerDetector` settings and the
     reader's ``reject`` level (the tower check's "no tower" probability at
-    which a hit is dropped) and ``region_threshold``."""
+    which a hit is dropped), ``region_threshold`` and ``region_reject``."""
     np.savez_compressed(path, detector=np.asarray(vector, np.float32), settings=np.array(json.dumps(settings)))

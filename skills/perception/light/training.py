@@ -49,6 +49,10 @@ from .reader import (CHECKER_FILE, CLASSIFIER_FILE, DETECTOR_FILE, REFINE_HEIGHT
 
 PROFILES = ("rcll2016", "rcll2025")
 HELDOUT_SEED = 1_000_003
+#: the tower check's "no tower" levels calibration tries
+REJECT_LEVELS = (0.5, 0.3, 0.2, 0.15, 0.1, 0.05, 0.02)
+#: hits a false detection on a composed tower-free calibration frame costs (:func:`calibrate`)
+FREE_FALSE_COST = 10
 
 
 @dataclass
@@ -171,7 +175,9 @@ def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[n
     (:func:`.reader.choose`): no false detection on the rendered tower-free
     ``frames``, then the most recall, each other false detection (on a
     tower's mount, a misplaced box, or composed clutter) costing hits: two
-    on frames with towers, three on composed tower-free ones.  ``no_tower``
+    on frames with towers, ten on composed tower-free ones (a tower that is
+    not there sends a robot to act on it; a tower missed in one frame is
+    found in the next).  ``no_tower``
     holds each frame's hits x variants probabilities."""
     top = max((float(h.scores.max()) for h in hits if len(h.scores)), default=low + 1.0)
     # only hits some setting can keep matter: those the loosest check keeps
@@ -181,7 +187,7 @@ def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[n
         vs = [[refine_box(h.boxes[k], v) for v in REFINE_HEIGHTS] for k in keep]
         cases.append((f, h.scores[keep], p[keep], vs, f.source.endswith("paste")))
     best = None
-    for reject in (0.5, 0.3, 0.2, 0.15, 0.1, 0.05, 0.02):
+    for reject in REJECT_LEVELS:
         for t in sorted(set(np.round(np.linspace(low, max(top, low + 0.1), 30), 4))):
             rendered, composed = LightScore(), LightScore()
             for f, scores, p, vs, is_composed in cases:
@@ -190,7 +196,7 @@ def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[n
                 (composed if is_composed else rendered).add(f.truths, [(tuple(b), 0) for _, b in picks])
             score = LightScore.combine([rendered, composed])
             other = score.false_all - score.false_free
-            key = (rendered.false_free, -(score.hits - 2 * other - 3 * composed.false_free), -reject, t)
+            key = (rendered.false_free, -(score.hits - 2 * other - FREE_FALSE_COST * composed.false_free), -reject, t)
             if best is None or key < best[0]:
                 best = (key, t, reject, score, composed.false_free)
     _, t, reject, score, composed_false = best
@@ -202,10 +208,11 @@ def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[n
 
 
 def calibrate_region(vector: np.ndarray, checker: Mlp | Ensemble, frames: list[PackedFrame], low: float,
-                     threshold: float, reject: float) -> tuple[float, dict]:
-    """The detector threshold inside a tag-given region: the lowest (most
-    recall) at which reading each required tower's region gives no more
-    false first detections than at the full-frame ``threshold``.  The hits'
+                     threshold: float, reject: float) -> tuple[float, float, dict]:
+    """The detector threshold and the check's rejection level inside a
+    tag-given region (where a tower is expected): those with the most recall
+    at which reading each required tower's region gives no more false first
+    detections than the full-frame ``threshold`` and ``reject``.  The hits'
     variants are the reader's for a tag-given region (:meth:`LightReader.check`)."""
     det = TowerDetector(vector, threshold=low)
     reader = LightReader(det, None, checker)
@@ -220,11 +227,11 @@ def calibrate_region(vector: np.ndarray, checker: Mlp | Ensemble, frames: list[P
             vs, p = reader.check(img, [k.xywh for k in kept], t.tower_height)
             reads.append((t, np.array([k.score for k in kept]), p, vs))
 
-    def count(t_region):
+    def count(t_region, r_region):
         hits = false = 0
         for truth, scores, p, vs in reads:
             n = int((scores >= t_region).sum())
-            picks = choose(vs[:n], p[:n], reject, 1)
+            picks = choose(vs[:n], p[:n], r_region, 1)
             if picks:
                 if iou(picks[0][1], truth.box) >= 0.3:
                     hits += 1
@@ -232,15 +239,16 @@ def calibrate_region(vector: np.ndarray, checker: Mlp | Ensemble, frames: list[P
                     false += 1
         return hits, false
 
-    _, allowed = count(threshold)
-    best = (threshold, *count(threshold))
-    for t in np.round(np.linspace(low, threshold, 25), 4):
-        hits, false = count(float(t))
-        if false <= allowed and hits > best[1]:
-            best = (float(t), hits, false)
-    t, hits, false = best
-    return t, {"region_threshold": t, "region_recall": hits / max(len(reads), 1), "region_false": false,
-               "region_towers": len(reads)}
+    _, allowed = count(threshold, reject)
+    best = (threshold, reject, *count(threshold, reject))
+    for r in REJECT_LEVELS:
+        for t in np.round(np.linspace(low, threshold, 25), 4):
+            hits, false = count(float(t), r)
+            if false <= allowed and hits > best[2]:
+                best = (float(t), r, hits, false)
+    t, r, hits, false = best
+    return t, r, {"region_threshold": t, "region_reject": r, "region_recall": hits / max(len(reads), 1),
+                  "region_false": false, "region_towers": len(reads)}
 
 
 def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: None,
@@ -290,7 +298,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         rng = np.random.default_rng(opts.seed)
         order = rng.permutation(len(frames))
         n_mine, n_towers, n_free = (40, 20, 10) if opts.quick else (500, 400, 400)
-        n_extra, n_clutter = (10, 200) if opts.quick else (600, 6000)
+        n_extra, n_clutter = (10, 200) if opts.quick else (1000, 12000)
         mine = [frames[i] for i in order[:n_mine]]
         # calibration: frames the detector never mined, every tower-free one of them
         # and extra composed tower-free frames (false detections are what it must rule out)
@@ -387,13 +395,14 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         else:
             no_tower.append(np.zeros((0, len(REFINE_HEIGHTS))))
     threshold, reject, cal = calibrate(calib, cal_hits, no_tower, low)
-    region_threshold, region_cal = calibrate_region(vector, checker, calib, low, threshold, reject)
+    region_threshold, region_reject, region_cal = calibrate_region(vector, checker, calib, low, threshold, reject)
     cal.update(region_cal)
     support = 1
-    settings = {"threshold": threshold, "min_support": support, "region_threshold": region_threshold}
+    settings = {"threshold": threshold, "min_support": support, "region_threshold": region_threshold,
+                "region_reject": region_reject}
     say(f"detector threshold {threshold:.3f}, tower check rejects at {reject:.2f}: recall "
         f"{cal['train_recall']:.3f}, {cal['train_false']} false on {cal['train_frames']} calibration frames; "
-        f"in tag regions threshold {region_threshold:.3f}: recall {region_cal['region_recall']:.3f}, "
+        f"in tag regions threshold {region_threshold:.3f}, rejects at {region_reject:.2f}: recall {region_cal['region_recall']:.3f}, "
         f"{region_cal['region_false']} false on {region_cal['region_towers']} towers")
     train_acc = float((net.predict(x) == y).mean())
 
