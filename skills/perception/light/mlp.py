@@ -52,6 +52,15 @@ def crop_features(crop: np.ndarray, size: tuple[int, int] = DEFAULT_SIZE, kind: 
     return np.concatenate([px, rows, _crop_hog().compute(grey).ravel()])
 
 
+def geometric_mean(p: np.ndarray, axis: int) -> np.ndarray:
+    """The normalised geometric mean of probability rows ``p`` along
+    ``axis`` (the last axis holds the classes): what several readings of
+    one crop, or several networks, agree on."""
+    logp = np.log(np.clip(p, 1e-12, 1.0)).mean(axis=axis)
+    q = np.exp(logp - logp.max(axis=-1, keepdims=True))
+    return q / q.sum(axis=-1, keepdims=True)
+
+
 @dataclass
 class Mlp:
     w1: np.ndarray      # (n_in, n_hidden)
@@ -165,9 +174,8 @@ class Mlp:
 
 @dataclass
 class Ensemble:
-    """Networks of one input kind trained from different starts (and
-    resamples of the training set), read together: the normalised
-    geometric mean of their probabilities.  One network's quirks (a lit
+    """Networks of one input kind trained from different starts, read
+    together: the normalised geometric mean of their probabilities.  One network's quirks (a lit
     lens it learnt from a few crops) are outvoted; a crop they disagree on
     gets a flat distribution.  Stored as one file of stacked weights."""
     members: list[Mlp]
@@ -182,15 +190,13 @@ class Ensemble:
 
     @property
     def n_out(self) -> int:
-        return self.members[0].w2.shape[1]
+        return self.members[0].n_out
 
     def features(self, crops) -> np.ndarray:
         return self.members[0].features(crops)
 
     def probabilities(self, x: np.ndarray) -> np.ndarray:
-        logp = np.mean([np.log(np.clip(m.probabilities(x), 1e-12, 1.0)) for m in self.members], axis=0)
-        q = np.exp(logp - logp.max(axis=1, keepdims=True))
-        return q / q.sum(axis=1, keepdims=True)
+        return geometric_mean(np.stack([m.probabilities(x) for m in self.members]), axis=0)
 
     def predict(self, x: np.ndarray) -> np.ndarray:
         return self.probabilities(x).argmax(axis=1)

@@ -20,7 +20,7 @@ from rll_bt.backend import LightDetection
 from rll_bt.errors import UserError
 
 from .hog import TOWER_H, TOWER_W, TowerDetector, crop_window
-from .mlp import Ensemble, Mlp
+from .mlp import Ensemble, Mlp, geometric_mean
 
 MODEL_DIR = Path(__file__).with_name("models")
 DETECTOR_FILE = "tower_hog_svm.npz"
@@ -55,8 +55,8 @@ class LightReader:
         self.candidates = candidates  # detector hits the networks look at, strongest first
         # the detector's threshold inside a tag-given region (a tower is expected there)
         self.region_threshold = detector.threshold if region_threshold is None else region_threshold
-        # the check's "no tower" level there (default: ``reject``)
-        self.region_reject = region_reject
+        # the check's "no tower" level there
+        self.region_reject = reject if region_reject is None else region_reject
 
     @classmethod
     def load(cls, directory: str | Path | None = None, **detector_options) -> "LightReader":
@@ -77,14 +77,13 @@ class LightReader:
         except (OSError, ValueError, KeyError) as exc:
             raise UserError(f"cannot read the light models in {d}: {exc}") from None
         reject = float(settings.pop("reject", 0.5))
-        reader_options = {k: settings.pop(k) for k in ("snap", "min_confidence") if k in settings}
         region_threshold = settings.pop("region_threshold", None)
         region_reject = settings.pop("region_reject", None)
         settings.update(detector_options)
         if "threshold" in detector_options:
             region_threshold = None
         return cls(TowerDetector(vector, **settings), classifier, checker, reject=reject,
-                   region_threshold=region_threshold, region_reject=region_reject, **reader_options)
+                   region_threshold=region_threshold, region_reject=region_reject)
 
     @staticmethod
     def _run(net: Mlp | Ensemble, image: np.ndarray, boxes) -> np.ndarray:
@@ -101,9 +100,7 @@ class LightReader:
             return self._run(self.classifier, image, boxes)
         variants = [jittered(b, j) for b in boxes for j in JITTER]
         p = self._run(self.classifier, image, variants).reshape(len(boxes), len(JITTER), -1)
-        logp = np.log(np.clip(p, 1e-12, 1.0)).mean(axis=1)
-        q = np.exp(logp - logp.max(axis=1, keepdims=True))
-        return q / q.sum(axis=1, keepdims=True)
+        return geometric_mean(p, axis=1)
 
     def no_tower(self, image: np.ndarray, boxes) -> np.ndarray:
         """The tower check's probability that each box is not a tower (zeros without a check)."""
@@ -131,12 +128,12 @@ class LightReader:
         snap = bool(tower_height) and self.snap is not None
         if snap:
             variants = [vs + snapped(b, tower_height) for vs, b in zip(variants, boxes)]
-        n = len(variants[0])
-        p_no = self.no_tower(image, [v for vs in variants for v in vs]).reshape(len(variants), n)
-        if snap:
-            off = np.abs(np.array([[v[3] for v in vs] for vs in variants]) / tower_height - 1.0)
-            p_no = np.where(off > self.snap, 1.0, p_no)
-        return variants, p_no
+        flat = [v for vs in variants for v in vs]
+        p_no = np.ones(len(flat))
+        # only variants of about the tag's height are looked at; the others count as no tower
+        fits = np.array([not snap or abs(v[3] / tower_height - 1.0) <= self.snap for v in flat])
+        p_no[fits] = self.no_tower(image, [v for v, ok in zip(flat, fits) if ok])
+        return variants, p_no.reshape(len(variants), -1)
 
     def read(self, image: np.ndarray, region: tuple[int, int, int, int] | None = None,
              tower_height: float | None = None, camera: str = "front") -> list[LightDetection]:
@@ -150,8 +147,7 @@ class LightReader:
         if not boxes:
             return []
         variants, p_no = self.check(image, [b.xywh for b in boxes], tower_height)
-        reject = self.region_reject if in_region and self.region_reject is not None else self.reject
-        picks = choose(variants, p_no, reject, self.max_detections)
+        picks = choose(variants, p_no, self.region_reject if in_region else self.reject, self.max_detections)
         chosen = [(boxes[i], v) for i, v in picks]
         probs = self.classify(image, [v for _, v in chosen])
         return [LightDetection(box=tuple(int(round(c)) for c in v), state=int(p.argmax()), score=b.score,

@@ -42,7 +42,7 @@ from rll_bt.errors import UserError
 from .dataset import ChunkResult, ChunkSpec, PackedFrame, free_frames, make_chunk
 from .evaluation import LightScore
 from .hog import TowerDetector, crop_window, iou, make_hog, select, train_svm, window_features, window_for_tower
-from .mlp import DEFAULT_SIZE, N_STATES, NO_TOWER, Ensemble, Mlp
+from .mlp import DEFAULT_SIZE, N_STATES, NO_TOWER, Ensemble, Mlp, crop_features
 from .photos import photos
 from .reader import (CHECKER_FILE, CLASSIFIER_FILE, DETECTOR_FILE, REFINE_HEIGHTS, REPORT_FILE, LightReader,
                      choose, refine_box, save_detector)
@@ -374,7 +374,9 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         if k % 100 == 0:
             say(f"  SCG iteration {k}: loss {fx:.4f}")
 
-    features = Mlp.create(1, 1, DEFAULT_SIZE, n_out=2).features
+    def features(crops):
+        return np.stack([crop_features(c, DEFAULT_SIZE) for c in crops])
+
     x_check = np.concatenate([features(towers), features(not_towers)])
     y_check = np.concatenate([np.zeros(len(towers), np.int64), np.ones(len(not_towers), np.int64)])
     say(f"training the tower check ({x_check.shape[1]} inputs, {opts.members} x {opts.check_hidden} hidden, "
