@@ -5,7 +5,7 @@ import json
 import numpy as np
 
 from skills.perception.light.dataset import ChunkSpec, make_chunk
-from skills.perception.light.reader import CLASSIFIER_FILE, DETECTOR_FILE, REPORT_FILE, LightReader
+from skills.perception.light.reader import CHECKER_FILE, CLASSIFIER_FILE, DETECTOR_FILE, REPORT_FILE, LightReader
 from skills.perception.light.training import TrainOptions, plan, train_light
 
 
@@ -46,3 +46,28 @@ def test_chunk_labels_match_the_world(tmp_path):
     assert res.pos.shape[1] == res.neg.shape[1] == 1188
     assert len(res.crops) == len(res.states) and set(res.states) <= set(range(9))
     assert 8 in res.states and (res.states < 8).sum() > 0          # towers and misplaced crops ("no tower")
+
+
+def test_augmentation_depends_only_on_its_generator():
+    """Training is reproducible: what ran before in a worker process (other
+    chunks, OpenCV's own generator) does not change an augmented frame."""
+    import cv2
+
+    from skills.perception.light.augment import photometric
+    img = np.random.default_rng(1).integers(0, 256, (48, 64, 3)).astype(np.uint8)
+    first = [photometric(img, np.random.default_rng(s)) for s in range(12)]
+    cv2.randn(np.empty((5, 5), np.float32), 0, 1)          # someone else draws from OpenCV's generator
+    again = [photometric(img, np.random.default_rng(s)) for s in range(12)]
+    assert all(np.array_equal(a, b) for a, b in zip(first, again))
+    assert len({a.tobytes() for a in first}) == 12
+
+
+def test_training_is_reproducible_across_worker_processes(tmp_path):
+    """The same options give the same model files, however the chunks fall on the workers."""
+    files = []
+    for run in ("a", "b"):
+        out = tmp_path / run
+        train_light(TrainOptions(out, samples=24, heldout=4, quick=True, workers=2, rounds=1, iterations=15))
+        files.append({p.name: p.read_bytes() for p in out.glob("*.npz")})
+    assert set(files[0]) == {DETECTOR_FILE, CLASSIFIER_FILE, CHECKER_FILE}
+    assert files[0] == files[1]

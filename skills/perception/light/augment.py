@@ -3,7 +3,8 @@
 Each call draws, from ``rng``: brightness offset, contrast, gamma, a colour
 cast (per-channel gain, like a white-balance error), saturation, vignetting,
 blur (Gaussian or a short motion streak), sensor noise and JPEG
-compression.  ``strength`` scales all of them (0: the image unchanged).
+compression.  The same ``rng`` state gives the same image, whatever ran
+before in the process (training is reproducible).  ``strength`` scales all of them (0: the image unchanged).
 """
 from __future__ import annotations
 
@@ -48,6 +49,7 @@ def photometric(img: np.ndarray, rng: np.random.Generator, strength: float = 1.0
         out = cv2.filter2D(out, -1, k)
     if rng.random() < 0.7:                                             # sensor noise
         noise = np.empty(out.shape, np.int16)
+        cv2.setRNGSeed(int(rng.integers(2 ** 31)))    # OpenCV's own generator is global: seed it from rng
         cv2.randn(noise, 0, float(rng.uniform(0, 7) * s))
         out = np.clip(out.astype(np.int16) + noise, 0, 255).astype(np.uint8)
     if rng.random() < 0.6 * min(1.0, s):
