@@ -71,3 +71,45 @@ def test_training_is_reproducible_across_worker_processes(tmp_path):
         files.append({p.name: p.read_bytes() for p in out.glob("*.npz")})
     assert set(files[0]) == {DETECTOR_FILE, CLASSIFIER_FILE, CHECKER_FILE}
     assert files[0] == files[1]
+
+
+def _calibration_case(n_towers=100, n_free=1000, n_false=3, false_score=0.5):
+    """Frames with one tower each (detector scores spread over -0.5..2, the
+    check sure of them) and tower-free frames, ``n_false`` of which hold a
+    hit the check cannot tell from a tower, of detector score ``false_score``."""
+    from skills.perception.light.dataset import PackedFrame, Truth
+    from skills.perception.light.reader import REFINE_HEIGHTS
+    from skills.perception.light.training import FrameHits
+    v = len(REFINE_HEIGHTS)
+
+    def hits(box, score):
+        return FrameHits(np.array([box], np.float32), np.array([score], np.float32), np.array([False]),
+                         np.zeros((1, v, 32, 8, 3), np.uint8), np.zeros((0, 1188), np.float32),
+                         np.array([-1]), np.zeros((1, v), np.float32))
+
+    empty = FrameHits(np.zeros((0, 4), np.float32), np.zeros(0, np.float32), np.zeros(0, bool),
+                      np.zeros((0, v, 32, 8, 3), np.uint8), np.zeros((0, 1188), np.float32),
+                      np.zeros(0, np.int64), np.zeros((0, v), np.float32))
+    frames, found, p_no = [], [], []
+    for k, score in enumerate(np.linspace(-0.5, 2.0, n_towers)):
+        box = (100 + k, 120, 20, 60)
+        frames.append(PackedFrame(b"", [Truth(box, k % 8, True)], "render"))
+        found.append(hits(box, score))
+        p_no.append(np.full((1, v), 0.01))
+    for k in range(n_free):
+        frames.append(PackedFrame(b"", [], "free-paste"))
+        found.append(hits((300, 50, 20, 60), false_score) if k < n_false else empty)
+        p_no.append(np.full((1, v), 0.01) if k < n_false else np.zeros((0, v)))
+    return frames, found, p_no
+
+
+def test_calibration_keeps_false_towers_under_the_allowed_rate():
+    """At most ``free_rate`` false towers per tower-free frame, even at a cost in recall."""
+    from skills.perception.light.training import calibrate
+    frames, found, p_no = _calibration_case()
+    t, _, cal = calibrate(frames, found, p_no, low=-0.8, free_rate=0.0005)
+    assert t > 0.5 and cal["train_false_free"] == 0 and cal["train_false_allowed"] == 0
+    assert 0.5 < cal["train_recall"] < 0.7                 # the towers scored below the false hits are lost
+    # allowed three in 1000 (and worth 30 hits against some 40 lost) they are kept
+    t, _, cal = calibrate(frames, found, p_no, low=-0.8, free_rate=0.003)
+    assert t <= -0.5 and cal["train_false_free"] == 3 and cal["train_recall"] == 1.0
