@@ -113,3 +113,15 @@ def test_calibration_keeps_false_towers_under_the_allowed_rate():
     # allowed three in 1000 (and worth 30 hits against some 40 lost) they are kept
     t, _, cal = calibrate(frames, found, p_no, low=-0.8, free_rate=0.003)
     assert t <= -0.5 and cal["train_false_free"] == 3 and cal["train_recall"] == 1.0
+
+
+def test_the_check_learns_from_the_clutter_that_looks_most_like_a_tower():
+    from skills.perception.light.training import hard_clutter
+    rng = np.random.default_rng(0)
+    towers = rng.normal(1.0, 0.3, (200, 6)).astype(np.float32)
+    other = rng.normal(-1.0, 0.3, (200, 6)).astype(np.float32)
+    clutter = rng.normal(-1.0, 0.3, (1000, 6)).astype(np.float32)
+    clutter[::50] = rng.normal(0.8, 0.3, (20, 6))             # 20 crops a tower could be
+    pick = hard_clutter(towers, other, clutter, 40, TrainOptions("unused", iterations=40), rng)
+    assert len(pick) == len(set(pick.tolist())) == 40
+    assert set(range(0, 1000, 50)) <= set(pick.tolist())      # every tower-like crop is learnt from
