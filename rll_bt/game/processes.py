@@ -124,7 +124,9 @@ class ProcessGame:
         self.recorder: Recorder | None = None
         self._logs = []
         self._team_logs: list[Path] = []
-        self._kills: list[tuple[float, int]] = []     # (sim time, robot) of killed agents
+        # (wall time, robot) of killed agents: on the clock the team server stamps its lines with,
+        # so that a task sent just before the kill starts before it once both are mapped
+        self._kills: list[tuple[float, int]] = []
         self.restarts = 0
         self._t0 = 0.0                  # sim time the game started (the world runs while processes start)
         self._started = False
@@ -215,7 +217,7 @@ class ProcessGame:
         """The agent process dies without a goodbye (SIGKILL): its links drop,
         its robot stops once the last drive command times out."""
         self._kill(f"agent{number}")
-        self._kills.append((self.clock.now(), number))
+        self._kills.append((self.wall.now(), number))
         self.recorder.note("agent killed", robot=number)
 
     def start_agent(self, number: int) -> None:
@@ -355,7 +357,8 @@ class ProcessGame:
                       key=lambda e: e["t"])
         rec = self.recorder.rec
         rec.tasks = task_runs(team, end=end)
-        for t, robot in self._kills:
+        for wall, robot in self._kills:
+            t = round(self.time_map(wall), 4) if len(self.time_map) else self.clock.now()
             for run in rec.tasks.get(robot, []):
                 if run["start"] <= t < run["end"]:
                     run["end"], run["outcome"] = t, "agent killed"
