@@ -122,6 +122,7 @@ def test_the_check_learns_from_the_clutter_that_looks_most_like_a_tower():
     other = rng.normal(-1.0, 0.3, (200, 6)).astype(np.float32)
     clutter = rng.normal(-1.0, 0.3, (1000, 6)).astype(np.float32)
     clutter[::50] = rng.normal(0.8, 0.3, (20, 6))             # 20 crops a tower could be
-    pick = hard_clutter(towers, other, clutter, 40, TrainOptions("unused", iterations=40), rng)
+    x, y = np.concatenate([towers, other]), np.repeat(np.array([0, 1], np.int64), 200)
+    pick = hard_clutter(x, y, clutter, 40, TrainOptions("unused", iterations=40), rng)
     assert len(pick) == len(set(pick.tolist())) == 40
     assert set(range(0, 1000, 50)) <= set(pick.tolist())      # every tower-like crop is learnt from

@@ -151,28 +151,27 @@ def _mine_job(args) -> list[FrameHits]:
     return out
 
 
-def train_ensemble(x: np.ndarray, y: np.ndarray, hidden: int, n_out: int, seed: int, opts: TrainOptions,
-                   callback=None) -> Ensemble:
-    """``opts.members`` networks on the same crops from different starts."""
-    members = []
-    for i in range(opts.members):
+def train_ensemble(x: np.ndarray, y: np.ndarray, hidden: int, n_out: int, seed: int, members: int,
+                   iterations: int, callback=None) -> Ensemble:
+    """``members`` networks on the same crops from different starts."""
+    nets = []
+    for i in range(members):
         m = Mlp.create(x.shape[1], hidden, DEFAULT_SIZE, seed=seed + 17 * i, n_out=n_out)
-        m.train(x, y, max_iter=opts.iterations, decay=1e-3, callback=callback)
-        members.append(m)
-    return Ensemble(members)
+        m.train(x, y, max_iter=iterations, decay=1e-3, callback=callback)
+        nets.append(m)
+    return Ensemble(nets)
 
 
-def hard_clutter(x_towers: np.ndarray, x_other: np.ndarray, x_clutter: np.ndarray, n: int, opts: TrainOptions,
+def hard_clutter(x: np.ndarray, y: np.ndarray, x_clutter: np.ndarray, n: int, opts: TrainOptions,
                  rng: np.random.Generator) -> np.ndarray:
     """Which ``n`` of the clutter crops (the detector's false hits on
-    tower-free frames) the check learns from: half at random, half the ones a
-    probe network (one, half the iterations, trained with the random half)
-    finds most tower-like: hard-negative mining for the check."""
+    tower-free frames) the check learns from besides its crops ``x``
+    (labels ``y``: 0 tower, 1 not): half at random, half the ones a probe
+    network (one, half the iterations, trained with the random half) finds
+    most tower-like: hard-negative mining for the check."""
     pick = rng.permutation(len(x_clutter))[:n // 2]
-    probe = Mlp.create(x_towers.shape[1], opts.check_hidden, DEFAULT_SIZE, seed=opts.seed + 3, n_out=2)
-    x = np.concatenate([x_towers, x_other, x_clutter[pick]])
-    y = np.concatenate([np.zeros(len(x_towers), np.int64), np.ones(len(x) - len(x_towers), np.int64)])
-    probe.train(x, y, max_iter=max(1, opts.iterations // 2), decay=1e-3)
+    probe = train_ensemble(np.concatenate([x, x_clutter[pick]]), np.concatenate([y, np.ones(len(pick), y.dtype)]),
+                           opts.check_hidden, 2, opts.seed + 3, 1, max(1, opts.iterations // 2))
     order = np.argsort(probe.probabilities(x_clutter)[:, 1], kind="stable")    # most tower-like first
     taken = np.zeros(len(x_clutter), bool)
     taken[pick] = True
@@ -190,7 +189,7 @@ def _split(items: list, n: int) -> list[list]:
 
 
 def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[np.ndarray], low: float,
-              limit: int = 3, free_rate: float = None) -> tuple[float, float, dict]:
+              limit: int = 3, free_rate: float | None = None) -> tuple[float, float, dict]:
     """The detector threshold and the tower check's "no tower" level at which
     a hit is dropped, with the reader's own choice of hits
     (:func:`.reader.choose`): at most ``free_rate`` false detections per
@@ -208,27 +207,26 @@ def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[n
     for f, h, p in zip(frames, hits, no_tower):
         keep = np.flatnonzero(p.min(axis=1) < 0.5) if len(p) else np.zeros(0, int)
         vs = [[refine_box(h.boxes[k], v) for v in REFINE_HEIGHTS] for k in keep]
-        cases.append((f, h.scores[keep], p[keep], vs, f.source.endswith("paste")))
+        cases.append((f, h.scores[keep], p[keep], vs))
     allowed = int(free_rate * sum(1 for f in frames if not f.truths))
     best = None
     for reject in REJECT_LEVELS:
         for t in sorted(set(np.round(np.linspace(low, max(top, low + 0.1), 30), 4))):
-            rendered, composed = LightScore(), LightScore()
-            for f, scores, p, vs, is_composed in cases:
+            score = LightScore()
+            for f, scores, p, vs in cases:
                 n = int((scores >= t).sum())          # hits come strongest first
                 picks = choose(vs[:n], p[:n], reject, limit)
-                (composed if is_composed else rendered).add(f.truths, [(tuple(b), 0) for _, b in picks])
-            score = LightScore.combine([rendered, composed])
+                score.add(f.truths, [(tuple(b), 0) for _, b in picks])
             other = score.false_all - score.false_free
             key = (max(0, score.false_free - allowed),
                    -(score.hits - 2 * other - FREE_FALSE_COST * score.false_free), -reject, t)
             if best is None or key < best[0]:
-                best = (key, t, reject, score, rendered.false_free)
-    _, t, reject, score, rendered_false = best
+                best = (key, t, reject, score)
+    _, t, reject, score = best
     return float(t), float(reject), {"threshold": float(t), "reject": float(reject),
                                      "train_recall": score.hits / max(score.required, 1),
                                      "train_false": score.false_all, "train_false_free": score.false_free,
-                                     "train_false_rendered_free": rendered_false, "train_false_allowed": allowed,
+                                     "train_false_allowed": allowed,
                                      "train_frames": score.frames, "train_free_frames": score.free_frames}
 
 
@@ -400,24 +398,25 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
     def features(crops):
         return np.stack([crop_features(c, DEFAULT_SIZE) for c in crops])
 
-    x_towers, x_other = features(towers), features(not_towers)
+    x_check = np.concatenate([features(towers), features(not_towers)])
+    y_check = np.concatenate([np.zeros(len(towers), np.int64), np.ones(len(not_towers), np.int64)])
     if clutter:
         x_clutter = features(clutter)
-        pick = hard_clutter(x_towers, x_other, x_clutter, n_clutter, opts, rng)
+        pick = hard_clutter(x_check, y_check, x_clutter, n_clutter, opts, rng)
         say(f"{len(pick)} clutter crops for the check, half of them the most tower-like to a probe network")
-        x_other = np.concatenate([x_other, x_clutter[pick]])
+        x_check = np.concatenate([x_check, x_clutter[pick]])
+        y_check = np.concatenate([y_check, np.ones(len(pick), np.int64)])
         del x_clutter
-    x_check = np.concatenate([x_towers, x_other])
-    y_check = np.concatenate([np.zeros(len(x_towers), np.int64), np.ones(len(x_other), np.int64)])
     say(f"training the tower check ({x_check.shape[1]} inputs, {opts.members} x {opts.check_hidden} hidden, "
-        f"tower / no tower) on {len(x_towers)} tower and {len(x_other)} other crops with SCG, "
+        f"tower / no tower) on {len(towers)} tower and {len(x_check) - len(towers)} other crops with SCG, "
         f"{opts.iterations} iterations")
-    checker = train_ensemble(x_check, y_check, opts.check_hidden, 2, opts.seed + 1, opts, tick)
+    checker = train_ensemble(x_check, y_check, opts.check_hidden, 2, opts.seed + 1, opts.members, opts.iterations,
+                             tick)
     x = np.concatenate([x_check[:len(true_boxes)], features(fits)]) if fits else x_check[:len(true_boxes)]
     y = np.concatenate([tower_states[:len(true_boxes)], np.asarray(fit_states, np.int64)])
     say(f"training the light network ({x.shape[1]} inputs, {opts.members} x {opts.hidden} hidden, 8 states) "
         f"on {len(x)} tower crops with SCG, {opts.iterations} iterations")
-    net = train_ensemble(x, y, opts.hidden, N_STATES, opts.seed, opts, tick)
+    net = train_ensemble(x, y, opts.hidden, N_STATES, opts.seed, opts.members, opts.iterations, tick)
     no_tower = []
     for h in cal_hits:
         if len(h.crops):
