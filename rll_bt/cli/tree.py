@@ -72,6 +72,8 @@ def register(cli) -> None:
                                  "with its ports and documentation.")
     p.add_argument("types", nargs="*", metavar="TYPE", help="show only these types, in full")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--btcpp", action="store_true",
+                   help="as a BehaviorTree.CPP 4 <TreeNodesModel> (load it into Groot2)")
     p.set_defaults(func=_nodes)
 
     p = g.add_parser("run", help="run a tree on a backend until it succeeds or fails",
@@ -169,6 +171,14 @@ def _nodes(args) -> int:
             from ..tree.errors import did_you_mean
             raise UserError(f"unknown node type {missing[0]!r}", hint=did_you_mean(missing[0], types, "node types"))
         types = {t: types[t] for t in args.types}
+    if args.btcpp:
+        from ..tree.btcpp import nodes_model
+        from ..tree.registry import NodeRegistry
+        sub = NodeRegistry()
+        for nt in types.values():
+            sub.register(nt)
+        sys.stdout.write(nodes_model(sub))
+        return EXIT_OK
     if args.json:
         print(json.dumps([nt.describe() for nt in types.values()], indent=1, default=repr))
         return EXIT_OK
