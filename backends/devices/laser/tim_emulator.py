@@ -1,0 +1,159 @@
+"""A TiM5xx on a TCP port: :class:`~.tim_device.TimDevice` served to any
+number of CoLa clients by one thread (``select``).
+
+    emu = TimEmulator(TimDevice(TIM571, source), port=0).start()
+    emu.address        # ("127.0.0.1", port) for the driver
+
+Faults: :meth:`unplug` drops every connection and stops listening for a
+while (connects are refused, as with the cable out), :meth:`set_silent`
+keeps the connections but sends nothing.
+"""
+from __future__ import annotations
+
+import logging
+import select
+import socket
+import threading
+
+from rll_bt.clock import Clock, WallClock
+
+from .tim_device import TimDevice
+
+log = logging.getLogger(__name__)
+
+
+class TimEmulator:
+    def __init__(self, device: TimDevice, *, host: str = "127.0.0.1", port: int = 0,
+                 clock: Clock | None = None, period: float = 0.005):
+        self.device = device
+        self.host = host
+        self.port = port
+        self.clock = clock or WallClock()
+        self.period = period
+        self.lock = threading.RLock()
+        self.silent = False
+        self.connects = 0
+        self._listener: socket.socket | None = None
+        self._clients: dict[socket.socket, object] = {}
+        self._unplugged_until: float | None = None
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    @property
+    def address(self) -> tuple[str, int]:
+        return self.host, self.port
+
+    def _listen(self) -> None:
+        s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        s.bind((self.host, self.port))
+        s.listen(4)
+        s.setblocking(False)
+        self.port = s.getsockname()[1]
+        self._listener = s
+
+    def start(self) -> TimEmulator:
+        self._listen()
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, name=f"tim:{self.port}", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+            self._thread = None
+        self._drop_all()
+
+    def unplug(self, duration: float) -> None:
+        with self.lock:
+            self._unplugged_until = self.clock.now() + duration
+
+    def replug(self) -> None:
+        with self.lock:
+            if self._unplugged_until is not None:
+                self._unplugged_until = self.clock.now()
+
+    @property
+    def plugged(self) -> bool:
+        return self._listener is not None
+
+    def set_silent(self, silent: bool) -> None:
+        with self.lock:
+            self.silent = silent
+
+    @property
+    def clients(self) -> int:
+        return len(self._clients)
+
+    def _drop_all(self) -> None:
+        for c in list(self._clients):
+            self._close(c)
+        if self._listener is not None:
+            self._listener.close()
+            self._listener = None
+
+    def _close(self, c: socket.socket) -> None:
+        self._clients.pop(c, None)
+        try:
+            c.close()
+        except OSError:
+            pass
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self._step()
+            except Exception:
+                log.exception("TiM emulator step failed")
+                self._stop.wait(0.05)
+
+    def _step(self) -> None:
+        now = self.clock.now()
+        with self.lock:
+            until = self._unplugged_until
+            if until is not None:
+                if self._listener is not None and now < until:
+                    log.info("TiM %d: unplugged", self.port)
+                    self._drop_all()
+                elif self._listener is None and now >= until:
+                    self._unplugged_until = None
+                    self._listen()
+                    log.info("TiM %d: plugged in again", self.port)
+        if self._listener is None:
+            self._stop.wait(self.period)
+            return
+        socks = [self._listener, *self._clients]
+        ready, _, _ = select.select(socks, [], [], self.period)
+        now = self.clock.now()
+        with self.lock:
+            for s in ready:
+                if s is self._listener:
+                    try:
+                        c, _ = s.accept()
+                    except OSError:
+                        continue
+                    c.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                    self._clients[c] = self.device.session()
+                    self.connects += 1
+                    continue
+                if s not in self._clients:
+                    continue
+                try:
+                    data = s.recv(65536)
+                except OSError:
+                    data = b""
+                if not data:
+                    self._close(s)
+                    continue
+                if not self.silent:
+                    self._clients[s].receive(data, now)
+            for c, session in list(self._clients.items()):
+                session.advance(now)
+                out = session.take_output()
+                if out and not self.silent:
+                    try:
+                        c.sendall(out)
+                    except OSError:
+                        self._close(c)

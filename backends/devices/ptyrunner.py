@@ -1,0 +1,127 @@
+"""A device model behind a pseudo-terminal, as a USB serial device looks to
+its host.
+
+The model has ``receive(data, now)``, ``take_output() -> bytes`` and
+``advance(now)``; :class:`PtyRunner` publishes the pty's slave under the
+symlink ``link`` (what the host opens, like ``/dev/ttyACM1``), feeds the
+model what the host writes and writes back what it produces, in a thread.
+Faults: :meth:`unplug` removes the device for a while (the link and the pty
+go away, as when the cable is pulled; a fresh pty comes back behind the same
+link), :meth:`set_silent` keeps the port but sends nothing (a hung device).
+The pty itself is :class:`backends.robotino.emulator.PtyDevice`.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import select
+import threading
+
+from rll_bt.clock import Clock, WallClock
+
+log = logging.getLogger(__name__)
+
+
+class PtyRunner:
+    def __init__(self, model, link: str, *, clock: Clock | None = None, period: float = 0.002,
+                 on_connect=None):
+        from backends.robotino.emulator import PtyDevice
+        self.model = model
+        self.clock = clock or WallClock()
+        self.pty = PtyDevice(link)
+        self.period = period
+        self.on_connect = on_connect
+        self.lock = threading.RLock()
+        self.silent = False
+        self.connects = 0
+        self.bytes_in = self.bytes_out = 0
+        self._unplugged_until: float | None = None
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    @property
+    def link(self) -> str:
+        return self.pty.link
+
+    def start(self) -> PtyRunner:
+        os.makedirs(os.path.dirname(self.link) or ".", exist_ok=True)
+        self.pty.open()
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, name=f"pty:{os.path.basename(self.link)}", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+            self._thread = None
+        self.pty.close()
+
+    def unplug(self, duration: float) -> None:
+        """Pull the cable for ``duration`` seconds (``inf``: until :meth:`replug`)."""
+        with self.lock:
+            self._unplugged_until = self.clock.now() + duration
+
+    def replug(self) -> None:
+        with self.lock:
+            if self._unplugged_until is not None:
+                self._unplugged_until = self.clock.now()
+
+    @property
+    def plugged(self) -> bool:
+        return self.pty.is_open
+
+    def set_silent(self, silent: bool) -> None:
+        with self.lock:
+            self.silent = silent
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self._step()
+            except Exception:              # keep serving the host
+                log.exception("%s: step failed", self.link)
+                self._stop.wait(0.05)
+
+    def _step(self) -> None:
+        now = self.clock.now()
+        with self.lock:
+            until = self._unplugged_until
+            if until is not None:
+                if self.pty.is_open and now < until:
+                    log.info("%s: unplugged", self.link)
+                    self.pty.close()
+                elif not self.pty.is_open and now >= until:
+                    self._unplugged_until = None
+                    self.pty.open()
+                    log.info("%s: plugged in again", self.link)
+            if not self.pty.is_open:
+                self._stop.wait(self.period)
+                return
+            was = self.pty.connected
+            self.pty.connected = self.pty.poll_connected()
+            if self.pty.connected and not was:
+                self.connects += 1
+                if self.on_connect is not None:
+                    self.on_connect(now)
+        fd = self.pty.master
+        if not self.pty.connected:
+            self._stop.wait(self.period)
+            return
+        ready, _, _ = select.select([fd], [], [], self.period)
+        now = self.clock.now()
+        with self.lock:
+            if not self.pty.is_open:
+                return
+            if ready:
+                data = self.pty.read()
+                if data:
+                    self.bytes_in += len(data)
+                    if not self.silent:
+                        self.model.receive(data, now)
+            self.model.advance(now)
+            out = self.model.take_output()
+            if out and not self.silent and self.pty.connected:
+                self.pty.write(out)
+                self.bytes_out += len(out)

@@ -1,0 +1,120 @@
+"""The URG driver against the emulated sensor on a real pty: scans decode to
+the distances the sensor measured, stamps map to host time, and a pulled
+cable is survived."""
+import math
+import time
+
+import numpy as np
+import pytest
+
+from backends.devices.laser import LaserMount
+from backends.devices.laser.urg import UrgLaser
+from backends.devices.laser.urg_device import URG_04LX, UTM_30LX, UrgDevice
+from backends.devices.ptyrunner import PtyRunner
+
+
+def _ranges(model):
+    steps = np.arange(model.max_step + 1)
+    return 500.0 + 10.0 * (steps % 300)          # mm, a different value on every step
+
+
+@pytest.fixture
+def urg(tmp_path):
+    made = []
+
+    def make(model=URG_04LX, source=None):
+        dev = UrgDevice(model, source or (lambda t: _ranges(model)), start=time.monotonic())
+        runner = PtyRunner(dev, str(tmp_path / f"urg{len(made)}")).start()
+        made.append(runner)
+        return dev, runner
+    yield make
+    for r in made:
+        r.stop()
+
+
+@pytest.mark.parametrize("mode,encoding", [("stream", 3), ("poll", 3), ("stream", 2)])
+def test_scans_decode_to_what_the_sensor_measured(urg, wait_for, mode, encoding):
+    dev, runner = urg(UTM_30LX if encoding == 3 else URG_04LX)
+    m = dev.model
+    laser = UrgLaser(runner.link, mode=mode, encoding=encoding, mount=LaserMount(x=0.1, yaw=0.2)).start(wait=5)
+    try:
+        assert wait_for(lambda: laser.stats().scans >= 3, 3)
+        scan = laser.latest()
+        expected = _ranges(m)[m.amin:m.amax + 1] / 1000.0
+        if encoding == 2:
+            expected = np.where(expected <= 4.095, expected, np.inf)
+        assert np.allclose(scan.ranges, expected)
+        assert scan.angle_min == pytest.approx((m.amin - m.afrt) * 2 * math.pi / m.ares)
+        assert scan.angle_increment == pytest.approx(2 * math.pi / m.ares)
+        assert scan.mount.x == 0.1 and scan.mount.theta == 0.2
+        assert abs(scan.stamp - time.monotonic()) < 0.5                    # host time, not device time
+        assert laser.info["PROT"] == "SCIP 2.0" and laser.stats().errors == 0
+        assert laser.scip11_switches == (1 if m.scip1_at_boot else 0)
+    finally:
+        laser.close()
+
+
+def test_stamps_are_the_scan_times_on_the_host_clock(urg, wait_for):
+    dev, runner = urg(URG_04LX)
+    laser = UrgLaser(runner.link).start(wait=5)
+    try:
+        seen = []
+        end = time.monotonic() + 1.5
+        while time.monotonic() < end:
+            s = laser.latest()
+            if s is not None and (not seen or s.stamp != seen[-1]):
+                seen.append(s.stamp)
+            time.sleep(0.005)
+        steps = np.diff(seen)
+        assert len(seen) >= 8
+        assert np.allclose(steps, 0.1, atol=0.02)         # 600 rpm: one scan every 100 ms
+        # each stamp lies on the device's scan grid, shifted by one common offset
+        phase = [(t - dev.boot) % 0.1 for t in seen]
+        assert max(phase) - min(phase) < 0.02
+    finally:
+        laser.close()
+
+
+def test_an_upside_down_laser_keeps_angles_counter_clockwise(urg):
+    dev, runner = urg(UTM_30LX)
+    laser = UrgLaser(runner.link, mount=LaserMount(upside_down=True)).start(wait=5)
+    try:
+        scan = laser.latest()
+        m = dev.model
+        raw = _ranges(m)[m.amin:m.amax + 1] / 1000.0
+        assert np.allclose(scan.ranges, raw[::-1])
+        assert scan.angle_min == pytest.approx(-(m.amax - m.afrt) * 2 * math.pi / m.ares)
+    finally:
+        laser.close()
+
+
+def test_the_driver_comes_back_after_the_cable_was_pulled(urg, wait_for):
+    _dev, runner = urg(URG_04LX)
+    laser = UrgLaser(runner.link, timeout=0.5, reopen_interval=0.1).start(wait=5)
+    try:
+        runner.unplug(1.0)
+        assert wait_for(lambda: not laser.stats().connected, 2)
+        assert not laser.healthy(0.3)
+        assert wait_for(lambda: laser.healthy(0.3), 5)
+        s = laser.stats()
+        assert s.link_losses >= 1 and s.connects >= 2
+        assert laser.scip11_switches == 1        # the sensor stayed powered: still SCIP 2.0
+    finally:
+        laser.close()
+
+
+def test_a_silent_sensor_is_a_lost_link(urg, wait_for):
+    _dev, runner = urg(UTM_30LX)
+    laser = UrgLaser(runner.link, timeout=0.4, reopen_interval=0.1).start(wait=5)
+    try:
+        runner.set_silent(True)
+        assert wait_for(lambda: laser.stats().link_losses >= 1, 2)
+        runner.set_silent(False)
+        assert wait_for(lambda: laser.healthy(0.3), 5)
+    finally:
+        laser.close()
+
+
+def test_no_device_is_a_clear_failure(tmp_path):
+    with pytest.raises(Exception, match="no scan within"):
+        UrgLaser(str(tmp_path / "nothing")).start(wait=0.5)
