@@ -6,7 +6,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.rll-bt-installed
 SEED   ?= 1
 
-.PHONY: sim test install protos clean
+.PHONY: sim test test-fast lint install protos clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -19,8 +19,16 @@ install: $(STAMP)
 sim: $(STAMP)
 	$(BIN)/rll-bt sim --seed $(SEED)
 
-test: $(STAMP)
+# the whole suite, after the linter (what CI runs)
+test: lint
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
+
+# the inner loop: the linter and every test not marked slow (whole games, training)
+test-fast: lint
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m "not slow"
+
+lint: $(STAMP)
+	$(BIN)/ruff check .
 
 protos: $(STAMP)
 	$(BIN)/python -m rll_bt.msgs.generate

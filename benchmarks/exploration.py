@@ -30,11 +30,9 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from rll_bt import rules  # noqa: E402
-from rll_bt.game.batch import fmt, median, run_batch  # noqa: E402
-from rll_bt.game.options import STRATEGIES, GameOptions  # noqa: E402
+from rll_bt import rules
+from rll_bt.game.batch import fmt, median, run_batch
+from rll_bt.game.options import STRATEGIES, GameOptions
 
 
 def main(argv=None) -> int:

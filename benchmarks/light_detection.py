@@ -29,8 +29,6 @@ from __future__ import annotations
 import argparse
 from concurrent.futures import ProcessPoolExecutor
 
-import numpy as np
-
 from rll_bt.clock import WallClock
 from skills.perception.light.colour_model import ColourModel
 from skills.perception.light.dataset import ChunkSpec, make_chunk

@@ -29,19 +29,16 @@ import argparse
 import math
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from rll_bt import rules  # noqa: E402
-from rll_bt.backend import Pose2D, open_backend, wrap_angle  # noqa: E402
-from skills.activity import Status  # noqa: E402
-from skills.context import FunctionPose, SkillContext  # noqa: E402
-from skills.localisation import AmclConfig, Localiser  # noqa: E402
-from skills.maps import FieldMap  # noqa: E402
-from skills.navigation import Navigate, StationSideGoal  # noqa: E402
+from rll_bt import rules
+from rll_bt.backend import Pose2D, open_backend, wrap_angle
+from skills.activity import Status
+from skills.context import FunctionPose, SkillContext
+from skills.localisation import AmclConfig, Localiser
+from skills.maps import FieldMap
+from skills.navigation import Navigate, StationSideGoal
 
 CONFIGS = {
     "fixed 500 / 60 beams": AmclConfig.fixed(500, 60),
@@ -81,7 +78,8 @@ def flat_scene(seed):
 
 def tour(stations):
     names = [n for n in sorted(stations) if n.startswith("C-")]
-    return [StationSideGoal(n, side, 0.8) for n in names for side in ("INPUT", "OUTPUT") if n[2:4] != "DS" or side == "INPUT"]
+    return [StationSideGoal(n, side, 0.8) for n in names for side in ("INPUT", "OUTPUT")
+            if n[2:4] != "DS" or side == "INPUT"]
 
 
 def run(seed, world_kind, results):

@@ -22,16 +22,13 @@ import math
 import random
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from rll_bt.backend import Pose2D, open_backend  # noqa: E402
-from skills.activity import Status  # noqa: E402
-from skills.context import FunctionPose, SkillContext  # noqa: E402
-from skills.navigation import Navigate, PoseGoal, StationSideGoal, ZoneGoal  # noqa: E402
+from rll_bt.backend import Pose2D, open_backend
+from skills.activity import Status
+from skills.context import FunctionPose, SkillContext
+from skills.navigation import Navigate, PoseGoal, StationSideGoal, ZoneGoal
 
 MAX_SPEED = 0.7
 
@@ -97,7 +94,8 @@ def run_seed(seed, n_goals, n_others, localisation, rows):
         straight = math.hypot(target.x - p0.x, target.y - p0.y)
         t = world.time - t0
         rows.append({"kind": kind, "ok": ok, "time": t, "bound": straight / MAX_SPEED,
-                     "collisions": world.collision_count - c0, "closest": closest[0], "near": (closest[1], near), "error": nav.error.value,
+                     "collisions": world.collision_count - c0, "closest": closest[0], "near": (closest[1], near),
+                     "error": nav.error.value,
                      "message": nav.message, "seed": seed, "goal": goal.describe(),
                      "hits": [c.obstacle for c in world.collision_log[log0:]]})
         if not ok:      # carry on from wherever the robot is

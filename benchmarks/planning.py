@@ -24,16 +24,13 @@ import random
 import statistics
 import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
-from rll_bt import rules  # noqa: E402
-from rll_bt.clock import WallClock  # noqa: E402
-from teamserver import model as M  # noqa: E402
-from teamserver.planning.domain import Progress  # noqa: E402
-from teamserver.planning.estimate import SimRobot  # noqa: E402
-from teamserver.planning.planner import ProductionPlanner, World  # noqa: E402
+from rll_bt import rules
+from rll_bt.clock import WallClock
+from teamserver import model as M
+from teamserver.planning.domain import Progress
+from teamserver.planning.estimate import SimRobot
+from teamserver.planning.planner import ProductionPlanner, World
 
 CAPS = {"C-CS1": "CAP_GREY", "C-CS2": "CAP_BLACK"}
 

@@ -20,11 +20,9 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from rll_bt import rules  # noqa: E402
-from rll_bt.game.batch import fmt, mean, median, run_batch  # noqa: E402
-from rll_bt.game.options import GameOptions  # noqa: E402
+from rll_bt import rules
+from rll_bt.game.batch import fmt, mean, median, run_batch
+from rll_bt.game.options import GameOptions
 
 VARIANTS = {"htn": False, "baseline": True}
 #: how the simulated refbox judges a delivery (backends/sim/refbox/orders2016.py, orders2025.py)

@@ -58,11 +58,11 @@ def run_mode(mode: str, seconds: float, robots: int, width: int, height: int, se
                     images += 1
         world.step(0.1)
     wall = time.perf_counter() - t0
-    result = dict(mode=mode, sim=world.time, wall=wall, rtf=world.time / wall, scans=scans,
-                  images=images, detections=detections, collisions=world.collision_count,
-                  distance=sum(b.robot.distance for b in bots),
-                  peak_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
-                  substeps=int(round(world.time / world.time_step)))
+    result = {"mode": mode, "sim": world.time, "wall": wall, "rtf": world.time / wall, "scans": scans,
+                  "images": images, "detections": detections, "collisions": world.collision_count,
+                  "distance": sum(b.robot.distance for b in bots),
+                  "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+                  "substeps": int(round(world.time / world.time_step))}
     world.close()
     return result
 

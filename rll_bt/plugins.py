@@ -12,7 +12,7 @@ it finds what they provide through these groups:
 from __future__ import annotations
 
 import logging
-from functools import lru_cache
+from functools import cache
 from importlib.metadata import EntryPoint, entry_points
 
 log = logging.getLogger(__name__)
@@ -21,7 +21,7 @@ GROUPS = ("rll_bt.backends", "rll_bt.nodes", "rll_bt.commands", "rll_bt.simulato
           "rll_bt.teamservers")
 
 
-@lru_cache(maxsize=None)
+@cache
 def discover(group: str) -> dict[str, EntryPoint]:
     """Entry points of ``group`` by name (not yet loaded)."""
     return {ep.name: ep for ep in entry_points(group=group)}

@@ -50,7 +50,7 @@ class Activity:
         self.finished_at: float | None = None
 
     # -- public API -------------------------------------------------------
-    def start(self) -> "Activity":
+    def start(self) -> Activity:
         """Begin (or restart) the activity.  Returns self."""
         self.status = Status.RUNNING
         self.error = SkillError.NONE

@@ -102,7 +102,7 @@ class SkillContext:
     @classmethod
     def create(cls, backend: Backend, clock: Clock, profile: Profile, start: Pose2D,
                localisation: str | AmclConfig | None = "standard", seed: int = 0,
-               field_map: FieldMap | None = None, **kw) -> "SkillContext":
+               field_map: FieldMap | None = None, **kw) -> SkillContext:
         """A context with a localiser (preset name or config) started at
         ``start``, or dead reckoning when ``localisation`` is None."""
         fmap = field_map or FieldMap.from_profile(profile)

@@ -14,8 +14,9 @@ skills and perception.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable, Protocol, runtime_checkable
+from typing import Protocol, runtime_checkable
 
 from rll_bt.backend import Backend, BackendError, CapabilityError, Detections, Pose2D
 

@@ -91,7 +91,8 @@ class DispatchConfig:
 
 class Dispatcher(HoldingMixin):
     def __init__(self, kb: KnowledgeBase, production: ProductionManager, clock,
-                 config: DispatchConfig = DispatchConfig()):
+                 config: DispatchConfig | None = None):
+        config = config if config is not None else DispatchConfig()
         self.kb = kb
         self.production = production
         self.clock = clock
@@ -214,10 +215,9 @@ class Dispatcher(HoldingMixin):
             return False                # a stored product is retrieved shortly before its window
         if not self.production.slide_ready(task):
             return False                # the ring station would break for want of bases
-        if task.kind == M.RETRIEVE_CAP and (self.production.cap_buffer.get(task.machine)
-                                            or not self.production.cap_due(task)):
-            return False                # a CS holding a cap cannot retrieve another
-        return True
+        # a CS holding a cap cannot retrieve another
+        return not (task.kind == M.RETRIEVE_CAP and (self.production.cap_buffer.get(task.machine)
+                                                     or not self.production.cap_due(task)))
 
     def deliver_from(self, task: M.Task) -> float:
         """Game time from which a delivery may start: its robot reaches the DS when

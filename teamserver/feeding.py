@@ -3,8 +3,9 @@ with, and stations left waiting for a workpiece that never came.
 
 A *feed* is a task whose robot puts a workpiece into a station's input for
 an instruction the server sent (MountRing, MountCap, RetrieveCap,
-Deliver, and a PutWorkpiece into a storage station for STORE).  A robot can report such a task done while the workpiece never
-reached the conveyor (it fell beside it).  The station then stays
+Deliver, and a PutWorkpiece into a storage station for STORE).  A robot can
+report such a task done while the workpiece never reached the conveyor (it
+fell beside it).  The station then stays
 PREPARED with our instruction: the refbox accepts no new PrepareMachine
 for it until it is fed, so the next robot's workpiece is processed with the
 *old* instruction (at the DS: delivered at the old gate).
@@ -165,9 +166,7 @@ class FeedMonitor:
         for key, deadline in list(feeds.items()):
             t = self.kb.tasks.get(int(key))
             st = self.kb.stations.get(t.machine) if t is not None else None
-            if t is None or st is None or t.prepared_at is None:
-                del feeds[key]
-            elif st.fed_at >= t.prepared_at or self._counted(t):
+            if t is None or st is None or t.prepared_at is None or st.fed_at >= t.prepared_at or self._counted(t):
                 del feeds[key]
             elif now >= deadline:
                 del feeds[key]

@@ -25,8 +25,9 @@ confidence.
 from __future__ import annotations
 
 import math
+from collections.abc import Hashable, Iterable
 from dataclasses import dataclass
-from typing import Any, Hashable, Iterable
+from typing import Any
 
 _C_MIN, _C_MAX = 1e-3, 0.999
 #: seconds of silence after which a robot's next observation counts as a new visit

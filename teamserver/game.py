@@ -32,7 +32,7 @@ class InProcessTeamServer(TeamServerHandle):
                  agents, state: str, strategy: str = "algorithm1", seed: int = 0,
                  oracle: dict | None = None, options: TeamServerOptions | None = None):
         self.options = options or TeamServerOptions()
-        self._args = dict(profile=profile, team_name=team_name, key=key, clock=clock)
+        self._args = {"profile": profile, "team_name": team_name, "key": key, "clock": clock}
         self._public, self._team, self._agents = refbox_public, refbox_team, agents
         self.state = state
         cfg = ServerConfig(strategy=strategy, seed=seed, map_period=self.options.map_period,

@@ -7,7 +7,8 @@ the same state from the database after a restart.
 """
 from __future__ import annotations
 
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 from rll_bt.rules import Profile
 
@@ -63,7 +64,7 @@ class KnowledgeBase:
 
     # -- restart ----------------------------------------------------------------
     @classmethod
-    def load(cls, profile: Profile, store: Store) -> "KnowledgeBase":
+    def load(cls, profile: Profile, store: Store) -> KnowledgeBase:
         """The knowledge base as persisted in ``store`` (empty for a new database)."""
         kb = cls(profile, store)
         saved = store.get_meta("profile")

@@ -9,7 +9,7 @@ port layout; a lockstep simulation builds one over bus peers.
 """
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from rll_bt import msgs
 from rll_bt.comm import MessageRegistry, UdpPeer, layout

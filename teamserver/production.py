@@ -23,12 +23,12 @@ from .caps import CLEANUP_ORDER, FREE, CapsMixin
 from .cleanup import CleanupMixin
 from .health import StationHealth
 from .kb import KnowledgeBase
-from .slides import SlidesMixin
-from .storage import StorageMixin
 from .planning.domain import CAP_LOCK, CAPLESS, EXTRA, MAIN, Progress
 from .planning.estimate import SimRobot, SimTask
 from .planning.htn import Network, PlanningFailed
 from .planning.planner import Candidate, ProductionPlanner, World
+from .slides import SlidesMixin
+from .storage import StorageMixin
 
 log = logging.getLogger("teamserver.production")
 
@@ -85,7 +85,7 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin, StorageMixin):
     def acquire(self, task: M.Task) -> None:
         if task.locks:
             locks = self.locks
-            locks.update({lk: task.product for lk in task.locks})
+            locks.update(dict.fromkeys(task.locks, task.product))
             self._set_locks(locks)
 
     def release(self, product: str, names=None) -> None:
@@ -338,11 +338,11 @@ class ProductionManager(CapsMixin, CleanupMixin, SlidesMixin, StorageMixin):
                 self.release(product.id)
         if task.releases and product is not None:
             self.release(product.id, set(task.releases))
-        if product is not None and product.state == ACTIVE and product.order_id == CLEANUP_ORDER:
-            if all(t.state in M.CLOSED_STATES for t in self.kb.tasks_of(product.tasks)):
-                product.state = DELIVERED
-                self.kb.save_product(product)
-                self.release(product.id)
+        if (product is not None and product.state == ACTIVE and product.order_id == CLEANUP_ORDER
+                and all(t.state in M.CLOSED_STATES for t in self.kb.tasks_of(product.tasks))):
+            product.state = DELIVERED
+            self.kb.save_product(product)
+            self.release(product.id)
 
     def _workpiece_for_pickup(self, task: M.Task, product: M.Product | None,
                               role: str) -> M.Workpiece:

@@ -22,8 +22,17 @@ The base has no laser and no camera (those raise CapabilityError).
 """
 from __future__ import annotations
 
-from rll_bt.backend import (Backend, BackendError, Battery, Capability, CapabilityError,
-                            GripperStatus, Odometry, Pose2D, wrap_angle)
+from rll_bt.backend import (
+    Backend,
+    BackendError,
+    Battery,
+    Capability,
+    CapabilityError,
+    GripperStatus,
+    Odometry,
+    Pose2D,
+    wrap_angle,
+)
 from rll_bt.clock import Clock, WallClock
 
 from .base import BaseReadings, LinkStats, RobotinoBase

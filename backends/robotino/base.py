@@ -139,7 +139,7 @@ class RobotinoBase:
         self._periods: deque = deque(maxlen=history)
 
     # -- life cycle ---------------------------------------------------------
-    def open(self) -> "RobotinoBase":
+    def open(self) -> RobotinoBase:
         """Open the port, do the Fawkes handshake, start polling.
         Raises :class:`BackendUnavailable` when the base does not answer."""
         if self.device is None:

@@ -203,7 +203,7 @@ def _probe_report(backend) -> dict:
         "distance_sensors_v": [round(v, 3) for v in r.distance_voltages],
         "analog_inputs_v": [round(v, 3) for v in r.analog_inputs],
         "digital_inputs": f"{r.digital_inputs:08b}",
-        "link": {k: v for k, v in vars(backend.link_stats()).items()},
+        "link": dict(vars(backend.link_stats()).items()),
     }
     if backend.gripper is not None:
         g = backend.gripper_status()

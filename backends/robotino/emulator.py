@@ -192,7 +192,7 @@ class RobotinoEmulator:
     def _endpoints(self) -> list[_Endpoint]:
         return [e for e in (self._base, self._grip) if e is not None]
 
-    def start(self) -> "RobotinoEmulator":
+    def start(self) -> RobotinoEmulator:
         for ep in self._endpoints():
             ep.pty.open()
         if self.faults.close_every > 0:
@@ -211,7 +211,7 @@ class RobotinoEmulator:
         if self._own_dir:
             shutil.rmtree(self.link_dir, ignore_errors=True)
 
-    def __enter__(self) -> "RobotinoEmulator":
+    def __enter__(self) -> RobotinoEmulator:
         return self.start()
 
     def __exit__(self, *exc) -> None:

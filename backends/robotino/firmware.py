@@ -27,7 +27,7 @@ import struct
 from collections import deque
 
 from . import tags as T
-from .framing import ChecksumMismatch, FrameDecoder, MAX_PAYLOAD, Oversize, encode_frame, stuff
+from .framing import MAX_PAYLOAD, ChecksumMismatch, FrameDecoder, Oversize, encode_frame, stuff
 from .kinematics import OmniKinematics
 
 TICKS_PER_REV = 2000

@@ -42,7 +42,7 @@ def stuff(data: bytes) -> bytes:
         return bytes(data)
     out = bytearray()
     for b in data:
-        if b == HEAD or b == ESCAPE:
+        if b in (HEAD, ESCAPE):
             out.append(ESCAPE)
             out.append(b ^ MANGLE)
         else:

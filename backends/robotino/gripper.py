@@ -19,8 +19,8 @@ import logging
 import math
 import select
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 from rll_bt.backend import BackendError, GripperState, GripperStatus
 from rll_bt.clock import Clock, WallClock
@@ -91,7 +91,7 @@ class ArduinoGripper:
         self._next_reopen = 0.0
 
     # -- life cycle ---------------------------------------------------------
-    def open(self) -> "ArduinoGripper":
+    def open(self) -> ArduinoGripper:
         """Open the port (BackendUnavailable if impossible) and start the thread."""
         self._port = open_serial(self.device)
         self._on_opened(self.clock.now())

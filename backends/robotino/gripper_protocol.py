@@ -23,8 +23,8 @@ them (the sketch negates its internal counts back).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
 
 TERMINATOR = "+"
 PREFIX = "AT "

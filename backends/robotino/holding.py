@@ -38,7 +38,7 @@ class HoldingSensor:
             raise ValueError(f"holding sensor threshold must be finite, got {self.threshold}")
 
     @classmethod
-    def parse(cls, text: str) -> "HoldingSensor":
+    def parse(cls, text: str) -> HoldingSensor:
         spec = text.strip().replace(" ", "")
         m = _ANALOG.match(spec)
         if m:

@@ -15,8 +15,9 @@ of the payload a :class:`RawTag` marked ``truncated``.
 from __future__ import annotations
 
 import struct
+from collections.abc import Iterable
 from dataclasses import dataclass, fields
-from typing import ClassVar, Iterable
+from typing import ClassVar
 
 
 class TagError(ValueError):
@@ -32,7 +33,7 @@ class Tag:
         return b""
 
     @classmethod
-    def from_data(cls, data: bytes) -> "Tag":
+    def from_data(cls, data: bytes) -> Tag:
         return cls()
 
     def encode(self) -> bytes:
@@ -866,7 +867,7 @@ class Info(_Text):
 
 
 @dataclass(frozen=True)
-class Warning(_Text):  # noqa: A001 - the firmware's name
+class Warning(_Text):
     ID: ClassVar[int] = 251
 
 

@@ -23,9 +23,19 @@ import threading
 
 import numpy as np
 
-from rll_bt.backend import (Backend, BackendError, BackendUnavailable, CameraExtrinsics,
-                            CameraImage, CameraIntrinsics, Capability, LaserScan, Odometry, Pose2D,
-                            wrap_angle)
+from rll_bt.backend import (
+    Backend,
+    BackendError,
+    BackendUnavailable,
+    CameraExtrinsics,
+    CameraImage,
+    CameraIntrinsics,
+    Capability,
+    LaserScan,
+    Odometry,
+    Pose2D,
+    wrap_angle,
+)
 from rll_bt.clock import Clock, WallClock
 
 from .client import RestClient, RestError

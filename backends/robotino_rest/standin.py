@@ -48,7 +48,7 @@ class RestStandIn:
         host, port = self._server.server_address[:2]
         return f"http://{host}:{port}"
 
-    def start(self) -> "RestStandIn":
+    def start(self) -> RestStandIn:
         self._thread = threading.Thread(target=self._server.serve_forever, args=(0.05,),
                                         name="rest-standin", daemon=True)
         self._thread.start()
@@ -62,7 +62,7 @@ class RestStandIn:
         self._thread.join(timeout=2.0)
         self._thread = None
 
-    def __enter__(self) -> "RestStandIn":
+    def __enter__(self) -> RestStandIn:
         return self.start()
 
     def __exit__(self, *exc) -> None:

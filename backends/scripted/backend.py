@@ -26,8 +26,17 @@ from typing import Any
 
 import yaml
 
-from rll_bt.backend import (Backend, BackendError, Battery, Capability, GripperState, GripperStatus, Odometry,
-                            Pose2D, wrap_angle)
+from rll_bt.backend import (
+    Backend,
+    BackendError,
+    Battery,
+    Capability,
+    GripperState,
+    GripperStatus,
+    Odometry,
+    Pose2D,
+    wrap_angle,
+)
 from rll_bt.clock import Clock, WallClock
 
 _DEFAULT_CAPS = (Capability.DRIVE | Capability.ODOMETRY | Capability.GRIPPER | Capability.BUMPER
@@ -63,7 +72,8 @@ def _caps(names) -> Capability:
             caps |= Capability[str(n).upper()]
         except KeyError:
             raise BackendError(f"scripted backend: unknown capability {n!r} "
-                               f"(known: {', '.join(c.name.lower() for c in Capability if c.name != 'NONE')})") from None
+                               f"(known: {', '.join(c.name.lower() for c in Capability if c.name != 'NONE')})"
+                               ) from None
     return caps
 
 

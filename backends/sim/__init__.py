@@ -130,6 +130,7 @@ def open_sim(world=None, robot=1, *, profile=None, seed: int = 0, perception: st
         from .backend import SimBackend
         return SimBackend(world, robot, **options)
     from rll_bt.clock import WallClock
+
     from .standalone import StandaloneSimBackend
     from .world import World
     own = World(profile, seed=int(seed), perception=perception, gui=bool(gui))

@@ -29,8 +29,17 @@ it raises :class:`CapabilityError` and skills run their detectors on
 """
 from __future__ import annotations
 
-from rll_bt.backend import (Backend, Battery, CameraImage, Capability, CapabilityError, Detections,
-                            GripperStatus, LaserScan, Odometry)
+from rll_bt.backend import (
+    Backend,
+    Battery,
+    CameraImage,
+    Capability,
+    CapabilityError,
+    Detections,
+    GripperStatus,
+    LaserScan,
+    Odometry,
+)
 from rll_bt.rules import CYAN
 
 from .world import World

@@ -84,6 +84,7 @@ def _print_table(prof, layout) -> None:
 def _gui(prof, layout) -> int:
     from rll_bt.backend import BackendUnavailable
     from rll_bt.clock import WallClock
+
     from .world import World
     try:
         world = World(prof, layout.seed or 0, layout=layout, gui=True)

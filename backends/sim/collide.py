@@ -27,7 +27,7 @@ class Box2D:
         object.__setattr__(self, "_s", math.sin(self.theta))
 
     @classmethod
-    def from_rect(cls, x_min: float, y_min: float, x_max: float, y_max: float) -> "Box2D":
+    def from_rect(cls, x_min: float, y_min: float, x_max: float, y_max: float) -> Box2D:
         return cls((x_min + x_max) / 2.0, (y_min + y_max) / 2.0, 0.0,
                    (x_max - x_min) / 2.0, (y_max - y_min) / 2.0)
 

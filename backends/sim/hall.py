@@ -202,7 +202,8 @@ class Hall:
         self.ceiling = _quad(cid, [(x0, y1, z), (x1, y1, z), (x1, y0, z), (x0, y0, z)])
         self.floor = _quad(cid, [(x0, y0, -0.012), (x1, y0, -0.012), (x1, y1, -0.012), (x0, y1, -0.012)])
         self.bodies = [*self.walls, self.ceiling, self.floor]
-        load = lambda kind, k: p.loadTexture(_texture_file(kind, seed, k, texture_dir), physicsClientId=cid)
+        def load(kind, k):
+            return p.loadTexture(_texture_file(kind, seed, k, texture_dir), physicsClientId=cid)
         self._textures = {kind: [load(kind, k) for k in range(STYLES)] for kind in ("wall", "ceiling", "floor")}
         self.restyle(np.random.default_rng(seed))
 

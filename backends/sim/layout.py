@@ -31,9 +31,9 @@ import math
 import random
 from dataclasses import dataclass, field
 
+from rll_bt import rules
 from rll_bt.backend import Pose2D
 from rll_bt.rules import CYAN, MAGENTA, Profile, machine_type, mirror_machine_name
-from rll_bt import rules
 
 from .collide import Box2D, box_distance
 from .fieldgeom import approach_points, entry_point, footprint
@@ -101,7 +101,7 @@ class FieldLayout:
                              for m, pl in sorted(self.machines.items())}}
 
     @classmethod
-    def from_dict(cls, data: dict) -> "FieldLayout":
+    def from_dict(cls, data: dict) -> FieldLayout:
         machines = {}
         for m, d in data["machines"].items():
             rot = int(d["rotation"])

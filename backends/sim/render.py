@@ -91,11 +91,11 @@ class Lighting:
         c = math.cos(self.elevation)
         return [c * math.cos(self.azimuth), c * math.sin(self.azimuth), math.sin(self.elevation)]
 
-    def with_options(self, **changes) -> "Lighting":
+    def with_options(self, **changes) -> Lighting:
         return replace(self, **changes)
 
     @classmethod
-    def random(cls, rng: np.random.Generator) -> "Lighting":
+    def random(cls, rng: np.random.Generator) -> Lighting:
         """Lighting drawn from what halls and cameras give: warm to cold light
         (2700-8000 K) with a camera balanced for a guess of it, dim to
         bright, from any side, soft to hard; the exposure is at most what

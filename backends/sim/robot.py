@@ -77,7 +77,7 @@ class RobotConfig:
     battery_life: float = 7200.0          # s from full to empty when idle
     geometry: RobotGeometry = ROBOT
 
-    def with_options(self, **options) -> "RobotConfig":
+    def with_options(self, **options) -> RobotConfig:
         unknown = sorted(set(options) - set(self.__dataclass_fields__))
         if unknown:
             raise TypeError(f"unknown sim robot option(s): {', '.join(unknown)} "

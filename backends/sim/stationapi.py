@@ -5,8 +5,8 @@ the package docstring for the list.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from .stations import Station
 from .store import SlotError

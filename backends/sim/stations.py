@@ -32,8 +32,17 @@ import numpy as np
 from rll_bt.backend import Pose2D, light_state_code, wrap_angle
 from rll_bt.rules import CYAN, Profile, machine_team, machine_type
 
-from .bullet import (Part, ShapeCache, box_polygon, matrix_quaternion, multibody, prism_mesh, pybullet,
-                     trimesh_shape, yaw_quaternion)
+from .bullet import (
+    Part,
+    ShapeCache,
+    box_polygon,
+    matrix_quaternion,
+    multibody,
+    prism_mesh,
+    pybullet,
+    trimesh_shape,
+    yaw_quaternion,
+)
 from .fieldgeom import footprint
 from .layout import MachinePlacement
 from .markers import quad_mesh, quad_size, texture_file
@@ -83,7 +92,7 @@ class Station:
         self.rotation = placement.rotation_deg
         self.tag_ids = profile.tag_ids(self.name)
         self.box = footprint(profile, self.pose)
-        self.lights = {c: "OFF" for c in LIGHT_COLORS}
+        self.lights = dict.fromkeys(LIGHT_COLORS, "OFF")
         self.slots = self._slots()
         self.body: int | None = None
         self._light_links: dict[str, int] = {}
@@ -260,5 +269,5 @@ class Station:
         for side, link in tag_links.items():
             tex = p.loadTexture(texture_file(self.tag_id(side), texture_dir), physicsClientId=cid)
             p.changeVisualShape(self.body, link, textureUniqueId=tex, physicsClientId=cid)
-        self._shown = {c: False for c in LIGHT_COLORS}
+        self._shown = dict.fromkeys(LIGHT_COLORS, False)
         return self.body

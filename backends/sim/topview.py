@@ -83,6 +83,6 @@ def _draw_station(ax, profile: Profile, layout: FieldLayout, name: str, Polygon,
         d = half + 0.22
         ax.text(pose.x + sign * c * d, pose.y + sign * s * d, label, fontsize=6, ha="center",
                 va="center", color="black",
-                bbox=dict(boxstyle="round,pad=0.15", fc="white", ec=color, lw=0.6))
+                bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": color, "lw": 0.6})
     ax.text(pose.x - s * 0.55, pose.y + c * 0.55, f"{name}\n{pl.rotation_deg}°", fontsize=7,
             ha="center", va="center", weight="bold")

@@ -43,10 +43,10 @@ class Workpiece:
         if len(self.rings) > 3:
             raise ValueError(f"a workpiece carries at most 3 rings, not {len(self.rings)}")
 
-    def with_ring(self, color: str) -> "Workpiece":
+    def with_ring(self, color: str) -> Workpiece:
         return replace(self, rings=self.rings + (color,))
 
-    def with_cap(self, color: str | None) -> "Workpiece":
+    def with_cap(self, color: str | None) -> Workpiece:
         return replace(self, cap=color)
 
     @property

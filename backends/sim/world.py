@@ -10,24 +10,32 @@ the same calls give bit-identical trajectories and sensor noise.
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
+from rll_bt import rules
 from rll_bt.backend import Pose2D
 from rll_bt.clock import SimClock
 from rll_bt.rules import TEAMS, Profile
-from rll_bt import rules
 
 from . import oracle, sensors
+from .bullet import (
+    ShapeCache,
+    box_polygon,
+    circle_polygon,
+    connect,
+    prism_mesh,
+    pybullet,
+    trimesh_shape,
+    yaw_quaternion,
+)
 from .camera import CameraViews
-from .bullet import (ShapeCache, box_polygon, circle_polygon, connect, prism_mesh, pybullet, trimesh_shape,
-                     yaw_quaternion)
 from .collide import Box2D, ObstacleGrid
 from .fieldgeom import WALL_HEIGHT, floor_rect, start_pose, walls
+from .handling import GripperHandling
 from .layout import FieldLayout, generate_layout
 from .robot import Collision, RobotConfig, SimRobot
-from .handling import GripperHandling
 from .stationapi import SlotEvent, StationAPI
 from .stations import Station
 from .store import WorkpieceStore
@@ -115,8 +123,8 @@ class World(StationAPI, GripperHandling, CameraViews):
     def _robot_body(self, robot: SimRobot) -> int:
         p = pybullet()
         g = robot.config.geometry
-        kw = dict(shapeTypes=[p.GEOM_CYLINDER, p.GEOM_CYLINDER], radii=[g.radius, MAST_RADIUS],
-                  lengths=[g.height, MAST_TOP - g.height])
+        kw = {"shapeTypes": [p.GEOM_CYLINDER, p.GEOM_CYLINDER], "radii": [g.radius, MAST_RADIUS],
+                  "lengths": [g.height, MAST_TOP - g.height]}
         frames = [[0.0, 0.0, g.height / 2], [MAST_X, 0.0, (g.height + MAST_TOP) / 2]]
         col = trimesh_shape(self.cid, [prism_mesh(circle_polygon(g.radius), 0.0, g.height),
                                        prism_mesh(circle_polygon(MAST_RADIUS, 12, MAST_X), g.height, MAST_TOP)])
@@ -372,7 +380,7 @@ class World(StationAPI, GripperHandling, CameraViews):
             except Exception:      # already gone (GUI window closed by the user)
                 pass
 
-    def __enter__(self) -> "World":
+    def __enter__(self) -> World:
         return self
 
     def __exit__(self, *exc) -> None:

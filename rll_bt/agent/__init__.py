@@ -47,7 +47,8 @@ from .tasks import TASK_KINDS, TREE_KINDS, InvalidTask, agent_task, task_kind, t
 
 __all__ = [
     "AgentConfig", "check_team_key", "normalise_color", "RobotAgent", "error_code", "GameGate", "KnownMachine",
-    "KnownMachines", "changed_names", "distribute", "RefboxAddress", "refbox_channels", "team_server_link", "ObservationFeed",
+    "KnownMachines", "changed_names", "distribute", "RefboxAddress", "refbox_channels", "team_server_link",
+    "ObservationFeed",
     "Outcome", "TaskRun", "default_trees_dir", "load_task_tree", "TASK_KINDS", "TREE_KINDS", "InvalidTask",
     "agent_task", "task_kind", "task_params",
 ]

@@ -12,8 +12,9 @@ Poses are station centres in the field frame (m, rad).
 from __future__ import annotations
 
 import logging
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any, Iterator, Mapping
+from typing import Any
 
 from ..backend import Pose2D, wrap_angle
 
@@ -47,10 +48,10 @@ class KnownMachines(Mapping[str, KnownMachine]):
         self.updates = 0
 
     @classmethod
-    def from_message(cls, msg, received: float = 0.0) -> "KnownMachines":
+    def from_message(cls, msg, received: float = 0.0) -> KnownMachines:
         out: dict[str, KnownMachine] = {}
         for k in msg.machines:
-            def opt(field: str):
+            def opt(field: str, k=k):
                 return getattr(k, field) if k.HasField(field) else None
             pose = Pose2D(k.pose.x, k.pose.y, k.pose.theta) if k.HasField("pose") else None
             color = ("CYAN", "MAGENTA")[k.team_color] if k.HasField("team_color") else None

@@ -8,8 +8,8 @@ be overridden.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from .. import msgs
 from ..clock import Clock

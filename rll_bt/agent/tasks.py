@@ -171,9 +171,7 @@ def agent_task(ms, task, params: dict[str, Any], profile: Profile, color: str):
                       robot_id=int(task.robot_id))
     kind = params["kind"]
     machine = params.get("machine", "")
-    if kind == "go_to" and params["zone"]:
-        at.move.waypoint = profile.zone_name(params["zone"])
-    elif kind == "explore_zone":
+    if kind == "go_to" and params["zone"] or kind == "explore_zone":
         at.move.waypoint = profile.zone_name(params["zone"])
     elif kind == "get_workpiece":
         at.retrieve.machine_id = machine

@@ -16,9 +16,22 @@ import abc
 import enum
 
 from .. import plugins
-from .types import (Battery, CameraExtrinsics, CameraImage, CameraIntrinsics, Detections,
-                    GripperState, GripperStatus, LaserScan, LightDetection, Odometry, Pose2D,
-                    TagDetection, light_state_code, wrap_angle)
+from .types import (
+    Battery,
+    CameraExtrinsics,
+    CameraImage,
+    CameraIntrinsics,
+    Detections,
+    GripperState,
+    GripperStatus,
+    LaserScan,
+    LightDetection,
+    Odometry,
+    Pose2D,
+    TagDetection,
+    light_state_code,
+    wrap_angle,
+)
 
 __all__ = [
     "Backend", "BackendError", "BackendUnavailable", "CapabilityError", "Capability",

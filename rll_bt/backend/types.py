@@ -25,22 +25,22 @@ class Pose2D:
     y: float = 0.0
     theta: float = 0.0
 
-    def compose(self, other: "Pose2D") -> "Pose2D":
+    def compose(self, other: Pose2D) -> Pose2D:
         """``self`` then ``other`` expressed in ``self``'s frame."""
         c, s = math.cos(self.theta), math.sin(self.theta)
         return Pose2D(self.x + c * other.x - s * other.y,
                       self.y + s * other.x + c * other.y,
                       wrap_angle(self.theta + other.theta))
 
-    def inverse(self) -> "Pose2D":
+    def inverse(self) -> Pose2D:
         c, s = math.cos(self.theta), math.sin(self.theta)
         return Pose2D(-c * self.x - s * self.y, s * self.x - c * self.y, wrap_angle(-self.theta))
 
-    def relative_to(self, frame: "Pose2D") -> "Pose2D":
+    def relative_to(self, frame: Pose2D) -> Pose2D:
         """This pose expressed in ``frame``."""
         return frame.inverse().compose(self)
 
-    def distance_to(self, other: "Pose2D") -> float:
+    def distance_to(self, other: Pose2D) -> float:
         return math.hypot(self.x - other.x, self.y - other.y)
 
 
@@ -86,7 +86,7 @@ class CameraIntrinsics:
         return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
 
     @classmethod
-    def from_fov(cls, width: int, height: int, hfov_rad: float) -> "CameraIntrinsics":
+    def from_fov(cls, width: int, height: int, hfov_rad: float) -> CameraIntrinsics:
         f = (width / 2.0) / math.tan(hfov_rad / 2.0)
         return cls(width, height, f, f, width / 2.0, height / 2.0)
 

@@ -77,7 +77,7 @@ def build() -> Commands:
                 raise
             continue
         mod.register(cli)
-    for name, register in sorted(plugins.load_all("rll_bt.commands").items()):
+    for _name, register in sorted(plugins.load_all("rll_bt.commands").items()):
         register(cli)
     return cli
 

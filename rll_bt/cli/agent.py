@@ -79,7 +79,8 @@ def register(cli) -> None:
     g.add_argument("--no-refbox", action="store_true",
                    help="do not join the refbox channels (no beacons; game state from the team server only)")
     g = p.add_argument_group("running")
-    g.add_argument("--trees", type=Path, metavar="DIR", help="directory of <task kind>.yaml (default: installed trees/)")
+    g.add_argument("--trees", type=Path, metavar="DIR",
+                   help="directory of <task kind>.yaml (default: installed trees/)")
     g.add_argument("--hz", type=_positive_float, default=10.0, help="tree tick rate in Hz (default 10)")
     g.add_argument("--localisation", default="standard", choices=LOCALISATION, metavar="PRESET",
                    help="localiser preset: standard (accuracy; the default) or cheap (fewer particles and "
@@ -94,7 +95,8 @@ def _config(args):
     try:
         check_team_key(args.key)
     except ValueError as exc:
-        raise UserError(str(exc), where="--key", hint="give the key from the refbox's crypto-keys for your team")
+        raise UserError(str(exc), where="--key",
+                        hint="give the key from the refbox's crypto-keys for your team") from None
     if args.trees is not None and not args.trees.is_dir():
         raise UserError("not a directory", where=f"--trees {args.trees}", hint="give the directory of the trees")
     try:

@@ -207,6 +207,7 @@ def _nodes(args) -> int:
 
 def _backend(args, clock):
     import yaml
+
     from .. import plugins
     from ..backend import BackendError, BackendUnavailable, open_backend
     opts = {}

@@ -71,7 +71,8 @@ def _import(args) -> int:
     try:
         paths = write_trees(files, args.output, force=args.force)
     except FileExistsError as exc:
-        raise UserError("the file exists", where=str(exc), hint="pass --force to overwrite, or another --output")
+        raise UserError("the file exists", where=str(exc),
+                        hint="pass --force to overwrite, or another --output") from None
     except OSError as exc:
         raise UserError(f"cannot write: {exc}", where=args.output) from None
     for p in paths:

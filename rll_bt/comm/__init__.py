@@ -12,15 +12,47 @@
 """
 from .bus import Bus, BusPeer, BusStreamClient, BusStreamServer
 from .codec import Decoded, FrameCodec
-from .crypto import (AES_128_CBC, AES_128_ECB, AES_256_CBC, AES_256_ECB, CIPHERS, NONE,
-                     TEAM_CIPHER, FrameCrypto, cipher_id, derive_key)
+from .crypto import (
+                     AES_128_CBC,
+                     AES_128_ECB,
+                     AES_256_CBC,
+                     AES_256_ECB,
+                     CIPHERS,
+                     NONE,
+                     TEAM_CIPHER,
+                     FrameCrypto,
+                     cipher_id,
+                     derive_key,
+)
 from .errors import CommError, CryptoError, FrameTooLarge, NoCompType, RegistryConflict
-from .framing import (FRAME_HEADER_SIZE, FRAME_V1, FRAME_V2, MAX_DATAGRAM, MAX_STREAM_PAYLOAD,
-                      MESSAGE_HEADER_SIZE, FrameHeader, FrameHeaderV1, MessageHeader,
-                      StreamReassembler)
-from .ports import (CHANNELS, COMPETITION, CYAN, DEFAULT_HOST, LAYOUTS, MAGENTA, PUBLIC,
-                    REFBOX_STREAM_PORT, SIM, TEAM_COLORS, TEAM_SERVER_PORT, Layout, PeerPorts,
-                    layout)
+from .framing import (
+                     FRAME_HEADER_SIZE,
+                     FRAME_V1,
+                     FRAME_V2,
+                     MAX_DATAGRAM,
+                     MAX_STREAM_PAYLOAD,
+                     MESSAGE_HEADER_SIZE,
+                     FrameHeader,
+                     FrameHeaderV1,
+                     MessageHeader,
+                     StreamReassembler,
+)
+from .ports import (
+                     CHANNELS,
+                     COMPETITION,
+                     CYAN,
+                     DEFAULT_HOST,
+                     LAYOUTS,
+                     MAGENTA,
+                     PUBLIC,
+                     REFBOX_STREAM_PORT,
+                     SIM,
+                     TEAM_COLORS,
+                     TEAM_SERVER_PORT,
+                     Layout,
+                     PeerPorts,
+                     layout,
+)
 from .registry import MessageRegistry, comp_type_of
 from .stats import CAUSES, DropStats
 from .tcp import StreamClient, StreamServer

@@ -16,7 +16,8 @@ from __future__ import annotations
 import itertools
 import os
 from collections import deque
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from ..clock import Clock
 from . import stats as S
@@ -59,7 +60,7 @@ class Bus:
     def peer(self, channel: str, *, registry: MessageRegistry, key: str | bytes | None = None,
              cipher: int | str = TEAM_CIPHER, name: str | None = None,
              label: str | None = None, max_datagram: int = MAX_DATAGRAM,
-             iv_source: Callable[[int], bytes] = os.urandom) -> "BusPeer":
+             iv_source: Callable[[int], bytes] = os.urandom) -> BusPeer:
         """Join broadcast ``channel`` (e.g. "public", "cyan").  ``label`` is the
         :attr:`Received.channel` name (default ``channel``); ``name`` identifies
         the sender in :attr:`Received.source`."""
@@ -72,7 +73,7 @@ class Bus:
     def stream_server(self, address: str = "teamserver", *, registry: MessageRegistry,
                       key: str | bytes | None = None, cipher: int | str = TEAM_CIPHER,
                       channel: str = "stream", drop_unauthenticated: bool = True,
-                      iv_source: Callable[[int], bytes] = os.urandom) -> "BusStreamServer":
+                      iv_source: Callable[[int], bytes] = os.urandom) -> BusStreamServer:
         """Listen at ``address``; raises ValueError if a server is already there."""
         if address in self._servers:
             raise ValueError(f"a bus stream server already listens at {address!r}")
@@ -85,7 +86,7 @@ class Bus:
     def stream_client(self, address: str = "teamserver", *, registry: MessageRegistry,
                       key: str | bytes | None = None, cipher: int | str = TEAM_CIPHER,
                       channel: str = "stream", name: str | None = None,
-                      iv_source: Callable[[int], bytes] = os.urandom) -> "BusStreamClient":
+                      iv_source: Callable[[int], bytes] = os.urandom) -> BusStreamClient:
         """A client of the server at ``address`` (connects now, or on a later poll)."""
         return BusStreamClient(self, address, registry=registry, key=key, cipher=cipher,
                                channel=channel, name=name or f"client#{next(self._ids)}",
@@ -185,7 +186,7 @@ class BusStreamServer(_BusEnd):
         self._clients: dict[int, BusStreamClient] = {}
         self._next_id = 1
 
-    def _accept(self, client: "BusStreamClient") -> int:
+    def _accept(self, client: BusStreamClient) -> int:
         cid, self._next_id = self._next_id, self._next_id + 1
         self._clients[cid] = client
         self._event(CONNECTED, cid)

@@ -7,14 +7,23 @@ frame it cannot use is counted by cause in :attr:`FrameCodec.stats`.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from . import stats as S
 from .crypto import CIPHERS, TEAM_CIPHER, FrameCrypto
 from .errors import FrameTooLarge
-from .framing import (FRAME_HEADER_SIZE, FRAME_V1, FRAME_V2, Drop, FrameHeader, FrameHeaderV1,
-                      MessageHeader, encrypted_frame, plain_frame)
+from .framing import (
+    FRAME_HEADER_SIZE,
+    FRAME_V1,
+    FRAME_V2,
+    Drop,
+    FrameHeader,
+    FrameHeaderV1,
+    MessageHeader,
+    encrypted_frame,
+    plain_frame,
+)
 from .registry import MessageRegistry, require_comp_type
 
 
@@ -100,7 +109,7 @@ class FrameCodec:
         except Drop as drop:
             self.stats.add(drop.cause, drop.detail)
             return None, drop.cause
-        except Exception as exc:  # noqa: BLE001 - the receive path must not raise
+        except Exception as exc:
             self.stats.add(S.PARSE_ERROR, f"{type(exc).__name__}: {exc}")
             return None, S.PARSE_ERROR
 
@@ -128,7 +137,7 @@ class FrameCodec:
                 raise Drop(S.ENCRYPTED_ON_PLAIN, f"cipher {hdr.cipher} frame, no key set")
             try:
                 payload = self.crypto.decrypt(hdr.cipher, frame[FRAME_HEADER_SIZE:])
-            except Exception as exc:  # noqa: BLE001
+            except Exception as exc:
                 raise Drop(S.DECRYPT_FAILURE, str(exc)) from None
         mh = MessageHeader.unpack(payload)
         return self._parse(mh.comp_id, mh.msg_type, payload[4:], hdr.cipher)
@@ -140,7 +149,7 @@ class FrameCodec:
         msg = cls()
         try:
             msg.ParseFromString(body)
-        except Exception as exc:  # noqa: BLE001
+        except Exception as exc:
             raise Drop(S.PARSE_ERROR, f"{cls.DESCRIPTOR.name}: {exc}") from None
         if not msg.IsInitialized():
             missing = ", ".join(msg.FindInitializationErrors())

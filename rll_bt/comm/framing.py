@@ -53,7 +53,7 @@ class FrameHeader:
         return _V2.pack(self.version, self.cipher, 0, self.payload_size)
 
     @classmethod
-    def unpack(cls, data: bytes) -> "FrameHeader":
+    def unpack(cls, data: bytes) -> FrameHeader:
         """Header from the first 8 bytes; :class:`Drop` if short or not version 2."""
         if len(data) < FRAME_HEADER_SIZE:
             raise Drop(S.TOO_SHORT, f"{len(data)} bytes, a frame header needs 8")
@@ -72,7 +72,7 @@ class FrameHeaderV1:
     payload_size: int
 
     @classmethod
-    def unpack(cls, data: bytes) -> "FrameHeaderV1":
+    def unpack(cls, data: bytes) -> FrameHeaderV1:
         if len(data) < FRAME_HEADER_SIZE:
             raise Drop(S.TOO_SHORT, f"{len(data)} bytes, a v1 frame header needs 8")
         return cls(*_V1.unpack_from(data))
@@ -89,7 +89,7 @@ class MessageHeader:
         return _MSG.pack(self.comp_id, self.msg_type)
 
     @classmethod
-    def unpack(cls, data: bytes) -> "MessageHeader":
+    def unpack(cls, data: bytes) -> MessageHeader:
         if len(data) < MESSAGE_HEADER_SIZE:
             raise Drop(S.TOO_SHORT, f"{len(data)} bytes of payload, a message header needs 4")
         return cls(*_MSG.unpack_from(data))

@@ -40,7 +40,7 @@ class PeerPorts:
     def split(self) -> bool:
         return self.send != self.recv
 
-    def swapped(self) -> "PeerPorts":
+    def swapped(self) -> PeerPorts:
         return PeerPorts(send=self.recv, recv=self.send)
 
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 
-from .errors import NoCompType, RegistryConflict
 from ..msgs.messageset import comp_type_of  # one definition, shared with the message sets
+from .errors import NoCompType, RegistryConflict
 
 CompType = tuple[int, int]
 
@@ -35,7 +35,7 @@ class MessageRegistry:
         self.add_all(classes)
 
     @classmethod
-    def from_message_set(cls, *sets) -> "MessageRegistry":
+    def from_message_set(cls, *sets) -> MessageRegistry:
         """Registry of one or more :mod:`rll_bt.msgs` message sets (anything with ``.classes``)."""
         reg = cls()
         for ms in sets:

@@ -24,8 +24,9 @@ from __future__ import annotations
 import logging
 import threading
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable, Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 from ..clock import Clock, WallClock
 from .codec import Decoded, FrameCodec
@@ -63,7 +64,7 @@ class Received:
         return self.msg.DESCRIPTOR.name
 
     @classmethod
-    def of(cls, d: Decoded, channel: str, source: Any, time: float) -> "Received":
+    def of(cls, d: Decoded, channel: str, source: Any, time: float) -> Received:
         return cls(d.msg, channel, source, d.comp_id, d.msg_type, time, d.cipher)
 
 
@@ -137,7 +138,7 @@ class PumpedTransport:
         if cb is not None:
             try:
                 cb(item)
-            except Exception:  # noqa: BLE001 - a bad callback must not kill the reader
+            except Exception:
                 log.exception("%s: receive callback failed", self.channel)
             return
         with self._cond:
@@ -208,7 +209,7 @@ class PumpedTransport:
             try:
                 self._wait_io(0.05)
                 self._pump_locked()
-            except Exception:  # noqa: BLE001 - keep reading whatever happens
+            except Exception:
                 log.exception("%s: reader loop error", self.channel)
 
     def stop(self) -> None:

@@ -16,7 +16,7 @@ import os
 import select
 import socket
 import struct
-from typing import Callable
+from collections.abc import Callable
 
 from ..clock import Clock
 from . import stats as S

@@ -20,8 +20,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .interfaces import (Award, Delivery, GameStatus, Simulation, StationTruth, TeamServerHandle,
-                         TeamServerOptions, load_simulator, load_teamserver)
+from .interfaces import (
+    Award,
+    Delivery,
+    GameStatus,
+    Simulation,
+    StationTruth,
+    TeamServerHandle,
+    TeamServerOptions,
+    load_simulator,
+    load_teamserver,
+)
 from .lockstep import GameResult, LockstepGame
 from .options import GameOptions, max_exploration_points
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import multiprocessing as mp
 import statistics
 import traceback
-from typing import Callable, Iterable
+from collections.abc import Callable, Iterable
 
 from .options import GameOptions, max_exploration_points
 from .report import exploration_points
@@ -42,7 +42,7 @@ def play_one(args: tuple[GameOptions, str | None]) -> dict:
             summary = finish(result, options, wall.now() - t0)
         summary.pop("awards", None)
         return summary
-    except Exception as exc:  # noqa: BLE001 - one bad game must not end the batch
+    except Exception as exc:
         return {"seed": options.seed, "strategy": options.strategy, "baseline": options.baseline,
                 "error": f"{type(exc).__name__}: {exc}", "trace": traceback.format_exc()}
 

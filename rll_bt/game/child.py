@@ -56,7 +56,7 @@ def run(cfg: dict) -> int:
         msglog = MessageLog(cfg["message_log"], clock, {}, team_reg, line_buffered=True)
 
     def agents():
-        kw = dict(registry=team_reg, key=cfg["key"], host="127.0.0.1", clock=clock)
+        kw = {"registry": team_reg, "key": cfg["key"], "host": "127.0.0.1", "clock": clock}
         if msglog is None:
             return StreamServer(cfg["listen"], **kw)
         return LoggedStreamServer(cfg["listen"], log=msglog, **kw)

@@ -28,9 +28,10 @@ radians of the rules profile.
 from __future__ import annotations
 
 import abc
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from ..backend import Backend, Pose2D
 

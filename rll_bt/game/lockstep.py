@@ -18,9 +18,9 @@ and demonstrations: :meth:`kill_agent`, :meth:`start_agent`,
 from __future__ import annotations
 
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 from .. import msgs
 from ..agent import AgentConfig, RobotAgent
@@ -204,7 +204,7 @@ class LockstepGame:
         while self.clock.now() < end - 1e-9:
             self.round()
 
-    def run_until(self, predicate: Callable[["LockstepGame"], bool], limit: float) -> bool:
+    def run_until(self, predicate: Callable[[LockstepGame], bool], limit: float) -> bool:
         """Run until ``predicate(game)`` or ``limit`` more simulated seconds; whether it held."""
         self.start()
         end = self.clock.now() + limit
@@ -214,7 +214,7 @@ class LockstepGame:
             self.round()
         return predicate(self)
 
-    def run(self, limit: float | None = None, stop: Callable[["LockstepGame"], bool] | None = None) -> GameResult:
+    def run(self, limit: float | None = None, stop: Callable[[LockstepGame], bool] | None = None) -> GameResult:
         """Play until the game is over (or ``stop(game)``), at most ``limit``
         simulated seconds (default: the expected length plus overtime and a margin)."""
         self.start()
@@ -244,7 +244,7 @@ class LockstepGame:
         for agent in self.agents.values():
             try:
                 agent.shutdown()
-            except Exception:  # noqa: BLE001 - closing must not hide the result
+            except Exception:
                 pass
         self.teamserver.close()
         if self.log is not None:
@@ -253,7 +253,7 @@ class LockstepGame:
         if self._tmp is not None:
             self._tmp.cleanup()
 
-    def __enter__(self) -> "LockstepGame":
+    def __enter__(self) -> LockstepGame:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -48,7 +48,7 @@ class MessageLog:
         self._registries = registries
         self._default = default
         self._key = key
-        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8",
+        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8",  # noqa: SIM115 - closed by close()
                                         buffering=1 if line_buffered else -1)
         self.lines = 0
         self.undecoded = 0

@@ -39,8 +39,8 @@ import json
 import subprocess
 import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from ..comm import Layout, PeerPorts
 from .interfaces import load_simulator
@@ -139,7 +139,7 @@ class ProcessGame:
 
     # -- children ----------------------------------------------------------------------------
     def _spawn(self, name: str, cmd: list[str]) -> None:
-        log = open(self.dir / f"{name}.log", "a")
+        log = open(self.dir / f"{name}.log", "a")  # noqa: SIM115 - closed with the game
         self._logs.append(log)
         self.procs[name] = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
 
@@ -296,7 +296,7 @@ class ProcessGame:
         self.recorder.sample(force=True)
         return True
 
-    def run_until(self, predicate: Callable[["ProcessGame"], bool], limit: float) -> bool:
+    def run_until(self, predicate: Callable[[ProcessGame], bool], limit: float) -> bool:
         """Run until ``predicate(game)`` or ``limit`` more simulated seconds; whether it held.
         :class:`ChildExited` if a process ended that no fault method stopped."""
         if not self.start():
@@ -396,7 +396,7 @@ class ProcessGame:
         self.sim.close()
         self._tmp.cleanup()
 
-    def __enter__(self) -> "ProcessGame":
+    def __enter__(self) -> ProcessGame:
         return self
 
     def __exit__(self, *exc) -> None:

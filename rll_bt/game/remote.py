@@ -32,13 +32,29 @@ import selectors
 import socket
 import struct
 from collections import deque
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
-from ..backend import (Backend, BackendError, BackendUnavailable, Battery, CameraExtrinsics, CameraImage,
-                       CameraIntrinsics, Capability, CapabilityError, Detections, GripperState,
-                       GripperStatus, LaserScan, LightDetection, Odometry, Pose2D, TagDetection)
+from ..backend import (
+    Backend,
+    BackendError,
+    BackendUnavailable,
+    Battery,
+    CameraExtrinsics,
+    CameraImage,
+    CameraIntrinsics,
+    Capability,
+    CapabilityError,
+    Detections,
+    GripperState,
+    GripperStatus,
+    LaserScan,
+    LightDetection,
+    Odometry,
+    Pose2D,
+    TagDetection,
+)
 from ..clock import Clock, WallClock
 
 _LEN = struct.Struct(">I")
@@ -524,7 +540,7 @@ class BackendServer(FramedServer):
         except (CapabilityError, BackendUnavailable, BackendError) as exc:
             return {"id": rid, "e": type(exc).__name__ if type(exc).__name__ in ERRORS else "BackendError",
                     "msg": str(exc)}
-        except Exception as exc:  # noqa: BLE001 - a bad call must not take the world down
+        except Exception as exc:
             return {"id": rid, "e": "BackendError", "msg": f"{type(exc).__name__}: {exc}"}
 
 

@@ -21,8 +21,8 @@ import bisect
 import heapq
 import json
 import os
+from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import Iterable, Iterator
 
 from ..comm import StreamServer
 
@@ -187,7 +187,8 @@ def task_runs(lines: Iterable[dict], end: float | None = None) -> dict[int, list
                 continue
             if cur is not None:
                 cur["end"], cur["outcome"] = t, "CANCELLED"
-            mine.append({"kind": next((k for k in m if k in kinds), None), "id": tid, "start": t, "end": None, "outcome": None})
+            mine.append({"kind": next((k for k in m if k in kinds), None), "id": tid, "start": t,
+                         "end": None, "outcome": None})
         elif e["type"] == "TaskResult" and m.get("status") in FINAL and cur is not None and cur["id"] == tid:
             cur["end"], cur["outcome"] = t, m["status"]
     if end is not None:

@@ -31,8 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .descriptors import differing_files, normalise_bytes
-from .sources import (PACKAGE_DIR, SETS, combined_sha256, generated_module_path, proto_dir,
-                      proto_files, source_hashes)
+from .sources import PACKAGE_DIR, SETS, combined_sha256, generated_module_path, proto_dir, proto_files, source_hashes
 
 #: Version of the generated module layout; bump when it changes.
 FORMAT = 1

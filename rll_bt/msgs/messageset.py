@@ -12,8 +12,8 @@ from __future__ import annotations
 import base64
 import importlib
 import threading
+from collections.abc import Mapping
 from types import MappingProxyType
-from typing import Mapping
 
 from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from google.protobuf.internal.enum_type_wrapper import EnumTypeWrapper

@@ -14,9 +14,24 @@ from __future__ import annotations
 
 from . import rcll2016, rcll2025
 from .geometry import MPS, ROBOT, WORKPIECE, MpsGeometry, RobotGeometry, WorkpieceGeometry
-from .profile import (BASE_COLORS, CAP_COLORS, LIGHTS, PREFIX, RING_COLORS, TEAMS, OrderShape,
-                      Phases, Profile, Scoring, machine_team, machine_type, mirror_machine_name,
-                      other_team, rotation_to_theta, theta_to_rotation)
+from .profile import (
+    BASE_COLORS,
+    CAP_COLORS,
+    LIGHTS,
+    PREFIX,
+    RING_COLORS,
+    TEAMS,
+    OrderShape,
+    Phases,
+    Profile,
+    Scoring,
+    machine_team,
+    machine_type,
+    mirror_machine_name,
+    other_team,
+    rotation_to_theta,
+    theta_to_rotation,
+)
 from .zones import CYAN, MAGENTA, Rect
 
 DEFAULT = "rcll2016"

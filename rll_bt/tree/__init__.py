@@ -25,8 +25,7 @@ The YAML format is described in ``docs/trees.md``.
 """
 from py_trees.common import Status
 
-from .blackboard import (ERROR_CODE_KEY, ERROR_MESSAGE_KEY, ERROR_NODE_KEY, Blackboard, clear_error,
-                         write_error)
+from .blackboard import ERROR_CODE_KEY, ERROR_MESSAGE_KEY, ERROR_NODE_KEY, Blackboard, clear_error, write_error
 from .build import build_tree, load_tree
 from .context import RunContext, register_service
 from .errors import Diagnostic, Loc, TreeLoadError, TreeRuntimeError

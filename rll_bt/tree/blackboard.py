@@ -10,7 +10,8 @@ rather than mutating them in place, or the journal cannot see the change.
 """
 from __future__ import annotations
 
-from typing import Any, Iterator
+from collections.abc import Iterator
+from typing import Any
 
 UNSET: Any = type("Unset", (), {"__repr__": lambda self: "UNSET"})()
 

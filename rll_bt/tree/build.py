@@ -1,10 +1,10 @@
 """Turn a checked :class:`TreeSpec` into py_trees behaviours."""
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any
 
-from ..backend import Capability
 from .context import RunContext
 from .errors import Diagnostic, TreeLoadError
 from .loader import parse_tree
@@ -38,7 +38,7 @@ def build_tree(spec: TreeSpec, ctx: RunContext | None = None) -> LoadedTree:
         kids: dict[str, list] = {}
         for slot, specs in ns.slots.items():
             kids[slot] = [make(c, my_id, depth + 1) for c in specs]
-        for pname, b in ns.ports.items():
+        for _pname, b in ns.ports.items():
             if isinstance(b, Unknown):
                 diags.append(Diagnostic(ns.loc, f"{b.source} has no value", "load the tree with a task that gives it"))
                 return None

@@ -11,18 +11,19 @@ on first use (``ctx.service("nav")``) when nobody provided one, which is how
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Callable, Mapping
+from typing import Any
 
 from ..clock import Clock, WallClock
 from .blackboard import Blackboard
 from .errors import TreeRuntimeError
 
-_SERVICE_FACTORIES: dict[str, Callable[["RunContext"], Any]] = {}
+_SERVICE_FACTORIES: dict[str, Callable[[RunContext], Any]] = {}
 
 
-def register_service(name: str, factory: Callable[["RunContext"], Any], *, replace: bool = False) -> None:
+def register_service(name: str, factory: Callable[[RunContext], Any], *, replace: bool = False) -> None:
     """Make ``ctx.service(name)`` build the service with ``factory(ctx)`` on
     first use, when the context was not given one."""
     if name in _SERVICE_FACTORIES and not replace and _SERVICE_FACTORIES[name] is not factory:
@@ -71,6 +72,6 @@ class RunContext:
     def has_service(self, name: str) -> bool:
         return name in self.services or name in _SERVICE_FACTORIES
 
-    def with_task(self, task: Mapping[str, Any]) -> "RunContext":
+    def with_task(self, task: Mapping[str, Any]) -> RunContext:
         """A copy of this context for a new task (fresh blackboard)."""
         return RunContext(self.backend, self.clock, task, self.logger, self.services, Blackboard())

@@ -7,7 +7,7 @@ early halts its running child (terminate with INVALID).
 """
 from __future__ import annotations
 
-from typing import Callable, Iterator
+from collections.abc import Callable, Iterator
 
 import py_trees
 from py_trees.common import OneShotPolicy, Status

@@ -5,8 +5,8 @@ Lines and columns are 1-based, as editors show them.
 from __future__ import annotations
 
 import difflib
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Iterable
 
 from ..errors import UserError
 
@@ -23,7 +23,7 @@ class Loc:
     def __str__(self) -> str:
         return f"{self.file}:{self.line}:{self.col}"
 
-    def shifted(self, offset: int) -> "Loc":
+    def shifted(self, offset: int) -> Loc:
         """The place ``offset`` characters into a one-line scalar."""
         quote = 1 if self.style in ("'", '"') else 0
         return Loc(self.file, self.line, self.col + quote + offset, None)

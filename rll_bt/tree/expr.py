@@ -19,8 +19,9 @@ from __future__ import annotations
 
 import operator
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 KEYWORDS = {"and", "or", "not", "in", "true", "false", "null", "True", "False", "None"}
 _CONST_WORDS = {"true": True, "True": True, "false": False, "False": False, "null": None, "None": None}
@@ -213,10 +214,7 @@ class Expr:
         elif tag == "cmp":
             self._collect(node[2], keys)
             self._collect(node[3], keys)
-        elif tag in ("and", "or"):
-            self._collect(node[1], keys)
-            self._collect(node[2], keys)
-        elif tag == "in":
+        elif tag in ("and", "or") or tag == "in":
             self._collect(node[1], keys)
             self._collect(node[2], keys)
         elif tag == "not":

@@ -11,14 +11,15 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any
 
 from .errors import Diagnostic, Loc, TreeLoadError, did_you_mean
 from .expr import ExprError, parse_expr
 from .ports import Binding, Const, Input, Key, Port, Unknown
-from .porttypes import EXPR, PortType, PortTypeError, port_type, type_names, type_of_value
+from .porttypes import EXPR, PortType, PortTypeError, port_type, type_names
 from .registry import NodeRegistry, NodeType, default_registry
 from .source import SourceError, YList, YMap, parse_yaml
 from .spec import Decl, NodeSpec, TreeSpec
@@ -54,7 +55,7 @@ class _Env:
     params: dict[str, Binding]
     remap: dict[str, str]
     autoremap: bool
-    parent: "_Env | None"
+    parent: _Env | None
     stack: tuple[Path, ...]
 
     def key(self, name: str) -> str:
@@ -460,7 +461,7 @@ class Loader:
         return self._plain_node(nt, opts, loc, env)
 
     def _bad_node_mapping(self, value: YMap) -> None:
-        keys = [k for k in value]
+        keys = list(value)
         if not keys:
             self.error(value.loc, "empty mapping where a node was expected", "write a node such as `success`")
             return
@@ -583,13 +584,15 @@ class Loader:
         path = next((c.resolve() for c in candidates if c.is_file()), None)
         if path is None:
             near = sorted(str(p.relative_to(here)) for p in here.rglob("*.yaml")) if here.is_dir() else []
-            self.error(floc, f"subtree file {fname!r} not found (looked in {', '.join(_display(c.parent) for c in candidates)})",
+            looked = ', '.join(_display(c.parent) for c in candidates)
+            self.error(floc, f"subtree file {fname!r} not found (looked in {looked})",
                        did_you_mean(fname, near, "tree files nearby") if near else "check the path; it is relative to "
                        "the including file")
             return None
         if path in env.stack:
             chain = " -> ".join(_display(p) for p in env.stack[env.stack.index(path):]) + " -> " + _display(path)
-            self.error(floc, f"subtree cycle: {chain}", "a tree may not include itself, directly or through its subtrees")
+            self.error(floc, f"subtree cycle: {chain}",
+                       "a tree may not include itself, directly or through its subtrees")
             return None
         child = self._read(path)
         if child is None:

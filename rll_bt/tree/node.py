@@ -24,14 +24,15 @@ py_trees).
 from __future__ import annotations
 
 import re
-from typing import Any, ClassVar, Iterator
+from collections.abc import Iterator
+from typing import Any, ClassVar
 
 import py_trees
 from py_trees.common import Status
 
 from ..backend import Capability
 from .context import RunContext
-from .ports import MISSING, BoundPorts, Const, Key, Port, Binding
+from .ports import MISSING, Binding, BoundPorts, Const, Key, Port
 
 _VALID = frozenset(Status)
 _RUNNING = Status.RUNNING
@@ -106,7 +107,7 @@ class Node(py_trees.behaviour.Behaviour):
 
     # -- building from Python -------------------------------------------------
     @classmethod
-    def make(cls, ctx: RunContext | None = None, name: str | None = None, **values: Any) -> "Node":
+    def make(cls, ctx: RunContext | None = None, name: str | None = None, **values: Any) -> Node:
         """Build a node from Python (tests, hand-built trees).  ``values`` are
         literals or :func:`~rll_bt.tree.ports.BB` keys."""
         ctx = ctx or RunContext()

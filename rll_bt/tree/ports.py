@@ -14,7 +14,8 @@ tree does not bind is simply not written.
 """
 from __future__ import annotations
 
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 from .porttypes import PortType, port_type
 
@@ -59,7 +60,7 @@ class Key(Binding):
     def read(self, bb):
         return bb._data.get(self.key, self.default)
 
-    def with_default(self, default: Any) -> "Key":
+    def with_default(self, default: Any) -> Key:
         return Key(self.key, self.source, default)
 
     def __repr__(self) -> str:
@@ -81,7 +82,7 @@ class Unknown(Binding):
         return f"Unknown({self.source})"
 
 
-def BB(key: str) -> Key:  # noqa: N802 - reads like a constructor in hand-built trees
+def BB(key: str) -> Key:
     """Bind a port to a blackboard key when building nodes from Python."""
     if not key.startswith("/"):
         key = "/" + key

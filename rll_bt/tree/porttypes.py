@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import math
 import typing
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import yaml
 
@@ -34,7 +35,7 @@ class PortType:
     def __str__(self) -> str:
         return self.name
 
-    def accepts(self, other: "PortType") -> bool:
+    def accepts(self, other: PortType) -> bool:
         """Whether a value of type ``other`` (a writer) may feed this port."""
         if self.name == "any" or other.name == "any" or self.name == other.name:
             return True
@@ -42,9 +43,7 @@ class PortType:
             return True
         if self.name == "list" and other.name.startswith("list["):
             return True
-        if self.name == "dict" and other.name.startswith("dict["):
-            return True
-        return False
+        return self.name == "dict" and other.name.startswith("dict[")
 
     def from_text(self, text: str) -> Any:
         """Convert a command-line string (``--task zone=C_Z12``)."""

@@ -11,7 +11,7 @@ of instant failures cannot spin inside one tick.
 """
 from __future__ import annotations
 
-from typing import Iterator
+from collections.abc import Iterator
 
 import py_trees
 from py_trees.common import Status

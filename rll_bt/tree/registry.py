@@ -15,8 +15,9 @@ import importlib
 import inspect
 import logging
 import threading
-from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Any
 
 from .node import Node, _snake
 from .ports import Port
@@ -81,7 +82,7 @@ class NodeRegistry:
     """Node types by name.  ``child()`` layers a registry over this one (a
     test or a team can add types without touching the default)."""
 
-    def __init__(self, parent: "NodeRegistry | None" = None):
+    def __init__(self, parent: NodeRegistry | None = None):
         self._types: dict[str, NodeType] = {}
         self._parent = parent
 
@@ -127,7 +128,7 @@ class NodeRegistry:
     def names(self) -> list[str]:
         return list(self.types())
 
-    def child(self) -> "NodeRegistry":
+    def child(self) -> NodeRegistry:
         return NodeRegistry(self)
 
 

@@ -119,12 +119,12 @@ def png_tree(spec: TreeSpec, path: str | Path, dpi: int = 110) -> Path:
     ax.set_ylim(-(depth - 0.4), 0.6)
     ax.axis("off")
     fig.suptitle(f"{spec.name}  ({spec.file})", fontsize=10)
-    for me, ns, parent in items:
+    for me, _ns, parent in items:
         x, d = pos[me]
         if parent is not None:
             px, pd = pos[parent]
             ax.plot([px, x], [-pd - 0.22, -d + 0.22], color="#888888", linewidth=0.8, zorder=1)
-    for me, ns, parent in items:
+    for me, ns, _parent in items:
         x, d = pos[me]
         face, edge = _KIND_STYLE.get(ns.kind, ("#ffffff", "#000000"))
         ax.add_patch(FancyBboxPatch((x - 0.44, -d - 0.22), 0.88, 0.44, boxstyle="round,pad=0.02,rounding_size=0.08",

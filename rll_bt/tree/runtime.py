@@ -7,8 +7,9 @@ observers (the JSON-lines tick log) see every visited node of every tick.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import py_trees
 from py_trees.common import Status
@@ -47,7 +48,7 @@ class LoadedTree:
         self.spec = spec
         self.nodes = nodes or _index(root)
         self.count = 0
-        self._observers: list[Callable[["LoadedTree", list], None]] = []
+        self._observers: list[Callable[[LoadedTree, list], None]] = []
         self._setup_done = False
 
     @property
@@ -69,7 +70,7 @@ class LoadedTree:
                 info.behaviour.setup(**kwargs)
             self._setup_done = True
 
-    def add_observer(self, fn: Callable[["LoadedTree", list], None]) -> None:
+    def add_observer(self, fn: Callable[[LoadedTree, list], None]) -> None:
         """``fn(tree, visited)`` after each tick; ``visited`` lists the
         behaviours ticked, in order."""
         self._observers.append(fn)
@@ -92,7 +93,7 @@ class LoadedTree:
         return self.root.status
 
     def run(self, hz: float = 10.0, max_ticks: int | None = None, timeout: float | None = None,
-            on_tick: Callable[["LoadedTree"], None] | None = None) -> Status:
+            on_tick: Callable[[LoadedTree], None] | None = None) -> Status:
         """Tick at ``hz`` (context clock) until SUCCESS or FAILURE.  Stops
         (interrupting the tree) after ``max_ticks`` ticks or ``timeout``
         seconds and returns RUNNING then."""

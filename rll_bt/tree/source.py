@@ -133,7 +133,8 @@ def _convert(loader: _Loader, node, filename: str, active: set):
                                                  "write the key as a word")) from None
                 if key in out:
                     first = out.key_locs[key]
-                    raise SourceError(Diagnostic(_loc(filename, knode), f"duplicate key {key!r} (first at line {first.line})",
+                    raise SourceError(Diagnostic(_loc(filename, knode),
+                                                 f"duplicate key {key!r} (first at line {first.line})",
                                                  "each key may appear once in a mapping; check the indentation"))
                 out.key_locs[key] = _loc(filename, knode)
                 out.value_locs[key] = _loc(filename, vnode)

@@ -5,8 +5,9 @@ a :class:`TreeSpec` into py_trees behaviours (:mod:`rll_bt.tree.build`).
 """
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Any, Iterator
+from typing import Any
 
 from .errors import Loc
 from .ports import Binding
@@ -42,18 +43,18 @@ class NodeSpec:
     loc: Loc
     kind: str
     ports: dict[str, Binding] = field(default_factory=dict)
-    slots: dict[str, list["NodeSpec"]] = field(default_factory=dict)
+    slots: dict[str, list[NodeSpec]] = field(default_factory=dict)
     scope: str = "/"
     file: str | None = None          # for subtrees: the file included
     nodetype: Any = field(default=None, repr=False, compare=False)
 
-    def children(self) -> list["NodeSpec"]:
+    def children(self) -> list[NodeSpec]:
         out: list[NodeSpec] = []
         for specs in self.slots.values():
             out.extend(specs)
         return out
 
-    def walk(self, depth: int = 0) -> Iterator[tuple[int, "NodeSpec"]]:
+    def walk(self, depth: int = 0) -> Iterator[tuple[int, NodeSpec]]:
         yield depth, self
         for c in self.children():
             yield from c.walk(depth + 1)

@@ -66,22 +66,22 @@ class AmclConfig:
             raise ValueError("need at least one beam")
 
     @classmethod
-    def standard(cls, **changes) -> "AmclConfig":
+    def standard(cls, **changes) -> AmclConfig:
         return replace(cls(), **changes)
 
     @classmethod
-    def cheap(cls, **changes) -> "AmclConfig":
+    def cheap(cls, **changes) -> AmclConfig:
         return replace(cls(particles=200, min_particles=60, max_particles=300, beams=24,
                            update_min_d=0.2, update_min_a=0.2, still_update_period=1.0,
                            beam_correlation=2.0), **changes)
 
     @classmethod
-    def fixed(cls, particles: int = 500, beams: int = 60, **changes) -> "AmclConfig":
+    def fixed(cls, particles: int = 500, beams: int = 60, **changes) -> AmclConfig:
         return replace(cls(particles=particles, min_particles=particles, max_particles=particles,
                            beams=beams), **changes)
 
     @classmethod
-    def preset(cls, name: str, **changes) -> "AmclConfig":
+    def preset(cls, name: str, **changes) -> AmclConfig:
         presets = {"standard": cls.standard, "cheap": cls.cheap, "fixed": cls.fixed}
         try:
             return presets[name](**changes)

@@ -116,7 +116,8 @@ class Relocalise(Activity):
                           for o in fixes)
             if self.last is not None and fix.distance_to(self.last) > self.tag_reach and not vouched:
                 continue
-            d, a = (math.inf, math.inf) if est is None else (fix.distance_to(est), abs(wrap_angle(fix.theta - est.theta)))
+            d, a = ((math.inf, math.inf) if est is None
+                    else (fix.distance_to(est), abs(wrap_angle(fix.theta - est.theta))))
             fits = loc.fit_now(fix) or 0.0
             if d > self.tag_disagreement or a > self.tag_disagreement:
                 here = (loc.fit_now(est) or 0.0) if est is not None else 0.0

@@ -28,10 +28,10 @@ from rll_bt.backend import CapabilityError, Pose2D
 
 from ..activity import Activity, Status
 from ..errors import SkillError, SkillFailure
+from ..localisation.particles import circular_mean
 from ..navigation.controller import Limits, VelocityLimiter, heading_command
 from ..navigation.guard import MotionGuard
 from ..navigation.safety import scan_points
-from ..localisation.particles import circular_mean
 from .places import Place, check_place, lateral_offset
 from .tagview import tag_pose_in_robot
 

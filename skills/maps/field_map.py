@@ -94,7 +94,7 @@ class FieldMap:
 
     # -- construction -----------------------------------------------------
     @classmethod
-    def from_profile(cls, profile: Profile, margin: float = 0.5) -> "FieldMap":
+    def from_profile(cls, profile: Profile, margin: float = 0.5) -> FieldMap:
         """The profile's field rectangle joined with its insertion areas,
         walled all round (the field's walls and the insertion areas' walls)."""
         f = profile.field

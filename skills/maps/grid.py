@@ -23,7 +23,7 @@ class GridSpec:
 
     @classmethod
     def covering(cls, x_min: float, y_min: float, x_max: float, y_max: float,
-                 resolution: float) -> "GridSpec":
+                 resolution: float) -> GridSpec:
         cols = int(np.ceil((x_max - x_min) / resolution))
         rows = int(np.ceil((y_max - y_min) / resolution))
         return cls(float(x_min), float(y_min), float(resolution), rows, cols)

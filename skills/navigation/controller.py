@@ -26,8 +26,8 @@ in the field frame and sent in the robot frame.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -44,7 +44,7 @@ class Limits:
     emergency_decel: float = 1.5      # braking for an obstacle: what the base can do
 
     @classmethod
-    def from_settings(cls, s, max_speed: float | None = None) -> "Limits":
+    def from_settings(cls, s, max_speed: float | None = None) -> Limits:
         return cls(min(max_speed or s.max_speed, s.max_speed), s.max_omega, s.max_accel,
                    s.max_decel, s.max_alpha, max(s.emergency_decel, s.max_decel))
 

@@ -25,9 +25,9 @@ from rll_bt.backend import CapabilityError, Pose2D, wrap_angle
 from ..activity import Activity, Status
 from ..errors import SkillError, SkillFailure
 from .controller import Limits, PathFollower
-from .planner import GridPlanner, NoPath
 from .goals import standing_clearance
 from .laserview import points_now
+from .planner import GridPlanner, NoPath
 from .safety import clear_distance, scan_points, speed_limit, to_field
 
 

@@ -190,6 +190,7 @@ def light_json(path: str, ms: float, detections) -> dict:
 
 def cmd_light(args) -> int:
     from rll_bt.clock import WallClock
+
     from .light.reader import LightReader
     reader = LightReader.load(args.models)
     if args.min_confidence is not None:
@@ -214,9 +215,11 @@ def cmd_light(args) -> int:
 def cmd_tags(args) -> int:
     import cv2
     import numpy as np
+
     from rll_bt import rules
     from rll_bt.clock import WallClock
     from rll_bt.errors import UserError
+
     from .camera_file import load_camera, scaled
     from .tags import TagDetector
     try:

@@ -15,8 +15,8 @@ confidence.  Times are the detections' stamps (the backend's clock).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from rll_bt.backend import Pose2D
 from rll_bt.rules import Profile

@@ -25,8 +25,20 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from rll_bt.backend import (Backend, BackendError, Capability, CameraExtrinsics, Detections, GripperState,
-                            GripperStatus, LaserScan, Odometry, Pose2D, TagDetection, wrap_angle)
+from rll_bt.backend import (
+    Backend,
+    BackendError,
+    CameraExtrinsics,
+    Capability,
+    Detections,
+    GripperState,
+    GripperStatus,
+    LaserScan,
+    Odometry,
+    Pose2D,
+    TagDetection,
+    wrap_angle,
+)
 from rll_bt.clock import SimClock
 from rll_bt.rules import MPS, ROBOT, MpsGeometry, Profile, RobotGeometry
 
@@ -126,7 +138,7 @@ class FlatWorld:
         self._segments = self._walls
 
     @classmethod
-    def from_profile(cls, profile: Profile, **kw) -> "FlatWorld":
+    def from_profile(cls, profile: Profile, **kw) -> FlatWorld:
         return cls(FieldMap.from_profile(profile), geometry=profile.robot, mps=profile.mps, **kw)
 
     # -- building ---------------------------------------------------------
@@ -137,7 +149,7 @@ class FlatWorld:
         self._segments = np.concatenate([self._walls] + edges, axis=0)
         return st
 
-    def add_robot(self, pose: Pose2D) -> "FlatRobot":
+    def add_robot(self, pose: Pose2D) -> FlatRobot:
         robot = FlatRobot(self, len(self.robots), pose)
         self.robots.append(robot)
         return robot
@@ -185,7 +197,7 @@ class FlatWorld:
                 depth = max(depth, 2 * r - gap)
         return depth
 
-    def scan(self, robot: "FlatRobot", angles_laser: np.ndarray, mount: Pose2D,
+    def scan(self, robot: FlatRobot, angles_laser: np.ndarray, mount: Pose2D,
              range_max: float) -> np.ndarray:
         origin = robot.true_pose.compose(mount)
         ang = angles_laser + origin.theta

@@ -16,7 +16,7 @@ entries carry zone and rotation, a rotation only with (or after) its zone.
 """
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from rll_bt.rules import Profile
 

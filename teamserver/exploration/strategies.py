@@ -240,8 +240,8 @@ class OracleStrategy(Strategy):
         return Decision(min(free, key=lambda z: (view.distance(pose, z), z)), "oracle")
 
 
-STRATEGIES = {"algorithm1": Algorithm1, "algorithm1-paper": Algorithm1Paper, "random": RandomStrategy, "nearest": NearestStrategy,
-              "oracle": OracleStrategy}
+STRATEGIES = {"algorithm1": Algorithm1, "algorithm1-paper": Algorithm1Paper, "random": RandomStrategy,
+              "nearest": NearestStrategy, "oracle": OracleStrategy}
 
 
 def make_strategy(name: str, seed: int = 0, thresh: float = DEFAULT_THRESH,

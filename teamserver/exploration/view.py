@@ -76,7 +76,7 @@ class ExplorationView:
 
     @classmethod
     def from_kb(cls, kb, team: str, zones: list[int], busy: set[int] = frozenset(),
-                cs: ConsistentSet | None = None) -> "ExplorationView":
+                cs: ConsistentSet | None = None) -> ExplorationView:
         """The view of ``kb``; ``cs``: its consistent set when already made."""
         cs = consistent_set(kb.profile, kb.machines) if cs is None else cs
         prefix = PREFIX[team] + "-"
@@ -85,7 +85,7 @@ class ExplorationView:
             est = mb.estimate(M.ZONE)
             if name.startswith(prefix) and est is not None:
                 raw[name] = int(est.value)
-        observed = {n for n in kb.observed_machines()}
+        observed = set(kb.observed_machines())
         return cls(kb.profile, team, list(zones), set(kb.visited), set(busy),
                    cs.own(team), raw, cs, observed)
 
@@ -104,7 +104,7 @@ class ExplorationView:
                 continue
             if g.zone is not None:
                 hyp[g.zone] = max(hyp.get(g.zone, 0.0), identification(self.profile, g))
-        for name, z in self.raw_zones.items():
+        for z in self.raw_zones.values():
             hyp.setdefault(z, 0.0)
         return hyp
 

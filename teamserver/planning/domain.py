@@ -285,7 +285,6 @@ def m_product_discard(ctx: ProductionContext, cs: str):
 
 def _bases_needed(ctx: ProductionContext, remaining, i: int) -> int:
     """Additional bases still to bring for remaining ring i (after slide credit)."""
-    rs = ctx.rs_for(remaining[i])
     credit = dict(ctx.progress.slide_credit)
     for j in range(i + 1):
         rj = ctx.rs_for(remaining[j])

@@ -119,7 +119,7 @@ def simulate(profile: Profile, tasks: list[SimTask], robots: list[SimRobot],
     if not robots:
         return res
     done = set(done or ())
-    finish: dict = {k: now for k in done}
+    finish: dict = dict.fromkeys(done, now)
     locks: dict[str, str] = dict(owned or {})
     holder_of: dict = {}            # carry task key -> robot that made the pickup
     holding: dict[str, object] = {}  # robot -> carry task it must do next

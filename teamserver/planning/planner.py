@@ -105,13 +105,13 @@ class Choice:
 
 
 class ProductionPlanner:
-    def __init__(self, profile: Profile, team_prefix: str, *, durations: Durations = Durations(),
+    def __init__(self, profile: Profile, team_prefix: str, *, durations: Durations | None = None,
                  budget: float = 0.04, max_evaluations: int = 60, clock: Clock | None = None,
                  max_expansions: int = 5000, storage: StoragePolicy = StoragePolicy()):
         self.profile = profile
         self.storage = storage
         self.prefix = team_prefix
-        self.durations = durations
+        self.durations = durations if durations is not None else Durations()
         self.budget = budget
         self.max_evaluations = max_evaluations
         self.clock = clock if clock is not None else WallClock()

@@ -2,8 +2,7 @@
 from rll_bt.backend import BackendError
 from skills.activity import Activity, Sequence, Status
 from skills.errors import SkillError, SkillFailure
-
-from skills_scene import Scene
+from tests.support.skills_scene import Scene
 
 
 class Counter(Activity):

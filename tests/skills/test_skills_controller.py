@@ -28,7 +28,8 @@ def test_follower_respects_speed_and_acceleration_limits_and_reaches_the_goal():
     f = PathFollower(path, math.pi, lim)
     cmds, end = simulate(f, Pose2D(0.0, 0.0, 0.0))
     assert f.done
-    assert math.hypot(end.x - 3.0, end.y - 2.0) <= 0.05 and abs(math.remainder(end.theta - math.pi, 2 * math.pi)) <= 0.05
+    assert math.hypot(end.x - 3.0, end.y - 2.0) <= 0.05
+    assert abs(math.remainder(end.theta - math.pi, 2 * math.pi)) <= 0.05
     speed = np.hypot(cmds[:, 0], cmds[:, 1])
     assert speed.max() <= 0.7 + 1e-9 and speed.max() > 0.6
     dv = np.hypot(*np.diff(cmds[:, :2], axis=0).T)

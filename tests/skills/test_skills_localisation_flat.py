@@ -7,8 +7,7 @@ import pytest
 
 from rll_bt.backend import Pose2D, wrap_angle
 from skills.localisation import AmclConfig, Localiser
-
-from skills_scene import Scene
+from tests.support.skills_scene import Scene
 
 
 def drive_through(scene, loc, waypoints, speed=0.5):

@@ -7,8 +7,18 @@ import pytest
 
 from rll_bt import rules
 from rll_bt.backend import Pose2D
-from skills.localisation import (AmclConfig, LikelihoodField, OmniMotionModel, ParticleFilter, draw,
-                                 kld_count, kld_prefix_length, bin_keys, odometry_step, systematic_indices)
+from skills.localisation import (
+    AmclConfig,
+    LikelihoodField,
+    OmniMotionModel,
+    ParticleFilter,
+    bin_keys,
+    draw,
+    kld_count,
+    kld_prefix_length,
+    odometry_step,
+    systematic_indices,
+)
 from skills.maps import FieldMap
 
 

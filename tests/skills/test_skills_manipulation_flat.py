@@ -7,10 +7,17 @@ import pytest
 from rll_bt.backend import Detections, Pose2D
 from skills.activity import Status
 from skills.errors import SkillError, SkillFailure
-from skills.manipulation import (ApproachStation, GrabFrom, Place, PutOnto, fit_face, gripper_target,
-                                 lateral_offset, place_for)
-
-from skills_scene import Scene
+from skills.manipulation import (
+    ApproachStation,
+    GrabFrom,
+    Place,
+    PutOnto,
+    fit_face,
+    gripper_target,
+    lateral_offset,
+    place_for,
+)
+from tests.support.skills_scene import Scene
 
 
 @pytest.mark.parametrize("start", [Pose2D(4.5, 2.0, math.pi / 2), Pose2D(2.0, 1.0, 0.0),
@@ -115,7 +122,8 @@ def test_places_and_their_checks():
         app = ApproachStation(scene.ctx, bad)
         assert scene.run(app) is Status.FAILURE and app.error is SkillError.INVALID_TASK
     m = scene.profile.mps
-    assert lateral_offset(Place("C-CS1", "INPUT", "shelf0"), scene.profile) == pytest.approx(m.shelf_y[0] - m.belt_offset_y)
+    shelf0 = Place("C-CS1", "INPUT", "shelf0")
+    assert lateral_offset(shelf0, scene.profile) == pytest.approx(m.shelf_y[0] - m.belt_offset_y)
     assert lateral_offset(Place("C-CS1", "OUTPUT"), scene.profile) == 0.0
     x, y, z = gripper_target(scene.profile, 0.27, 0.03)
     assert (x, y) == pytest.approx((0.05, 0.0)) and z == pytest.approx(m.belt_height + 0.0225 / 2)

@@ -8,8 +8,7 @@ from rll_bt.backend import Pose2D
 from skills.activity import Status
 from skills.errors import SkillError
 from skills.navigation import Navigate, PoseGoal, StationSideGoal, ZoneGoal, approach_pose
-
-from skills_scene import STATIONS, Scene
+from tests.support.skills_scene import STATIONS, Scene
 
 
 @pytest.mark.parametrize("goal", [

@@ -7,8 +7,7 @@ from py_trees.common import Status as TreeStatus
 from rll_bt.backend import Pose2D
 from rll_bt.tree import ERROR_CODE_KEY, RunContext, default_registry, load_tree
 from skills.nodes import NODE_TYPES
-
-from skills_scene import Scene
+from tests.support.skills_scene import Scene
 
 GRAB_AND_PUT = """
 name: grab_and_put

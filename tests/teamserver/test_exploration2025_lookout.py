@@ -10,7 +10,7 @@ from teamserver import model as M
 from teamserver.exploration.lookout import LOOK, Lookout, face_viewpoints, is_look
 from teamserver.exploration.symmetry import consistent_set
 from teamserver.kb import KnowledgeBase
-from ts_harness import Lockstep
+from tests.support.teamserver import Lockstep
 
 P25 = rules.profile("rcll2025")
 Z = P25.zone_number

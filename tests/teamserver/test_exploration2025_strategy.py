@@ -7,7 +7,7 @@ from teamserver import model as M
 from teamserver.exploration.strategies import Algorithm1, RandomStrategy
 from teamserver.exploration.view import ExplorationView
 from teamserver.kb import KnowledgeBase
-from ts_harness import Lockstep
+from tests.support.teamserver import Lockstep
 
 P25 = rules.profile("rcll2025")
 Z = P25.zone_number

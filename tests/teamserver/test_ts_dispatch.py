@@ -4,8 +4,7 @@ import pytest
 
 from teamserver import model as M
 from teamserver.server import ServerConfig
-from ts_harness import RS_2016, Lockstep, production_setup, task_kinds
-
+from tests.support.teamserver import RS_2016, Lockstep, production_setup, task_kinds
 
 #: these tests look at the dispatch of one product's steps: no caps retrieved ahead
 ALONE = ServerConfig(prefill_caps=False)
@@ -31,7 +30,7 @@ def prepares(ls):
 def test_tasks_go_to_the_nearest_idle_robot_over_tcp(tcp):
     ls = tcp
     place(ls, [(0.5, 5.5, 0.0), (5.0, 1.6, 0.0), (3.0, 3.2, 0.0)])
-    production_setup(ls, [dict(id=1)])
+    production_setup(ls, [{"id": 1}])
     ls.step(n=5)
     by_robot = {a.number: task_kinds(a) for a in ls.agents}
     assert by_robot[2] == [(by_robot[2][0][0], "get_workpiece", "C-BS")]     # next to the BS
@@ -45,7 +44,7 @@ def test_prepare_machine_waits_until_the_robot_is_about_to_arrive(tcp):
     ls = tcp
     ls.server.config.dispatch.prepare_retry = 3.0
     place(ls, [(0.5, 5.5, 0.0), (1.0, 5.0, 0.0), (0.2, 5.8, 0.0)])
-    production_setup(ls, [dict(id=1)])
+    production_setup(ls, [{"id": 1}])
     ls.step(n=5)
     got_bs = [a for a in ls.agents if any(k[2] == "C-BS" for k in task_kinds(a))]
     assert len(got_bs) == 1
@@ -70,7 +69,7 @@ def test_one_robot_at_a_station_at_a_time():
     # four robots: one may hold its base until the cap is ready, and two stay free
     ls = Lockstep(robots=4)
     place(ls, [(5.0, 1.6, 0.0), (4.8, 1.7, 0.0), (5.2, 1.7, 0.0), (4.6, 1.6, 0.0)])
-    production_setup(ls, [dict(id=1), dict(id=2, delivery_gate=2)])
+    production_setup(ls, [{"id": 1}, {"id": 2, "delivery_gate": 2}])
     ls.step(n=5)
     bs = [(a, k) for a in ls.agents for k in task_kinds(a) if k[2] == "C-BS"]
     assert len(bs) == 1                                      # two products, one BS
@@ -103,18 +102,19 @@ def run_tasks(ls, until, fail=None, steps=400):
 
 def test_a_lost_workpiece_is_repaired_and_the_product_still_delivered():
     ls = Lockstep()
-    production_setup(ls, [dict(id=1)])
+    production_setup(ls, [{"id": 1}])
     kb = ls.server.kb
     failed = []
 
     def fail(agent, t):
         if t.WhichOneof("kind") == "mount_cap" and not failed:
             failed.append(t.task_id)
-            return dict(error="PUT_FAILED", holding=False)
+            return {"error": "PUT_FAILED", "holding": False}
         return None
 
-    delivered = lambda: any(p.state == "DELIVERED" and p.order_id == 1
-                            for p in kb.products.values())
+    def delivered():
+        return any(p.state == "DELIVERED" and p.order_id == 1
+                                for p in kb.products.values())
     assert run_tasks(ls, delivered, fail)
     [p] = [p for p in kb.products.values() if p.order_id == 1]
     assert p.repairs == 1
@@ -131,14 +131,14 @@ def test_a_lost_workpiece_is_repaired_and_the_product_still_delivered():
 
 def test_a_retryable_failure_tries_the_same_step_again():
     ls = Lockstep(config=ALONE)
-    production_setup(ls, [dict(id=1)])
+    production_setup(ls, [{"id": 1}])
     kb = ls.server.kb
     failed = []
 
     def fail(agent, t):
         if t.WhichOneof("kind") == "deliver" and not failed:
             failed.append((agent.number, t.task_id))
-            return dict(error="NAVIGATION_FAILED", holding=True)
+            return {"error": "NAVIGATION_FAILED", "holding": True}
         return None
 
     assert run_tasks(ls, lambda: any(p.state == "DELIVERED" for p in kb.products.values()),
@@ -153,10 +153,11 @@ def test_a_retryable_failure_tries_the_same_step_again():
 
 def test_a_broken_station_with_our_workpiece_inside_triggers_repair():
     ls = Lockstep()
-    production_setup(ls, [dict(id=1, complexity=1, rings=["RING_GREEN"])])
+    production_setup(ls, [{"id": 1, "complexity": 1, "rings": ["RING_GREEN"]}])
     kb = ls.server.kb
-    mounted = lambda: any(t.kind == M.MOUNT_RING and t.state == M.DONE
-                          for t in kb.tasks.values())
+    def mounted():
+        return any(t.kind == M.MOUNT_RING and t.state == M.DONE
+                              for t in kb.tasks.values())
     assert run_tasks(ls, mounted)
     ls.station_states["C-RS1"] = "BROKEN"
     ls.refbox.machines(ls.station_states)
@@ -178,9 +179,9 @@ def test_new_order_is_planned_at_once():
     ls = Lockstep()
     production_setup(ls, [])
     assert not ls.server.kb.products
-    ls.refbox.orders([dict(id=5, complexity=0, base_color=1, cap_color=2, quantity_requested=1,
-                           quantity_delivered_cyan=0, quantity_delivered_magenta=0,
-                           delivery_period_begin=0, delivery_period_end=900, delivery_gate=3)])
+    ls.refbox.orders([{"id": 5, "complexity": 0, "base_color": 1, "cap_color": 2, "quantity_requested": 1,
+                           "quantity_delivered_cyan": 0, "quantity_delivered_magenta": 0,
+                           "delivery_period_begin": 0, "delivery_period_end": 900, "delivery_gate": 3}])
     ls.step(n=2)
     assert [p.order_id for p in ls.server.kb.products.values() if p.order_id] == [5]
 
@@ -189,7 +190,7 @@ def bs_task_after_setup(ls, poses):
     """Robots placed at ``poses``, one order: (the knowledge base, the
     assigned base-station task)."""
     place(ls, poses)
-    production_setup(ls, [dict(id=1)])
+    production_setup(ls, [{"id": 1}])
     ls.step(n=5)
     kb = ls.server.kb
     [bs] = [t for t in kb.tasks.values() if t.machine == "C-BS" and t.state == M.ASSIGNED]
@@ -231,7 +232,7 @@ def test_work_that_frees_a_stuck_robot_goes_first():
     product's cap retrieval waits, yet it goes for the one that frees robot 1."""
     ls = Lockstep(robots=2, config=ALONE)
     place(ls, [(5.0, 1.2, 0.0), (-5.0, 5.5, 0.0)])
-    production_setup(ls, [dict(id=1)], states={"C-CS2": "DOWN"})
+    production_setup(ls, [{"id": 1}], states={"C-CS2": "DOWN"})
     kb, d = ls.server.kb, ls.server.dispatcher
     ls.step(n=3)
     [get] = [t for t in kb.tasks.values() if t.machine == "C-BS" and t.state == M.ASSIGNED]

@@ -3,8 +3,14 @@ import pytest
 
 from rll_bt import rules
 from teamserver import model as M
-from teamserver.exploration.strategies import (Algorithm1, Algorithm1Paper, NearestStrategy,
-                                               OracleStrategy, RandomStrategy, make_strategy)
+from teamserver.exploration.strategies import (
+    Algorithm1,
+    Algorithm1Paper,
+    NearestStrategy,
+    OracleStrategy,
+    RandomStrategy,
+    make_strategy,
+)
 from teamserver.exploration.view import ExplorationView, opposite_zone
 from teamserver.kb import KnowledgeBase
 

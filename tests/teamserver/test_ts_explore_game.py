@@ -1,9 +1,8 @@
 """Exploration end to end in lockstep: scripted robots look at the zones they are
 sent to; the server reports to the refbox before the deadline."""
-import pytest
 
 from rll_bt import rules
-from ts_harness import Lockstep
+from tests.support.teamserver import Lockstep
 
 TRUTH_2016 = {"C-BS": 9, "C-DS": 4, "C-RS1": 2, "C-RS2": 19, "C-CS1": 23, "C-CS2": 6,
               "M-BS": 21, "M-DS": 16, "M-RS1": 14, "M-RS2": 7, "M-CS1": 11, "M-CS2": 18}

@@ -1,7 +1,7 @@
 """Faults: robots that drop out and come back, a team server killed and restarted."""
 from teamserver import model as M
 from teamserver.server import ServerConfig
-from ts_harness import Lockstep, production_setup, task_kinds
+from tests.support.teamserver import Lockstep, production_setup, task_kinds
 
 
 def beat_all_but(ls, silent, seconds, dt=0.5):
@@ -17,7 +17,7 @@ def test_a_silent_robot_is_dropped_and_its_task_reassigned():
     ls.server.config.dispatch.heartbeat_timeout = 4.0
     for a, pose in zip(ls.agents, [(5.0, 1.6, 0.0), (0.5, 5.5, 0.0), (1.0, 5.0, 0.0)]):
         a.pose = pose
-    production_setup(ls, [dict(id=1)])
+    production_setup(ls, [{"id": 1}])
     kb = ls.server.kb
     [(tid, _, _)] = [k for k in task_kinds(ls.agents[0]) if k[2] == "C-BS"]
     beat_all_but(ls, {1}, 3.0)
@@ -59,7 +59,7 @@ def test_a_robot_that_comes_back_gets_the_machine_map_at_once():
 def test_the_team_server_resumes_from_its_database(tmp_path):
     state = str(tmp_path / "ts.sqlite")
     ls = Lockstep(state=state)
-    production_setup(ls, [dict(id=1, complexity=1, rings=["RING_ORANGE"])])
+    production_setup(ls, [{"id": 1, "complexity": 1, "rings": ["RING_ORANGE"]}])
     kb = ls.server.kb
     ls.agents[1].observe("M-CS1", zone=17, zconf=0.8, lights=5, lconf=0.7)
     ls.step()

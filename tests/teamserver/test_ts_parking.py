@@ -6,7 +6,7 @@ import numpy as np
 
 from teamserver import model as M
 from teamserver import parking
-from ts_harness import Lockstep, production_setup, task_kinds
+from tests.support.teamserver import Lockstep, production_setup, task_kinds
 
 
 def far_spots(n):
@@ -75,7 +75,7 @@ def test_a_failed_park_is_not_resent_at_once():
 def test_a_parking_robot_gets_ready_work_and_its_park_is_cancelled():
     ls, f1, f2 = setup()
     (p,) = ls.agents[0].parks()
-    production_setup(ls, [dict(id=1)])                          # work appears while it drives
+    production_setup(ls, [{"id": 1}])                          # work appears while it drives
     ls.step(n=3)
     assert ("get_workpiece", "C-BS") in [k[1:] for k in task_kinds(ls.agents[0])]
     assert p.task_id in [c.task_id for c in ls.agents[0].cancels()]

@@ -1,6 +1,5 @@
 """HTN production planning: decompositions for C0..C3 and every ring cost, repair
 from partial progress, and the anytime choice of orders."""
-import itertools
 
 import pytest
 

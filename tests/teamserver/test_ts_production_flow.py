@@ -2,7 +2,7 @@
 workpieces a station never took, stations left PREPARED with a stale instruction,
 robots left holding what they cannot use yet, places the robots keep failing at."""
 from teamserver import model as M
-from ts_harness import Lockstep, play, production_setup
+from tests.support.teamserver import Lockstep, play, production_setup
 
 
 def ds_gates(ls):
@@ -20,8 +20,8 @@ def delivered(ls, *orders):
 
 def test_a_delivery_waits_for_the_orders_window():
     ls = Lockstep()
-    production_setup(ls, [dict(id=2, delivery_period_begin=70, delivery_period_end=300,
-                               delivery_gate=2)])
+    production_setup(ls, [{"id": 2, "delivery_period_begin": 70, "delivery_period_end": 300,
+                               "delivery_gate": 2}])
     starts = {}
 
     def note(agent, t):
@@ -39,7 +39,7 @@ def test_a_delivery_waits_for_the_orders_window():
 
 def test_a_delivery_the_station_never_took_is_made_again_at_the_same_gate():
     ls = Lockstep()
-    production_setup(ls, [dict(id=1, delivery_gate=3)])
+    production_setup(ls, [{"id": 1, "delivery_gate": 3}])
     dropped = []
 
     def drop(agent, t):
@@ -59,13 +59,13 @@ def test_a_delivery_the_station_never_took_is_made_again_at_the_same_gate():
 
 def test_a_feed_reported_failed_that_reached_the_station_counts_as_done():
     ls = Lockstep()
-    production_setup(ls, [dict(id=1)])
+    production_setup(ls, [{"id": 1}])
     failed = []
 
     def fail(agent, t):
         if t.WhichOneof("kind") == "mount_cap" and not failed:
             failed.append(t.task_id)                 # it timed out backing off
-            return dict(error="TIMEOUT", holding=False, fed=True)
+            return {"error": "TIMEOUT", "holding": False, "fed": True}
         return None
     assert play(ls, delivered(ls, 1), fail=fail)
     kb = ls.server.kb
@@ -77,7 +77,7 @@ def test_a_feed_reported_failed_that_reached_the_station_counts_as_done():
 
 def test_a_station_waiting_with_another_gate_is_fed_a_spare_base_first():
     ls = Lockstep()
-    production_setup(ls, [dict(id=1, delivery_gate=1), dict(id=2, delivery_gate=2)])
+    production_setup(ls, [{"id": 1, "delivery_gate": 1}, {"id": 2, "delivery_gate": 2}])
     srv = ls.server
     kb, feeds = srv.kb, srv.dispatcher.feeds
     ls.step(n=3)
@@ -118,7 +118,7 @@ def test_a_station_waiting_with_another_gate_is_fed_a_spare_base_first():
 
 def test_a_feed_still_being_checked_is_neither_adopted_nor_flushed():
     ls = Lockstep()
-    production_setup(ls, [dict(id=1, delivery_gate=1)])
+    production_setup(ls, [{"id": 1, "delivery_gate": 1}])
     kb, feeds = ls.server.kb, ls.server.dispatcher.feeds
     t = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1}, state=M.DONE,
                prepare={"machine": "C-DS", "ds": {"gate": 1}}, prepared_at=ls.clock.now())
@@ -139,7 +139,7 @@ def test_a_feed_still_being_checked_is_neither_adopted_nor_flushed():
 
 def test_one_robot_stays_free_while_the_others_hold_products_for_later_windows():
     ls = Lockstep()
-    late = dict(delivery_period_begin=200, delivery_period_end=500)
+    late = {"delivery_period_begin": 200, "delivery_period_end": 500}
     production_setup(ls, [dict(id=2, **late), dict(id=3, delivery_gate=2, **late),
                           dict(id=4, delivery_gate=3, **late)])
     kb = ls.server.kb
@@ -160,20 +160,20 @@ def test_one_robot_stays_free_while_the_others_hold_products_for_later_windows()
     assert pickup.machine[2:4] == "CS"                 # the third waits at the CS output
     assert ls.server.dispatcher.stuck(130.0) == 2
     assert play(ls, delivered(ls, 2, 3, 4), t0=130, steps=300, dt=1.0)
-    assert all(200 <= gt for gt, _ in ls.stations.deliveries)
+    assert all(gt >= 200 for gt, _ in ls.stations.deliveries)
 
 
 def test_a_slide_the_robots_keep_failing_at_is_planned_around():
     ls = Lockstep()
     # ORANGE costs one base on C-RS2's slide; the robots never manage to put it there
-    production_setup(ls, [dict(id=5, complexity=1, rings=["RING_ORANGE"]), dict(id=1)])
+    production_setup(ls, [{"id": 5, "complexity": 1, "rings": ["RING_ORANGE"]}, {"id": 1}])
     kb = ls.server.kb
     tries = []
 
     def fail(agent, t):
         if t.WhichOneof("kind") == "put_workpiece" and t.put_workpiece.machine == "C-RS2":
             tries.append(t.task_id)
-            return dict(error="NAVIGATION_FAILED", holding=True)
+            return {"error": "NAVIGATION_FAILED", "holding": True}
         return None
     assert play(ls, delivered(ls, 1), fail=fail)
     play(ls, lambda gt: False, fail=fail, steps=100, t0=ls.server.refbox.game_time())
@@ -186,7 +186,7 @@ def test_a_slide_the_robots_keep_failing_at_is_planned_around():
 def test_a_base_that_missed_the_slide_is_fetched_again_before_the_mount():
     ls = Lockstep()
     # ORANGE costs one base on C-RS2's slide; the first one falls beside it
-    production_setup(ls, [dict(id=5, complexity=1, rings=["RING_ORANGE"])])
+    production_setup(ls, [{"id": 5, "complexity": 1, "rings": ["RING_ORANGE"]}])
     kb = ls.server.kb
     dropped, broke = [], []
 
@@ -211,7 +211,7 @@ def test_a_base_that_missed_the_slide_is_fetched_again_before_the_mount():
 
 def test_a_full_slide_takes_no_more_bases_until_a_mount_uses_some():
     ls = Lockstep()
-    production_setup(ls, [dict(id=5, complexity=1, rings=["RING_BLUE"])])   # 2 bases, RS1
+    production_setup(ls, [{"id": 5, "complexity": 1, "rings": ["RING_BLUE"]}])   # 2 bases, RS1
     pm, kb = ls.server.production, ls.server.kb
     ls.refbox.machines(ls.station_states, {"C-RS1": ("RING_BLUE", "RING_GREEN")},
                        **{"C-RS1": {"loaded_with": 3}})
@@ -232,7 +232,7 @@ def test_a_cap_retrieved_ahead_that_the_station_never_took_blocks_nothing():
     station for anyone to mount), its open tasks are cancelled and its locks freed,
     and the order is still made (it used to wait for that station for good)."""
     ls = Lockstep()
-    production_setup(ls, [dict(id=1)])
+    production_setup(ls, [{"id": 1}])
     kb = ls.server.kb
     dropped = []
 
@@ -247,7 +247,7 @@ def test_a_cap_retrieved_ahead_that_the_station_never_took_blocks_nothing():
     def fail(agent, t):                  # nothing comes out of the station: nothing to grab
         if t.WhichOneof("kind") == "get_workpiece" and dropped \
                 and kb.tasks[t.task_id].product == dropped[0][1]:
-            return dict(error="GRAB_FAILED", holding=False)
+            return {"error": "GRAB_FAILED", "holding": False}
         return None
     made = delivered(ls, 1)
 

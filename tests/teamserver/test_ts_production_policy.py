@@ -5,23 +5,23 @@ import pytest
 
 from rll_bt import msgs
 from rll_bt.cli import main
-from rll_bt.comm import MessageRegistry
 from rll_bt.clock import SimClock
+from rll_bt.comm import MessageRegistry
 from rll_bt.game.interfaces import TeamServerOptions
 from teamserver import model as M
+from teamserver.caps import FREE
 from teamserver.cli import PLANNER_NAMES
 from teamserver.game import InProcessTeamServer
 from teamserver.health import StationHealth
 from teamserver.kb import KnowledgeBase
 from teamserver.planning.planner import PLANNERS, GreedyPlanner, ProductionPlanner, make_planner
-from teamserver.caps import FREE
 from teamserver.server import ServerConfig
-from ts_harness import Lockstep, play, production_setup
+from tests.support.teamserver import Lockstep, play, production_setup
 
 
 def test_a_delivery_the_refbox_never_counted_opens_its_order_again():
     ls = Lockstep()
-    production_setup(ls, [dict(id=1), dict(id=3, quantity_requested=2)])
+    production_setup(ls, [{"id": 1}, {"id": 3, "quantity_requested": 2}])
     pm, kb = ls.server.production, ls.server.kb
     for p in list(kb.products.values()):
         pm.cancel_open(p)
@@ -39,7 +39,7 @@ def test_a_delivery_the_refbox_never_counted_opens_its_order_again():
 
 def test_caps_are_retrieved_ahead_and_mounted_by_the_next_product():
     ls = Lockstep()
-    production_setup(ls, [dict(id=1)])                       # black caps (C-CS2) only
+    production_setup(ls, [{"id": 1}])                       # black caps (C-CS2) only
     pm, kb = ls.server.production, ls.server.kb
     [ahead] = [p for p in kb.products.values() if p.order_id == 0]
     kinds = [(t.kind, t.machine) for t in kb.tasks_of(ahead.tasks)]
@@ -66,14 +66,14 @@ def test_no_cap_is_retrieved_ahead_without_orders_or_near_the_end():
     production_setup(ls, [])
     pm = ls.server.production
     assert pm.prefill(10.0, 900.0) == []                      # nothing to make yet
-    production_setup(ls, [dict(id=1)])
+    production_setup(ls, [{"id": 1}])
     assert pm.prefill(850.0, 900.0) == []
 
 
 def test_a_cap_is_retrieved_once_the_ring_mounts_before_it_are_under_way():
     ls = Lockstep()
     # two rings that cost nothing: no cap-less base is needed, so the cap comes last
-    production_setup(ls, [dict(id=6, complexity=2, rings=["RING_GREEN", "RING_YELLOW"])])
+    production_setup(ls, [{"id": 6, "complexity": 2, "rings": ["RING_GREEN", "RING_YELLOW"]}])
     kb, pm = ls.server.kb, ls.server.production
     [p] = [p for p in kb.products.values() if p.order_id == 6]
     [retrieve] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP]
@@ -90,7 +90,7 @@ def test_a_cap_is_retrieved_once_the_ring_mounts_before_it_are_under_way():
 def test_a_cap_that_feeds_a_slide_is_retrieved_at_once():
     ls = Lockstep()
     # BLUE costs two bases: one of them is the cap-less base of the cap retrieval
-    production_setup(ls, [dict(id=5, complexity=1, rings=["RING_BLUE"])])
+    production_setup(ls, [{"id": 5, "complexity": 1, "rings": ["RING_BLUE"]}])
     kb = ls.server.kb
     [p] = [p for p in kb.products.values() if p.order_id == 5]
     [retrieve] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP]
@@ -120,9 +120,9 @@ def test_a_place_that_keeps_failing_is_paused_and_a_success_clears_the_count():
 
 
 def test_the_planner_is_an_option_of_the_server():
-    assert PLANNER_NAMES == tuple(PLANNERS)
+    assert tuple(PLANNERS) == PLANNER_NAMES
     ls = Lockstep(config=ServerConfig(planner="greedy"))
-    production_setup(ls, [dict(id=1), dict(id=2, delivery_gate=2)])
+    production_setup(ls, [{"id": 1}, {"id": 2, "delivery_gate": 2}])
     assert isinstance(ls.server.planner, GreedyPlanner)
     assert ls.server.production.planner is ls.server.planner
     assert {p.order_id for p in ls.server.kb.products.values() if p.order_id} == {1}
@@ -156,8 +156,8 @@ def test_cli_offers_the_planner(capsys):
 
 
 @pytest.mark.parametrize("order, rest", [
-    (dict(id=2, cap_color=2), M.DISCARD),                       # C0: the base was discarded
-    (dict(id=5, complexity=1, rings=["RING_BLUE"], cap_color=2), M.PUT_WORKPIECE),  # on a slide
+    ({"id": 2, "cap_color": 2}, M.DISCARD),                       # C0: the base was discarded
+    ({"id": 5, "complexity": 1, "rings": ["RING_BLUE"], "cap_color": 2}, M.PUT_WORKPIECE),  # on a slide
 ])
 def test_a_cap_retrieved_ahead_goes_to_a_product_planned_before_it(order, rest):
     ls = Lockstep(config=ServerConfig(prefill_caps=False))
@@ -221,8 +221,8 @@ def test_the_cap_less_base_serves_only_the_last_ring(rings, reused):
 
 def test_a_cap_waiting_ahead_is_not_given_to_a_product_far_from_its_cap():
     ls = Lockstep(config=ServerConfig(prefill_caps=False))
-    production_setup(ls, [dict(id=6, complexity=2, rings=["RING_GREEN", "RING_YELLOW"],
-                               cap_color=2)], states={"C-CS1": "DOWN"})
+    production_setup(ls, [{"id": 6, "complexity": 2, "rings": ["RING_GREEN", "RING_YELLOW"],
+                               "cap_color": 2}], states={"C-CS1": "DOWN"})
     pm, kb = ls.server.production, ls.server.kb
     [p] = [p for p in kb.products.values() if p.order_id == 6]
     pm._take_cap("C-CS1", FREE)

@@ -5,11 +5,11 @@ import pytest
 from rll_bt import msgs, rules
 from rll_bt.cli import main
 from rll_bt.clock import SimClock
-from rll_bt.comm import Bus, MessageRegistry
+from rll_bt.comm import MessageRegistry
 from teamserver import model as M
 from teamserver.kb import KnowledgeBase
 from teamserver.refbox import RefboxClient
-from ts_harness import KEY, TEAM, Lockstep
+from tests.support.teamserver import TEAM, Lockstep
 
 
 def client(profile="rcll2016", color="CYAN"):

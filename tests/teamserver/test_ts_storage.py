@@ -11,7 +11,7 @@ from teamserver.planning.domain import Progress
 from teamserver.planning.estimate import SimRobot
 from teamserver.planning.htn import PlanningFailed
 from teamserver.planning.planner import ProductionPlanner, StoragePolicy, World
-from ts_harness import C0, Lockstep, Stations, machines_known, play
+from tests.support.teamserver import C0, Lockstep, Stations, machines_known, play
 
 P25, P16 = rules.profile("rcll2025"), rules.profile("rcll2016")
 RS25 = {"C-RS1": ("RING_ORANGE", "RING_GREEN"), "C-RS2": ("RING_BLUE", "RING_YELLOW")}
@@ -115,7 +115,7 @@ def test_a_finished_product_is_handed_over_from_where_it_is():
     pl = ProductionPlanner(P25, "C")
     o = order(rings=("RING_ORANGE",), begin=700)
     w = world([o], now=300.0)
-    done = dict(base="BASE_RED", rings=("RING_ORANGE",), cap="CAP_BLACK")
+    done = {"base": "BASE_RED", "rings": ("RING_ORANGE",), "cap": "CAP_BLACK"}
     # on the shelf: retrieved from its place and delivered
     net = pl.decompose(pl.context(w, o, Progress(location="C-SS:SHELF", stored_at=(2, 5),
                                                  **done)), w)
@@ -242,7 +242,7 @@ def ss_prepares(ls):
 def test_an_early_product_waits_in_the_storage_station_not_in_a_gripper():
     ls = Lockstep("rcll2025")
     setup_2025(ls)
-    send_orders(ls, [dict(id=3, delivery_period_begin=400, delivery_period_end=700)])
+    send_orders(ls, [{"id": 3, "delivery_period_begin": 400, "delivery_period_end": 700}])
     kb, pm = ls.server.kb, ls.server.production
     [p] = [p for p in kb.products.values() if p.order_id == 3]
     assert any(t.params.get("store") for t in kb.tasks_of(p.tasks))    # planned so
@@ -272,7 +272,7 @@ def test_an_early_product_waits_in_the_storage_station_not_in_a_gripper():
 def test_a_product_whose_window_opens_soon_is_delivered_directly():
     ls = Lockstep("rcll2025")
     setup_2025(ls)
-    send_orders(ls, [dict(id=3, delivery_period_begin=240, delivery_period_end=500)])
+    send_orders(ls, [{"id": 3, "delivery_period_begin": 240, "delivery_period_end": 500}])
     assert play(ls, delivered(ls, 3), t0=T0, steps=400)
     assert ss_prepares(ls) == [] and ls.server.production.ss_places == {}
     [(gt, oid)] = ls.stations.deliveries
@@ -288,7 +288,7 @@ def test_the_choice_is_made_again_when_the_product_is_finished(actual):
     ready, min_wait = estimate(ls, 900)
     # the plan hands it over directly (early) or stores it (late)
     begin = round(ready + min_wait + (-20 if actual == "early" else 20))
-    send_orders(ls, [dict(id=3, delivery_period_begin=begin, delivery_period_end=begin + 300)])
+    send_orders(ls, [{"id": 3, "delivery_period_begin": begin, "delivery_period_end": begin + 300}])
     kb = ls.server.kb
     [p] = [p for p in kb.products.values() if p.order_id == 3]
     assert any(t.params.get("store") for t in kb.tasks_of(p.tasks)) is (actual == "late")
@@ -310,7 +310,7 @@ def test_the_choice_is_made_again_when_the_product_is_finished(actual):
 def test_a_product_brought_out_but_not_picked_up_is_taken_from_the_output():
     ls = Lockstep("rcll2025")
     setup_2025(ls)
-    send_orders(ls, [dict(id=3, delivery_period_begin=400, delivery_period_end=700)])
+    send_orders(ls, [{"id": 3, "delivery_period_begin": 400, "delivery_period_end": 700}])
     kb = ls.server.kb
     [p] = [p for p in kb.products.values() if p.order_id == 3]
     failed = []
@@ -319,7 +319,7 @@ def test_a_product_brought_out_but_not_picked_up_is_taken_from_the_output():
         if t.WhichOneof("kind") == "get_workpiece" and t.get_workpiece.machine == "C-SS" \
                 and len(failed) < 3:
             failed.append(t.task_id)
-            return dict(error="GRAB_FAILED", holding=False)
+            return {"error": "GRAB_FAILED", "holding": False}
         return None
     assert play(ls, delivered(ls, 3), t0=T0, steps=800, fail=fail)
     assert len(failed) == 3 and p.repairs == 1

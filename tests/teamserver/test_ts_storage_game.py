@@ -8,10 +8,13 @@ checked is the machinery on the wire and in the world, not when storing pays
 import json
 import math
 
+import pytest
+
+from rll_bt.game import GameOptions, LockstepGame
 from teamserver.dispatch import DispatchConfig
 from teamserver.planning.planner import StoragePolicy
 
-from rll_bt.game import GameOptions, LockstepGame
+pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
 
 
 def test_a_product_goes_through_the_storage_station_and_is_delivered(tmp_path):
@@ -26,7 +29,7 @@ def test_a_product_goes_through_the_storage_station_and_is_delivered(tmp_path):
         game.close()
     assert result.finished
     prepares = []
-    for line in open(tmp_path / "messages.jsonl", encoding="utf-8"):
+    for line in (tmp_path / "messages.jsonl").read_text(encoding="utf-8").splitlines():
         if '"PrepareMachine"' in line:
             m = json.loads(line)
             assert m["channel"] == "cyan" and m["from"] == "teamserver"

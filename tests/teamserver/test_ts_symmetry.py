@@ -96,7 +96,7 @@ def test_2025_reports_rotation_only_with_a_zone():
     obs(kb, "C-CS2", M.ORIENTATION, 90, 0.99)
     rep = Reporter(P25, "C", thresh=0.9)
     cs = consistent_set(P25, kb.machines)
-    assert "C-CS2" not in rep.new_values(cs, {}, 100, lambda l: None)
+    assert "C-CS2" not in rep.new_values(cs, {}, 100, lambda _line: None)
     obs(kb, "C-CS2", M.ZONE, 44, 0.99)
     cs = consistent_set(P25, kb.machines)
-    assert rep.new_values(cs, {}, 100, lambda l: None)["C-CS2"] == {"zone": 44, "rotation": 90}
+    assert rep.new_values(cs, {}, 100, lambda _line: None)["C-CS2"] == {"zone": 44, "rotation": 90}

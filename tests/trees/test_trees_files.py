@@ -3,31 +3,29 @@ of the team protocol, and each tree takes exactly the task fields the
 agent gives it."""
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 
-from agent_testkit import make_task
 from rll_bt import msgs, rules
 from rll_bt.agent import TREE_KINDS, default_trees_dir, task_params
 from rll_bt.cli import main
 from rll_bt.tree import default_registry, parse_tree
+from tests.support import TREES
+from tests.support.agents import make_task
 
-TREES = Path(__file__).resolve().parents[2] / "trees"
 ALL_FILES = sorted(TREES.rglob("*.yaml"))
 TM = msgs.message_set("team")
 
 #: one sample task per kind, as the team server sends them
 SAMPLES = {
-    "explore_zone": dict(zone=6),
-    "get_workpiece": dict(machine="C-CS1", side=TM.MachineSide.Value("SHELF"), shelf_slot=1),
-    "put_workpiece": dict(machine="C-RS1", side=TM.MachineSide.Value("SLIDE")),
-    "retrieve_cap": dict(machine="C-CS1", shelf_slot=0),
-    "mount_ring": dict(machine="C-RS1", ring_color=2),
-    "mount_cap": dict(machine="C-CS2", cap_color=1),
-    "deliver": dict(machine="C-DS", gate=3),
-    "discard": dict(),
-    "go_to": dict(zone=5),
+    "explore_zone": {"zone": 6},
+    "get_workpiece": {"machine": "C-CS1", "side": TM.MachineSide.Value("SHELF"), "shelf_slot": 1},
+    "put_workpiece": {"machine": "C-RS1", "side": TM.MachineSide.Value("SLIDE")},
+    "retrieve_cap": {"machine": "C-CS1", "shelf_slot": 0},
+    "mount_ring": {"machine": "C-RS1", "ring_color": 2},
+    "mount_cap": {"machine": "C-CS2", "cap_color": 1},
+    "deliver": {"machine": "C-DS", "gate": 3},
+    "discard": {},
+    "go_to": {"zone": 5},
 }
 
 
@@ -69,7 +67,7 @@ def test_the_trees_use_skill_nodes_and_recoveries():
         spec = parse_tree(TREES / f"{kind}.yaml")
         types = set()
 
-        def walk(ns):
+        def walk(ns, types=types):
             types.add(ns.type)
             for kids in ns.slots.values():
                 for k in kids:

@@ -4,20 +4,15 @@ their order on injected failures (an empty gripper after a grab, drive
 faults, a lost pose), ending with the error code the team server gets."""
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "agent"))
-
-from agent_testkit import KEY, TEAM_REG, TM, Rig, ScriptedServer
 from backends.scripted import ScriptedBackend
 from rll_bt.clock import SimClock
 from rll_bt.comm import Bus
-from trees_doubles import CALLS, REGISTRY, Hands, calls
+from tests.support import TREES
+from tests.support.agents import KEY, TEAM_REG, TM, Rig, ScriptedServer
+from tests.support.tree_doubles import CALLS, REGISTRY, Hands, calls
 
-TREES = Path(__file__).resolve().parents[2] / "trees"
 SIDE = TM.MachineSide.Value
 
 
@@ -53,18 +48,18 @@ def skills_called() -> list[str]:
 
 
 @pytest.mark.parametrize("kind, fields, holding, after", [
-    ("explore_zone", dict(zone=6), False, False),
-    ("get_workpiece", dict(machine="C-BS"), False, True),
-    ("get_workpiece", dict(machine="C-CS1", side=SIDE("SHELF"), shelf_slot=2), False, True),
-    ("put_workpiece", dict(machine="C-RS1", side=SIDE("SLIDE")), True, False),
-    ("retrieve_cap", dict(machine="C-CS2", shelf_slot=1), False, False),
-    ("mount_ring", dict(machine="C-RS2", ring_color=1), True, False),
-    ("mount_cap", dict(machine="C-CS1"), True, False),
-    ("deliver", dict(machine="C-DS", gate=1), True, False),
-    ("discard", dict(), True, False),
-    ("discard", dict(machine="C-RS1", side=SIDE("SLIDE")), True, False),
-    ("go_to", dict(zone=7), False, False),
-    ("go_to", dict(target=TM.Pose2D(x=1.5, y=3.0, theta=0.5)), True, True),
+    ("explore_zone", {"zone": 6}, False, False),
+    ("get_workpiece", {"machine": "C-BS"}, False, True),
+    ("get_workpiece", {"machine": "C-CS1", "side": SIDE("SHELF"), "shelf_slot": 2}, False, True),
+    ("put_workpiece", {"machine": "C-RS1", "side": SIDE("SLIDE")}, True, False),
+    ("retrieve_cap", {"machine": "C-CS2", "shelf_slot": 1}, False, False),
+    ("mount_ring", {"machine": "C-RS2", "ring_color": 1}, True, False),
+    ("mount_cap", {"machine": "C-CS1"}, True, False),
+    ("deliver", {"machine": "C-DS", "gate": 1}, True, False),
+    ("discard", {}, True, False),
+    ("discard", {"machine": "C-RS1", "side": SIDE("SLIDE")}, True, False),
+    ("go_to", {"zone": 7}, False, False),
+    ("go_to", {"target": TM.Pose2D(x=1.5, y=3.0, theta=0.5)}, True, True),
 ])
 def test_every_task_kind_succeeds(kind, fields, holding, after):
     rig = make(holding=holding)
@@ -158,7 +153,7 @@ def test_a_lost_workpiece_is_reported_before_driving():
                                            ("retrieve_cap", "C-RS2")])
 def test_the_wrong_kind_of_station_is_an_invalid_task(kind, machine):
     rig = make(holding=True)
-    fields = dict(machine=machine)
+    fields = {"machine": machine}
     if kind == "retrieve_cap":
         fields["shelf_slot"] = 0
     if kind == "mount_ring":

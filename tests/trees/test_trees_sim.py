@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from trees_simkit import SIDE, TM, SimTaskRig, error, status
+from tests.support.tree_sim import SIDE, TM, SimTaskRig, error, status
 
 
 @pytest.fixture
@@ -35,6 +35,7 @@ def test_explore_zone_finds_the_station_and_reports_it(rig):
     assert rig.world.collision_count == 0
 
 
+@pytest.mark.slow
 def test_a_product_from_base_to_delivery(rig):
     w = rig.world
     w.spawn_workpiece("C-BS", "output", "BASE_RED")
@@ -54,6 +55,7 @@ def test_a_product_from_base_to_delivery(rig):
     assert w.collision_count == 0
 
 
+@pytest.mark.slow
 def test_caps_from_the_shelf(rig):
     w = rig.world
     w.spawn_workpiece("C-CS1", "shelf1", "BASE_BLACK", cap="CAP_GREY")
@@ -67,6 +69,7 @@ def test_caps_from_the_shelf(rig):
     assert w.collision_count == 0
 
 
+@pytest.mark.slow
 def test_slides_and_discards(rig):
     w = rig.world
     for base in ("BASE_BLACK", "BASE_SILVER", "BASE_RED"):

@@ -101,7 +101,8 @@ class LaserDriver:
             while self.latest() is None:
                 if self.clock.now() >= end:
                     self.close()
-                    raise LinkLost(f"{self.describe()}: no scan within {wait:g} s ({self.stats().last_error or 'no reply'})")
+                    why = self.stats().last_error or "no reply"
+                    raise LinkLost(f"{self.describe()}: no scan within {wait:g} s ({why})")
                 self._stop.wait(0.01)
         return self
 

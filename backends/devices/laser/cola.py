@@ -276,7 +276,7 @@ class _Tokens:
             raise ColaError(f"{tok[:20]!r} is not a number") from None
         if v < 0 and not signed:
             raise ColaError(f"{tok!r} is negative")
-        if v >= 1 << bits and not (tok[:1] in (b"+", b"-")):
+        if v >= 1 << bits and tok[:1] not in (b"+", b"-"):
             raise ColaError(f"{tok!r} does not fit in {bits} bits")
         if signed and v >= 1 << (bits - 1):
             v -= 1 << bits

@@ -85,8 +85,7 @@ from .game import PendingDelivery, RefboxGame
 from .node import RefboxNode
 from .ruleset import Rules2016, rules_for
 from .ruleset2025 import Rules2025
-from .stations import (BSInstruction, CSInstruction, DSInstruction, RSInstruction,
-                       StationConfig)
+from .stations import BSInstruction, CSInstruction, DSInstruction, RSInstruction, StationConfig
 from .storage import SSInstruction
 from .timing import Timing, parse_phase_lengths
 from .world import RefboxWorld, SlotEvent, TableWorld, Workpiece

@@ -109,6 +109,7 @@ def _world_choice(text: str) -> str:
 def _settings(args):
     """Validated (profile, timing, keys) from the arguments; UserError otherwise."""
     from rll_bt import rules
+
     from .ruleset import rules_for
     from .timing import Timing, parse_phase_lengths
     try:
@@ -214,7 +215,7 @@ def _open_world(args, prof):
     try:
         from backends.sim.world import World
         return World(prof, seed=args.seed)
-    except Exception as exc:  # noqa: BLE001 - PyBullet missing or failing
+    except Exception as exc:
         raise Unavailable(f"cannot build the PyBullet world: {exc}",
                           hint="use --world table to run without PyBullet") from None
 
@@ -222,6 +223,7 @@ def _open_world(args, prof):
 def _message_log(path, game):
     """A tap writing the node's messages to ``path`` (JSON lines, the game's clock)."""
     from rll_bt.game.msglog import MessageLog
+
     from .node import RefboxNode
     log = MessageLog(path, game.clock, {}, RefboxNode.registry(game), line_buffered=True)
 
@@ -237,6 +239,7 @@ def _message_log(path, game):
 
 def cmd_sim(args) -> int:
     from rll_bt.clock import WallClock
+
     from .game import RefboxGame
     from .node import RefboxNode
     from .stations import StationConfig
@@ -271,7 +274,9 @@ def cmd_sim(args) -> int:
     view = None
     if args.snapshot:
         import os
+
         from rll_bt.game.child import write_snapshot
+
         from .view import GameView, snapshot
         view, pid = GameView(game), os.getpid()
 

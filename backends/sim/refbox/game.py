@@ -20,21 +20,32 @@ from __future__ import annotations
 import logging
 import random
 from collections import deque
+from dataclasses import dataclass
 
 from rll_bt import rules as R
 from rll_bt.rules import CYAN, MAGENTA, TEAMS, machine_team
 
 from . import events as E
-from dataclasses import dataclass
-
 from .exploration2016 import ReportEntry
 from .ledger import Ledger, PointsEntry
 from .mockup import Mockup
 from .robots import RobotRegistry
 from .ruleset import rules_for
 from .stations import CapStation, Station, StationConfig, make_station
-from .timing import (EXPLORATION, INIT, PAUSED, PHASES, POST_GAME, PRE_GAME, PRODUCTION, RUNNING,
-                     SETUP, STATES, WAIT_START, Timing)
+from .timing import (
+    EXPLORATION,
+    INIT,
+    PAUSED,
+    PHASES,
+    POST_GAME,
+    PRE_GAME,
+    PRODUCTION,
+    RUNNING,
+    SETUP,
+    STATES,
+    WAIT_START,
+    Timing,
+)
 from .world import ALL_OFF, PUT, SHELF_SLOTS, TableWorld, Workpiece, WorldLost
 
 log = logging.getLogger("backends.sim.refbox")
@@ -546,7 +557,7 @@ class RefboxGame:
                     st.on_take(ev.slot, ev.workpiece)
             except WorldLost:
                 raise
-            except Exception:  # noqa: BLE001 - a world quirk must not stop the game
+            except Exception:
                 log.exception("slot event %s failed", ev)
 
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from rll_bt.game.interfaces import Award
 
-
 # one award: team, phase, points (may be negative), reason, game time, machine, order
 PointsEntry = Award
 

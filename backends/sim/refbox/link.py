@@ -52,7 +52,7 @@ any call or :meth:`RemoteWorld.pump`.
 from __future__ import annotations
 
 import json
-from typing import Callable
+from collections.abc import Callable
 
 from rll_bt.game.remote import FramedClient, FramedServer, LinkClosed, parse_address
 
@@ -120,7 +120,7 @@ class StationServer(FramedServer):
             return {"id": rid, "e": "KeyError", "msg": str(exc.args[0]) if exc.args else ""}
         except ValueError as exc:                    # a full slot (SlotError), a bad value
             return {"id": rid, "e": "ValueError", "msg": str(exc)}
-        except Exception as exc:  # noqa: BLE001 - a bad call must not take the world down
+        except Exception as exc:
             return {"id": rid, "e": "RuntimeError", "msg": f"{type(exc).__name__}: {exc}"}
 
     def _call(self, method: str, args: list, kwargs: dict):

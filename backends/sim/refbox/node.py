@@ -102,7 +102,7 @@ class Channels:
         for _label, _team, t in self.all():
             try:
                 t.close()
-            except Exception:  # noqa: BLE001
+            except Exception:
                 log.debug("closing %s failed", t, exc_info=True)
 
 
@@ -146,7 +146,7 @@ class RefboxNode:
     @classmethod
     def on_bus(cls, game, bus, *, keys: dict[str, str] | None = None,
                stream_address: str | None = "refbox", control_via_public: bool = False,
-               channel_names: dict[str, str] | None = None) -> "RefboxNode":
+               channel_names: dict[str, str] | None = None) -> RefboxNode:
         """The refbox on an in-process :class:`rll_bt.comm.Bus` (lockstep).  Robots join
         bus channels "public", "cyan" and "magenta" (``channel_names`` renames them);
         controllers connect a stream client to ``stream_address``."""
@@ -163,12 +163,13 @@ class RefboxNode:
     def on_udp(cls, game, *, host: str = "127.0.0.1", layout="sim",
                keys: dict[str, str] | None = None, stream_port: int | None = None,
                stream_host: str = "0.0.0.0", bind_host: str = "0.0.0.0",
-               control_via_public: bool = False) -> "RefboxNode":
+               control_via_public: bool = False) -> RefboxNode:
         """The refbox on UDP: ``layout`` (a :class:`rll_bt.comm.Layout` or its name,
         "competition" or "sim") gives each channel's send and receive ports from the
         refbox's side; ``stream_port`` (default the layout's, 0 = ephemeral, -1 = none)
         is the plain TCP control stream.  Raises OSError if a port is taken."""
-        from rll_bt.comm import Layout, StreamServer, UdpPeer, layout as get_layout
+        from rll_bt.comm import Layout, StreamServer, UdpPeer
+        from rll_bt.comm import layout as get_layout
         lay = layout if isinstance(layout, Layout) else get_layout(layout)
         reg = cls.registry(game)
         opened = []
@@ -227,7 +228,7 @@ class RefboxNode:
                 self.ignored[name] += 1
         except WorldLost:
             raise
-        except Exception:  # noqa: BLE001 - a bad message must never stop the refbox
+        except Exception:
             self.ignored[name] += 1
             log.exception("%s on %s could not be handled", name, label)
 
@@ -307,7 +308,7 @@ class RefboxNode:
         try:
             if transport.send(msg):
                 self.sent[msg.DESCRIPTOR.name] += 1
-        except Exception as exc:  # noqa: BLE001 - e.g. a frame over 1024 bytes
+        except Exception as exc:
             log.error("cannot send %s on %s: %s", msg.DESCRIPTOR.name,
                       getattr(transport, "channel", "?"), exc)
 

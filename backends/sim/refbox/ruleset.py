@@ -132,7 +132,7 @@ class Rules2016:
 
 
 def _rulesets() -> dict:
-    from .ruleset2025 import Rules2025      # a subclass of Rules2016
+    from .ruleset2025 import Rules2025  # a subclass of Rules2016
     return {"rcll2016": Rules2016, "rcll2025": Rules2025}
 
 

@@ -44,8 +44,7 @@ from typing import Protocol
 from rll_bt.rules import BASE_COLORS
 
 from . import events as E
-from .world import (ALL_OFF, BLINK, INPUT, ON, OUTPUT, SHELF_SLOTS, SLIDE, Workpiece, describe,
-                    lights, station_slots)
+from .world import ALL_OFF, BLINK, INPUT, ON, OUTPUT, SHELF_SLOTS, SLIDE, Workpiece, describe, lights, station_slots
 
 IDLE, PREPARED, PROCESSING = "IDLE", "PREPARED", "PROCESSING"
 READY_AT_OUTPUT, WAIT_IDLE, BROKEN, DOWN = "READY-AT-OUTPUT", "WAIT-IDLE", "BROKEN", "DOWN"
@@ -130,15 +129,15 @@ class StationHost(Protocol):
     profile: object
     rules: object
 
-    def station_lights(self, station: "Station") -> dict: ...
+    def station_lights(self, station: Station) -> dict: ...
     def ring_cost(self, color: str) -> int: ...
     def rs_colors(self, machine: str) -> tuple[str, ...]: ...
     def award(self, team: str, points: int, reason: str, machine: str | None = None,
               game_time: float | None = None) -> None: ...
     def emit(self, kind: str, text: str, *, team: str | None = None, machine: str | None = None,
              game_time: float | None = None, **data) -> None: ...
-    def deliver(self, station: "Station", wp: Workpiece, gate: int, game_time: float) -> None: ...
-    def station_state_changed(self, station: "Station", previous: str) -> None: ...
+    def deliver(self, station: Station, wp: Workpiece, gate: int, game_time: float) -> None: ...
+    def station_state_changed(self, station: Station, previous: str) -> None: ...
 
 
 @dataclass
@@ -403,8 +402,8 @@ class Station:
         return self.bases_added - self.bases_used
 
 
-def _light_text(l: dict) -> str:
-    on = [f"{c}-{s}" for c, s in l.items() if s != "OFF"]
+def _light_text(lights: dict) -> str:
+    on = [f"{c}-{s}" for c, s in lights.items() if s != "OFF"]
     return " ".join(on) or "off"
 
 
@@ -545,7 +544,7 @@ KINDS = {"BS": BaseStation, "RS": RingStation, "CS": CapStation, "DS": DeliveryS
 def make_station(name: str, team: str, host: StationHost) -> Station:
     kind = name[2:4]
     if kind == "SS":
-        from .storage import StorageStation     # built on Station: imported here, not above
+        from .storage import StorageStation  # built on Station: imported here, not above
         return StorageStation(name=name, team=team, host=host)
     try:
         cls = KINDS[kind]

@@ -45,7 +45,7 @@ class Timing:
             raise ValueError(f"speed {self.speed!r} must be > 0")
 
     @classmethod
-    def from_profile(cls, profile, *, speed: float = 1.0, **overrides: float) -> "Timing":
+    def from_profile(cls, profile, *, speed: float = 1.0, **overrides: float) -> Timing:
         """The profile's phase lengths, with ``overrides`` (setup=, exploration=,
         production=, overtime=) replacing single values.  For a profile that
         explores inside PRODUCTION, ``exploration=`` sets that window."""

@@ -107,7 +107,7 @@ class SnapshotView:
     def status(self) -> GameStatus:
         s = self.data().get("status")
         if s is None:
-            return GameStatus("PRE_GAME", "WAIT_START", 0.0, None, {t: 0 for t in TEAMS})
+            return GameStatus("PRE_GAME", "WAIT_START", 0.0, None, dict.fromkeys(TEAMS, 0))
         return GameStatus(**s)
 
     def awards(self) -> list[Award]:

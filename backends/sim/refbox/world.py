@@ -17,8 +17,9 @@ are ``OFF``/``ON``/``BLINK`` for ``RED``, ``YELLOW``, ``GREEN``.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Callable, Protocol, runtime_checkable
+from typing import Protocol, runtime_checkable
 
 INPUT, OUTPUT, SLIDE = "input", "output", "slide"
 SHELF_SLOTS = ("shelf0", "shelf1", "shelf2")
@@ -57,10 +58,10 @@ class Workpiece:
     cap: str | None = None
     id: int | None = field(default=None, compare=False)
 
-    def with_ring(self, color: str) -> "Workpiece":
+    def with_ring(self, color: str) -> Workpiece:
         return replace(self, rings=tuple(self.rings) + (color,))
 
-    def with_cap(self, color: str | None) -> "Workpiece":
+    def with_cap(self, color: str | None) -> Workpiece:
         return replace(self, cap=color)
 
     def __str__(self) -> str:
@@ -130,7 +131,7 @@ class TableWorld:
         self._ids = 0
 
     @classmethod
-    def generated(cls, profile, seed: int) -> "TableWorld":
+    def generated(cls, profile, seed: int) -> TableWorld:
         """A table world with the seeded layout of the PyBullet world's generator
         (:func:`backends.sim.layout.generate_layout`)."""
         from ..layout import generate_layout

@@ -55,16 +55,17 @@ FROM_BUILTIN = {v: k for k, v in SAME.items()} | {k: v[0] for k, v in CONVERTED.
 
 #: every BT.CPP 4 built-in node and its kind (bt_factory.cpp), for checking documents
 BUILTINS: dict[str, str] = {
-    **{n: "Control" for n in ("Fallback", "AsyncFallback", "Sequence", "AsyncSequence", "SequenceWithMemory",
-                              "SequenceStar", "Parallel", "ParallelAll", "ReactiveSequence", "ReactiveFallback",
-                              "IfThenElse", "WhileDoElse", "TryCatch", "Switch2", "Switch3", "Switch4",
-                              "Switch5", "Switch6")},
-    **{n: "Decorator" for n in ("Inverter", "RetryUntilSuccessful", "KeepRunningUntilFailure", "Repeat",
-                                "Timeout", "Delay", "RunOnce", "ForceSuccess", "ForceFailure", "Precondition",
-                                "LoopInt", "LoopBool", "LoopDouble", "LoopString", "SkipUnlessUpdated",
-                                "WaitValueUpdate")},
-    **{n: "Action" for n in ("AlwaysSuccess", "AlwaysFailure", "Script", "SetBlackboard", "Sleep",
-                             "UnsetBlackboard", "WasEntryUpdated")},
+    **dict.fromkeys((
+        "Fallback", "AsyncFallback", "Sequence", "AsyncSequence", "SequenceWithMemory", "SequenceStar",
+        "Parallel", "ParallelAll", "ReactiveSequence", "ReactiveFallback", "IfThenElse", "WhileDoElse",
+        "TryCatch", "Switch2", "Switch3", "Switch4", "Switch5", "Switch6"), "Control"),
+    **dict.fromkeys((
+        "Inverter", "RetryUntilSuccessful", "KeepRunningUntilFailure", "Repeat", "Timeout", "Delay",
+        "RunOnce", "ForceSuccess", "ForceFailure", "Precondition", "LoopInt", "LoopBool", "LoopDouble",
+        "LoopString", "SkipUnlessUpdated", "WaitValueUpdate"), "Decorator"),
+    **dict.fromkeys((
+        "AlwaysSuccess", "AlwaysFailure", "Script", "SetBlackboard", "Sleep", "UnsetBlackboard",
+        "WasEntryUpdated"), "Action"),
     "ScriptCondition": "Condition",
 }
 #: ports of the built-ins this module writes (others: not checked)

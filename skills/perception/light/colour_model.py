@@ -48,7 +48,7 @@ class ColourModel:
     red: ColourClass = ColourClass((40, 40, 230), 60.0)
     min_fraction: float = 0.3
 
-    def scaled(self, luma: float, fraction: float) -> "ColourModel":
+    def scaled(self, luma: float, fraction: float) -> ColourModel:
         """The model with every ``min_luma`` times ``luma`` and ``min_fraction`` set."""
         return ColourModel(*(replace(getattr(self, n), min_luma=getattr(self, n).min_luma * luma)
                              for n in LIGHT_ORDER), min_fraction=fraction)

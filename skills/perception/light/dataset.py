@@ -27,9 +27,9 @@ import cv2
 import numpy as np
 
 from .augment import photometric
-from .photos import backdrop
 from .hog import crop_window, make_hog, random_negatives, window_features, window_for_tower
 from .mlp import DEFAULT_SIZE, NO_TOWER
+from .photos import backdrop
 from .synth import draw_tower, paste
 
 #: a tower a detector must find: fully visible and at least this tall (pixels)
@@ -70,7 +70,7 @@ class PackedFrame:
         return not self.truths
 
     @staticmethod
-    def pack(image: np.ndarray, truths, source: str, distance=None) -> "PackedFrame":
+    def pack(image: np.ndarray, truths, source: str, distance=None) -> PackedFrame:
         ok, buf = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 95])
         if not ok:
             raise RuntimeError("cannot encode a frame")
@@ -178,8 +178,8 @@ def _compose(rng: np.random.Generator, size, sprites: list[tuple[np.ndarray, np.
         if rng.random() < 0.6:                          # mount: a box under the tower
             mw = int(tw * rng.uniform(1.0, 4.0))
             col = tuple(int(c) for c in rng.integers(0, 140, 3))
-            cv2.rectangle(img, (x + tw // 2 - mw // 2, y + th), (x + tw // 2 + mw // 2, y + th + int(mw * rng.uniform(0.5, 2))),
-                          col, -1)
+            foot = y + th + int(mw * rng.uniform(0.5, 2))
+            cv2.rectangle(img, (x + tw // 2 - mw // 2, y + th), (x + tw // 2 + mw // 2, foot), col, -1)
         pasted = paste(img, timg, alpha, x, y, glow)
         clean = pasted == box
         truths.append(Truth(pasted, state, clean))
@@ -208,6 +208,7 @@ def make_chunk(spec: ChunkSpec, open_world=None) -> ChunkResult:
     """Render and cut one chunk (runs in a worker process); ``open_world``
     is a world factory (default: :func:`.scenes.world_factory`)."""
     import time
+
     from .scenes import SceneRenderer, ViewRange, world_factory
     t0 = time.perf_counter()
     rng = np.random.default_rng(spec.seed)

@@ -16,8 +16,8 @@ wrong; every other detection is a false detection.  Metrics:
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Callable, Iterable
 
 import numpy as np
 
@@ -71,7 +71,7 @@ class LightScore:
             self.false_free += false
 
     @classmethod
-    def combine(cls, scores) -> "LightScore":
+    def combine(cls, scores) -> LightScore:
         """One score over the frames of several (e.g. from worker processes)."""
         total = cls()
         for s in scores:

@@ -17,7 +17,6 @@ hits.  Boxes are the tower's outline (x, y, w, h) in image pixels.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import cv2
@@ -224,8 +223,9 @@ class TowerDetector:
         top = grey if abs(s0 - 1.0) < 1e-6 else cv2.resize(
             grey, size, interpolation=cv2.INTER_AREA if s0 < 1 else cv2.INTER_LINEAR)
         # OpenCV's own pyramid (parallel): the levels below the largest, at most len(levels)
-        rects, weights = self._hog_with_levels(len(levels)).detectMultiScale(top, hitThreshold=thr, winStride=self.stride, padding=(0, 0),
-                                                   scale=self.scale_step, groupThreshold=0)
+        hog = self._hog_with_levels(len(levels))
+        rects, weights = hog.detectMultiScale(top, hitThreshold=thr, winStride=self.stride, padding=(0, 0),
+                                              scale=self.scale_step, groupThreshold=0)
         if len(rects) == 0:
             return empty
         r = np.asarray(rects, np.float32).reshape(-1, 4) / np.float32(s0)

@@ -72,7 +72,7 @@ class Mlp:
 
     @classmethod
     def create(cls, n_in: int, n_hidden: int, size=DEFAULT_SIZE, seed: int = 0,
-               n_out: int = N_STATES, kind: str = "rich") -> "Mlp":
+               n_out: int = N_STATES, kind: str = "rich") -> Mlp:
         rng = np.random.default_rng(seed)
         return cls(rng.normal(0, 1 / np.sqrt(n_in), (n_in, n_hidden)), np.zeros(n_hidden),
                    rng.normal(0, 1 / np.sqrt(n_hidden), (n_hidden, n_out)), np.zeros(n_out),
@@ -164,7 +164,7 @@ class Mlp:
                             size=np.array(self.size), kind=np.array(self.kind))
 
     @classmethod
-    def load(cls, path) -> "Mlp":
+    def load(cls, path) -> Mlp:
         with np.load(path) as d:
             kind = str(d["kind"]) if "kind" in d else "pixels"
             return cls(d["w1"].astype(np.float64), d["b1"].astype(np.float64),
@@ -208,7 +208,7 @@ class Ensemble:
         np.savez_compressed(path, **stack, size=np.array(m0.size), kind=np.array(m0.kind))
 
     @classmethod
-    def load(cls, path) -> "Ensemble":
+    def load(cls, path) -> Ensemble:
         """An ensemble file, or a single network's file (an ensemble of one)."""
         with np.load(path) as d:
             kind = str(d["kind"]) if "kind" in d else "pixels"

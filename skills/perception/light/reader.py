@@ -59,7 +59,7 @@ class LightReader:
         self.region_reject = reject if region_reject is None else region_reject
 
     @classmethod
-    def load(cls, directory: str | Path | None = None, **detector_options) -> "LightReader":
+    def load(cls, directory: str | Path | None = None, **detector_options) -> LightReader:
         """The models in ``directory`` (default: the ones shipped in the package).
         ``detector_options`` override the saved detector settings."""
         d = Path(directory) if directory is not None else MODEL_DIR

@@ -258,7 +258,9 @@ class SceneRenderer:
         true pose in the camera frame with tag-detection noise: position
         ``pos_sigma`` per metre of range, rotation ``rot_sigma``."""
         import cv2
+
         from rll_bt.backend import TagDetection
+
         from .region import tower_region
         best = None
         for side in ("input", "output"):

@@ -31,10 +31,10 @@ from __future__ import annotations
 import json
 import multiprocessing
 import os
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -46,8 +46,17 @@ from .evaluation import LightScore
 from .hog import TowerDetector, crop_window, iou, make_hog, select, train_svm, window_features, window_for_tower
 from .mlp import DEFAULT_SIZE, N_STATES, NO_TOWER, Ensemble, Mlp, crop_features
 from .photos import photos
-from .reader import (CHECKER_FILE, CLASSIFIER_FILE, DETECTOR_FILE, REFINE_HEIGHTS, REPORT_FILE, LightReader,
-                     choose, refine_box, save_detector)
+from .reader import (
+    CHECKER_FILE,
+    CLASSIFIER_FILE,
+    DETECTOR_FILE,
+    REFINE_HEIGHTS,
+    REPORT_FILE,
+    LightReader,
+    choose,
+    refine_box,
+    save_detector,
+)
 
 PROFILES = ("rcll2016", "rcll2025")
 HELDOUT_SEED = 1_000_003
@@ -299,7 +308,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
     pos, neg, crops, states, frames, heldout = [], [], [], [], [], []
     jobs = [(s, True) for s in train_specs] + [(s, False) for s in held_specs]
     with _pool(opts.workers) as pool:
-        for k, ((spec, is_train), res) in enumerate(zip(jobs, pool.map(_chunk_job, [j[0] for j in jobs]))):
+        for k, ((_spec, is_train), res) in enumerate(zip(jobs, pool.map(_chunk_job, [j[0] for j in jobs]))):
             if is_train:
                 pos.append(res.pos)
                 neg.append(res.neg)
@@ -433,7 +442,8 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
                 "region_reject": region_reject}
     say(f"detector threshold {threshold:.3f}, tower check rejects at {reject:.2f}: recall "
         f"{cal['train_recall']:.3f}, {cal['train_false']} false on {cal['train_frames']} calibration frames; "
-        f"in tag regions threshold {region_threshold:.3f}, rejects at {region_reject:.2f}: recall {region_cal['region_recall']:.3f}, "
+        f"in tag regions threshold {region_threshold:.3f}, rejects at {region_reject:.2f}: "
+        f"recall {region_cal['region_recall']:.3f}, "
         f"{region_cal['region_false']} false on {region_cal['region_towers']} towers")
     train_acc = float((net.predict(x) == y).mean())
 

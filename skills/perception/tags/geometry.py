@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from rll_bt.backend import CameraExtrinsics, Pose2D, TagDetection, wrap_angle
-from rll_bt.rules import MpsGeometry, Profile
+from rll_bt.rules import MpsGeometry
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,213 @@
+"""``rll-bt sim --processes``: the remote backend, and a short game with the refbox, the
+team server and an agent as their own processes over loopback UDP and TCP."""
+import json
+import os
+import threading
+
+import numpy as np
+import pytest
+
+from rll_bt.backend import (
+    Backend,
+    Capability,
+    CapabilityError,
+    Detections,
+    GripperState,
+    GripperStatus,
+    LaserScan,
+    Odometry,
+    Pose2D,
+    TagDetection,
+    open_backend,
+)
+from rll_bt.cli import main
+from rll_bt.clock import SimClock
+from rll_bt.game.remote import BackendServer
+
+pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
+
+
+class Fake(Backend):
+    name = "fake"
+    capabilities = Capability.DRIVE | Capability.ODOMETRY | Capability.LASER | Capability.DETECTIONS
+
+    def __init__(self):
+        self.commands = []
+
+    def drive(self, vx, vy, omega):
+        self.commands.append((vx, vy, omega))
+
+    def odometry(self):
+        return Odometry(10.0, Pose2D(1.0, 2.0, 0.5), 0.1, 0.0, 0.2)
+
+    def laser_scan(self):
+        return LaserScan(10.0, -1.0, 0.5, 0.05, 5.0, np.array([1.0, np.inf, 2.5, 0.3, 4.0]))
+
+    def detections(self, camera="front"):
+        return Detections(10.0, tags=(TagDetection(66, (0.1, 0.0, 0.6), (0.0, 3.1, 0.0)),))
+
+    def gripper_status(self):
+        return GripperStatus(GripperState.IDLE, True, (0.0, 0.0, 0.05), holding=False)
+
+
+@pytest.fixture
+def served():
+    fake = Fake()
+    clock = SimClock(start=10.0)
+    server = BackendServer(lambda team, n: fake if (team, n) == ("CYAN", 2) else None, clock.now)
+    stop = threading.Event()
+
+    def serve():
+        while not stop.is_set():
+            server.poll(0.01)
+    t = threading.Thread(target=serve, daemon=True)
+    t.start()
+    yield fake, server, clock
+    stop.set()
+    t.join(2.0)
+    server.close()
+
+
+def test_the_remote_backend_carries_every_reading_and_command(served):
+    fake, server, _ = served
+    clock = SimClock(start=100.0)
+    bot = open_backend("remote", address=f"127.0.0.1:{server.port}", robot=2, clock=clock)
+    try:
+        assert bot.capabilities == fake.capabilities
+        bot.drive(0.3, -0.1, 0.5)
+        bot.stop()
+        assert fake.commands == [(0.3, -0.1, 0.5), (0.0, 0.0, 0.0)]
+        odo = bot.odometry()
+        assert odo.pose == Pose2D(1.0, 2.0, 0.5) and (odo.vx, odo.omega) == (0.1, 0.2)
+        assert odo.stamp == pytest.approx(100.0)            # on the client's clock
+        scan = bot.laser_scan()
+        assert np.isinf(scan.ranges[1]) and scan.ranges[2] == pytest.approx(2.5) and scan.angle_increment == 0.5
+        assert bot.detections().tags[0].tag_id == 66
+        assert bot.gripper_status().is_open and bot.holding() is False
+        with pytest.raises(CapabilityError):
+            bot.camera_image()
+    finally:
+        bot.close()
+
+
+def test_a_robot_the_world_does_not_have_is_an_error_not_a_hang(served):
+    _, server, _ = served
+    from rll_bt.backend import BackendError
+    with pytest.raises(BackendError):
+        open_backend("remote", address=f"127.0.0.1:{server.port}", robot=3)
+
+
+def test_a_short_game_in_processes_scores_exploration_and_logs_both_links(tmp_path, capsys):
+    out = tmp_path / "game"
+    rc = main(["sim", "--processes", "--robots", "1", "--setup", "1", "--exploration", "15", "--production", "2",
+               "--out", str(out), "-q"])
+    assert rc == 0, (out / "teamserver.log").read_text() if (out / "teamserver.log").exists() else ""
+    rep = json.loads((out / "report.json").read_text())
+    assert rep["finished"] and rep["points"]["exploration"] > 0       # reports reached the refbox
+    assert 18.0 <= rep["sim_time"] < 25.0             # the game's own length, not the processes' start-up
+    snap = json.loads((out / "teamserver.json").read_text())
+    assert snap["robots"]["1"]["status"] == "ACTIVE"                   # the agent joined over TCP
+    assert any(t["kind"] == "explore_zone" and t["robot"] == 1 for t in snap["tasks"])
+    assert rep["robot_stats"]["1"]["distance"] > 1.0                    # and drove through the remote backend
+    assert (out / "timeline.png").stat().st_size > 0
+    log = [json.loads(x) for x in (out / "messages.jsonl").read_text().splitlines()]
+    assert rep["messages"] == len(log)
+    got = {(x["channel"], x["from"], x["type"]) for x in log}
+    # the team server's reports and the agent's beacons arrived over UDP on the encrypted team channel
+    assert {("cyan", "teamserver", "MachineReport"), ("cyan", "R1", "BeaconSignal"),
+            ("public", "refbox", "GameState")} <= got
+    assert {f for _, f, _ in got} == {"refbox", "teamserver", "R1"}     # senders named as in lockstep
+    # and the team server's TCP link to the agent, both ways, in the lockstep schema
+    assert {("teamserver", "R1", "RobotHello"), ("teamserver", "R1", "TaskResult"),
+            ("teamserver", "teamserver", "Task"), ("teamserver", "teamserver", "GamePhase")} <= got
+    assert all(x["type"] is not None and set(x) == {"t", "channel", "from", "type", "msg"} for x in log)
+    assert [x["t"] for x in log] == sorted(x["t"] for x in log)
+    # the robot's task intervals come from those messages, on the game's clock
+    sent = [x for x in log if x["type"] == "Task"]
+    assert rep["robot_stats"]["1"]["tasks"] == len({x["msg"]["task_id"] for x in sent}) > 0
+    assert 0 < rep["robot_stats"]["1"]["busy_time"] <= rep["sim_time"]
+    assert sent[0]["t"] >= next(x["t"] for x in log if x["type"] == "GameState"
+                                and x["msg"]["phase"] == "EXPLORATION" and x["msg"]["state"] == "RUNNING")
+    assert not list(out.glob("teamserver-messages*.jsonl"))           # merged into messages.jsonl
+    assert not list(out.glob("refbox-messages*.jsonl"))
+    # the refbox ran as a process of its own on the world's stations, and stopped cleanly
+    refbox = json.loads((out / "refbox.json").read_text())
+    assert refbox["pid"] != os.getpid() and refbox["status"]["phase"] == "POST_GAME"
+    assert refbox["status"]["points"]["CYAN"] == rep["points"]["total"]
+    text = (out / "refbox.log").read_text()
+    assert text.startswith("refbox sim: rcll2016") and "stations of the world at 127.0.0.1:" in text
+    assert "final score" in text and "Traceback" not in text
+
+
+
+def _prepare(game, machine: str, **instruction) -> None:
+    """A PrepareMachine as a team sends it: UDP to the refbox, on the encrypted team channel."""
+    from google.protobuf.json_format import ParseDict
+
+    from rll_bt import msgs
+    from rll_bt.comm import MessageRegistry, UdpPeer
+    ms = msgs.message_set(game.options.profile)
+    pm = ParseDict({"team_color": "CYAN", "machine": machine, **instruction}, ms.get("PrepareMachine")())
+    ports = game.layout.robot("cyan")
+    peer = UdpPeer("127.0.0.1", ports.send, ports.recv, registry=MessageRegistry.from_message_set(ms),
+                   channel="team", key=game.options.key)
+    try:
+        assert peer.send(pm)
+    finally:
+        peer.close()
+
+
+def test_production_across_the_station_link(tmp_path):
+    """The team server prepares a cap station in the refbox process; the test then plays the
+    team's robot in the world (its agent killed) and its team server for the base station:
+    a base dispensed, taken off the BS, a cap carrier taken off the CS shelf and fed to its
+    input, the cap retrieved.  Every step crosses the station link: the refbox's spawns into
+    the world, the robot's takes and puts back to the refbox."""
+    from rll_bt.game import GameOptions
+    from rll_bt.game.processes import ProcessGame
+    opts = GameOptions(seed=3, robots=1, setup=1.0, exploration=3.0, production=300.0, strategy="oracle",
+                       processes=True, out=tmp_path / "game")
+    game = ProcessGame(opts)
+
+    def state(machine):
+        return game.sim.stations()[machine].state
+
+    def retrieving(g):
+        return next((e["machine"] for e in reversed(g.sim.station_log()) if e["machine"].startswith("C-CS")
+                     and e["to"] == "PREPARED" and "RETRIEVE_CAP" in e["reason"]), None)
+    try:
+        assert game.run_until(retrieving, limit=60.0), "the team server prepared no cap station"
+        cs = retrieving(game)
+        game.kill_agent(1)
+        game.run_for(1.5)                                  # its last drive command times out
+        if state("C-BS") == "IDLE":
+            _prepare(game, "C-BS", instruction_bs={"side": "OUTPUT", "color": "BASE_RED"})
+        assert game.run_until(lambda g: state("C-BS") == "READY-AT-OUTPUT", limit=15.0)
+        world = game.sim.world
+        robot = world.robot("CYAN", 1)
+        base = world.workpiece_at("C-BS", "output")
+        assert base is not None and base.base.startswith("BASE_")     # dispensed by the refbox process
+
+        def gripper(op, machine, slot):
+            world.teleport("CYAN", 1, world.station(machine).approach_pose(slot))
+            robot.gripper.command(op, now=world.time)
+            game.run_for(3.0)
+
+        gripper("close", "C-BS", "output")
+        assert world.held_workpiece("CYAN", 1).base == base.base
+        assert game.run_until(lambda g: state("C-BS") != "READY-AT-OUTPUT", limit=5.0)
+        assert any(e["machine"] == "C-BS" and e["reason"] == "product taken" for e in game.sim.station_log())
+        gripper("open", "C-BS", "input")                  # back on the BS input, out of the way
+        gripper("close", cs, "shelf1")
+        carrier = world.held_workpiece("CYAN", 1)
+        assert carrier is not None and carrier.cap is not None
+        gripper("open", cs, "input")
+        assert any(e["machine"] == cs and e["to"] == "PROCESSING" for e in game.sim.station_log())
+        assert game.run_until(lambda g: state(cs) == "READY-AT-OUTPUT", limit=20.0)
+        out = world.workpiece_at(cs, "output")
+        assert out is not None and out.cap is None         # the cap retrieved, the carrier put out by the refbox
+        result = game.result(False)
+    finally:
+        game.close()
+    states = {m: [s for _, s in h] for m, h in result.recording.stations.items()}
+    assert "WAIT-IDLE" in states["C-BS"] and "READY-AT-OUTPUT" in states[cs]     # recorded here, from the snapshot

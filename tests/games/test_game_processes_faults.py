@@ -1,0 +1,91 @@
+"""Faults in a ``--processes`` game: a refbox process, a team server process and two
+``rll-bt agent`` processes on loopback TCP/UDP, the world in the test's process serving
+the robots' backends and the refbox's stations.  One short game takes the faults in turn
+(each process start costs seconds)."""
+import json
+import os
+
+import pytest
+
+from rll_bt.game import GameOptions, finish
+from rll_bt.game.processes import ProcessGame
+from tests.support.games import PRODUCTION_KINDS
+
+pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
+
+
+def _tasks(game) -> dict[int, dict]:
+    return {t["id"]: t for t in game.snapshot().get("tasks", [])}
+
+
+def _working(game) -> dict[int, int]:
+    """Robot -> id of the production task the team server has it on."""
+    robots = game.snapshot().get("robots", {})
+    return {int(n): r["task_id"] for n, r in robots.items() if r.get("task") in PRODUCTION_KINDS}
+
+
+def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
+    opts = GameOptions(seed=3, robots=2, setup=1.0, exploration=3.0, production=300.0, strategy="oracle",
+                       processes=True, out=tmp_path / "game")
+    game = ProcessGame(opts)
+    try:
+        # the refbox is a process of its own, neither this one (the world's) nor another child
+        refbox = game.procs["refbox"].pid
+        assert refbox != os.getpid() and refbox not in {p.pid for n, p in game.procs.items() if n != "refbox"}
+        assert json.loads(game.refbox_file.read_text())["pid"] == refbox
+        assert game.run_until(lambda g: bool(_working(g)), limit=60.0), "no production task was handed out"
+
+        # an agent process dies without a goodbye: its task goes back, the game goes on
+        victim, tid = sorted(_working(game).items())[0]
+        game.kill_agent(victim)
+
+        def taken_back(g):
+            return (g.snapshot()["robots"][str(victim)]["status"] == "LOST"
+                    and _tasks(g)[tid]["robot"] != victim)
+        assert game.run_until(taken_back, limit=30.0), "the dead robot kept its task"
+        st = game.sim.status()
+        assert st.phase == "PRODUCTION" and st.state == "RUNNING"
+
+        # a new agent process for that robot rejoins
+        game.start_agent(victim)
+        assert game.run_until(lambda g: g.snapshot()["robots"][str(victim)]["status"] == "ACTIVE", limit=30.0)
+
+        # the team server process is killed and a new one resumes from the database
+        before = set(_tasks(game))
+        killed_at = game.wall.now()
+        game.restart_teamserver()
+
+        def resumed(g):
+            snap = g.snapshot()
+            ts = snap.get("tasks", [])
+            return (snap.get("now", 0) > killed_at
+                    and all(snap["robots"].get(str(n), {}).get("status") == "ACTIVE" for n in (1, 2))
+                    and any((t["assigned_at"] or 0) > killed_at or (t["finished_at"] or 0) > killed_at
+                            for t in ts))
+        assert game.run_until(resumed, limit=40.0), "the new team server neither heard results nor gave tasks"
+        assert before <= set(_tasks(game))                                 # the plan survived
+
+        # a station goes DOWN: the team server hears it and sends nobody there meanwhile
+        down_at = game.wall.now()
+        game.station_down("C-BS", 12.0)
+        assert game.run_until(lambda g: g.snapshot().get("stations", {}).get("C-BS") == "DOWN", limit=10.0)
+        game.run_for(7.0)
+        sent = [t for t in _tasks(game).values() if t["machine"] == "C-BS" and t["assigned_at"] is not None
+                and down_at + 2.0 < t["assigned_at"] < down_at + 10.0]
+        assert not sent, f"tasks sent to C-BS while it was down: {sent}"
+        result = game.result(False)
+    finally:
+        game.close()
+
+    summary = finish(result, opts)
+    assert summary["team_server_restarts"] == 1
+    assert [e["what"] for e in summary["events"]][:4] == ["agent killed", "agent started", "team server restarted",
+                                                          "station down"]     # (+ how far the world fell behind)
+    runs = result.recording.tasks[victim]
+    assert any(r["id"] == tid and r["outcome"] == "agent killed" for r in runs)
+    log = [json.loads(x) for x in (opts.out / "messages.jsonl").read_text().splitlines()]
+    hellos = [x for x in log if x["type"] == "RobotHello" and x["from"] == f"R{victim}"]
+    assert len(hellos) >= 2 and any(x["msg"]["restarted"] for x in hellos[1:])   # the new agent came back
+    assert [x["t"] for x in log] == sorted(x["t"] for x in log)
+    assert "DOWN" in {s for _, s in result.recording.stations["C-BS"]}   # the refbox process's states, recorded here
+    assert "Traceback" not in (opts.out / "refbox.log").read_text()

@@ -1,0 +1,36 @@
+"""Short whole games for the game tests: SETUP 1 s, 40 s of exploration with
+the oracle strategy (robots go straight to the stations), a short production,
+a team server that drops a robot after 3 s without a heartbeat."""
+from __future__ import annotations
+
+from rll_bt.game import GameOptions, LockstepGame
+from teamserver.dispatch import DispatchConfig
+
+PRODUCTION_KINDS = ("get_workpiece", "put_workpiece", "retrieve_cap", "mount_ring", "mount_cap",
+                    "deliver", "discard")
+
+
+def short_game(seed: int = 3, **kw) -> LockstepGame:
+    opts = {"seed": seed, "setup": 1.0, "exploration": 40.0, "production": 300.0, "strategy": "oracle",
+                "extra": {"dispatch": DispatchConfig(heartbeat_timeout=3.0)}}
+    opts.update(kw)
+    return LockstepGame(GameOptions(**opts))
+
+
+def in_production(game) -> bool:
+    st = game.sim.status()
+    return st.phase == "PRODUCTION" and st.state == "RUNNING"
+
+
+def tasks(game) -> dict[int, dict]:
+    return {t["id"]: t for t in game.teamserver.snapshot()["tasks"]}
+
+
+def running(game, kinds=PRODUCTION_KINDS) -> dict[int, tuple[str, int]]:
+    """Robot number -> (kind, task id) of the production trees running now."""
+    out = {}
+    for n, agent in game.agents.items():
+        run = agent.run
+        if run is not None and not run.done and run.kind in kinds:
+            out[n] = (run.kind, run.task_id)
+    return out

@@ -1,0 +1,387 @@
+"""Scripted refbox and robots for the team-server tests (lockstep, one clock)."""
+from __future__ import annotations
+
+from rll_bt import msgs, rules
+from rll_bt.clock import SimClock
+from rll_bt.comm import Bus, MessageRegistry, StreamClient, StreamServer
+from teamserver.links import RefboxLink
+from teamserver.server import ServerConfig, TeamServer
+
+TEAM, KEY = "Testers", "secret"
+PHASE = {"PRE_GAME": 0, "SETUP": 10, "EXPLORATION": 20, "PRODUCTION": 30, "POST_GAME": 40}
+STATE = {"INIT": 0, "WAIT_START": 1, "RUNNING": 2, "PAUSED": 3}
+
+
+class FakeRefbox:
+    """Speaks the profile's refbox messages on bus peers: public + cyan."""
+
+    def __init__(self, bus: Bus, profile: str):
+        self.ms = msgs.message_set(profile)
+        reg = MessageRegistry.from_message_set(self.ms)
+        self.public = bus.peer("public", registry=reg, name="refbox")
+        self.cyan = bus.peer("cyan", registry=reg, key=KEY, name="refbox")
+        self.received: list = []
+
+    def game_state(self, phase="PRODUCTION", state="RUNNING", t=0.0, team=TEAM):
+        gs = self.ms.GameState(state=STATE[state], phase=PHASE[phase], team_cyan=team)
+        gs.game_time.sec, gs.game_time.nsec = int(t), int((t % 1) * 1e9)
+        self.public.send(gs)
+
+    def orders(self, orders):
+        info = self.ms.OrderInfo()
+        for o in orders:
+            info.orders.add(**o)
+        self.public.send(info)
+
+    def rings(self, costs):
+        e = self.ms.enum("RingColor")
+        info = self.ms.RingInfo()
+        for c, n in costs.items():
+            info.rings.add(ring_color=e.Value(c), raw_material=n)
+        self.cyan.send(info)
+
+    def machines(self, states: dict, ring_colors: dict | None = None, **extra):
+        info = self.ms.MachineInfo(team_color=0)
+        e = self.ms.enum("RingColor")
+        for name, state in states.items():
+            m = info.machines.add(name=name, state=state, type=name[2:4])
+            for c in (ring_colors or {}).get(name, ()):
+                m.ring_colors.append(e.Value(c))
+            for k, v in extra.get(name, {}).items():
+                setattr(m, k, v)
+        self.cyan.send(info)
+
+    def take(self):
+        got = [rx.msg for rx in self.cyan.receive()]
+        self.received += got
+        return got
+
+
+class FakeAgent:
+    """A robot agent over a team-protocol transport."""
+
+    def __init__(self, transport, number: int, pose=(4.0, 0.5, 0.0)):
+        self.ms = msgs.message_set("team")
+        self.t = transport
+        self.number = number
+        self.pose = pose
+        self.inbox: list = []
+        self.seq = 0
+
+    def hello(self, restarted=False):
+        self.t.send(self.ms.RobotHello(robot_id=self.number, team_name=TEAM,
+                                       peer_name=f"robot{self.number}", restarted=restarted))
+
+    def beat(self):
+        self.seq += 1
+        self.t.send(self.ms.Heartbeat(robot_id=self.number, seq=self.seq))
+
+    def status(self, state=1, holding=False):
+        st = self.ms.RobotStatus(robot_id=self.number, state=state)
+        st.pose.x, st.pose.y, st.pose.theta = self.pose
+        if holding:
+            st.holding.SetInParent()
+        self.t.send(st)
+
+    def take(self):
+        got = [rx.msg for rx in self.t.receive()]
+        self.inbox += got
+        return got
+
+    def tasks(self):
+        """Tasks with real work (parking GO_TOs: :meth:`parks`)."""
+        return [m for m in self.inbox if m.DESCRIPTOR.name == "Task" and m.WhichOneof("kind") != "go_to"]
+
+    def parks(self):
+        """GO_TO tasks (parking) this robot got."""
+        return [m for m in self.inbox if m.DESCRIPTOR.name == "Task" and m.WhichOneof("kind") == "go_to"]
+
+    def cancels(self):
+        return [m for m in self.inbox if m.DESCRIPTOR.name == "CancelTask"]
+
+    def result(self, task_id, status="SUCCEEDED", error="NONE", holding=None):
+        r = self.ms.TaskResult(task_id=task_id, robot_id=self.number,
+                               status=self.ms.enum("TaskResult.Status").Value(status),
+                               error=self.ms.enum("ErrorCode").Value(error))
+        if holding:
+            r.holding.SetInParent()
+        self.t.send(r)
+
+    def observe(self, name, zone=None, zconf=0.9, lights=None, lconf=0.9, orientation=None,
+                oconf=0.9, pose=None, pconf=0.9):
+        m = self.ms.MachineObservation(robot_id=self.number)
+        m.name.value, m.name.confidence = name, 1.0
+        if zone is not None:
+            m.zone.value, m.zone.confidence = zone, zconf
+        if lights is not None:
+            m.lights.pattern, m.lights.confidence = lights, lconf
+        if orientation is not None:
+            m.orientation.value, m.orientation.confidence = orientation, oconf
+        if pose is not None:
+            m.pose.pose.x, m.pose.pose.y, m.pose.pose.theta = pose
+            m.pose.confidence = pconf
+        self.t.send(m)
+
+
+class Lockstep:
+    """A team server, a fake refbox and fake agents on one bus and one clock."""
+
+    def __init__(self, profile="rcll2016", robots=3, state=":memory:", config=None,
+                 tcp=False, **kw):
+        self.tcp = tcp
+        self.clock = SimClock()
+        self.bus = Bus(self.clock)
+        self.profile_name = profile
+        self.profile = rules.profile(profile)
+        self.refbox = FakeRefbox(self.bus, profile)
+        self.state = state
+        self.config = config or ServerConfig()
+        self.kw = kw
+        self.team_reg = MessageRegistry.from_message_set(msgs.message_set("team"))
+        self.server = self._server()
+        self.agents = [FakeAgent(self._client(f"robot{i}"), i) for i in range(1, robots + 1)]
+        if tcp:
+            for a in self.agents:
+                assert a.t.wait_connected(5.0), "loopback TCP connect failed"
+
+    def _client(self, name):
+        if self.tcp:
+            return StreamClient("127.0.0.1", self.server.agents.port, registry=self.team_reg,
+                                key=KEY, clock=self.clock)
+        return self.bus.stream_client("teamserver", registry=self.team_reg, key=KEY, name=name)
+
+    def _server(self):
+        reg = MessageRegistry.from_message_set(msgs.message_set(self.profile_name))
+        link = RefboxLink(self.bus.peer("public", registry=reg, name="ts"),
+                          lambda color: self.bus.peer(color, registry=reg, name="ts"))
+        if self.tcp:
+            agents = StreamServer(0, host="127.0.0.1", registry=self.team_reg, key=KEY,
+                                  clock=self.clock)
+        else:
+            agents = self.bus.stream_server("teamserver", registry=self.team_reg, key=KEY)
+        return TeamServer(self.profile_name, TEAM, key=KEY, clock=self.clock, refbox=link,
+                          agents=agents, state=self.state, config=self.config, **self.kw)
+
+    def restart(self):
+        """Kill the server (no goodbye) and start a new one on the same database."""
+        self.server.agents.close()
+        self.server.close()
+        self.server = self._server()
+        for a in self.agents:       # the clients reconnect to the new server
+            a.t = self._client(f"robot{a.number}-again")
+
+    def close(self):
+        self.server.agents.close()
+        for a in self.agents:
+            a.t.close()
+        self.server.close()
+
+    def step(self, dt=0.1, n=1):
+        for _ in range(n):
+            self.clock.advance(dt)
+            if self.tcp:        # let loopback frames arrive (bounded, real time)
+                self.server.agents.wait(0.002)
+            self.server.tick()
+            if self.tcp:
+                for a in self.agents:
+                    a.t.wait(0.002)
+            for a in self.agents:
+                a.take()
+            self.refbox.take()
+
+
+C0 = {"complexity": 0, "quantity_requested": 1, "quantity_delivered_cyan": 0,
+          "quantity_delivered_magenta": 0, "delivery_period_begin": 0, "delivery_period_end": 900,
+          "delivery_gate": 1}
+PLACES_2016 = {"C-BS": 9, "C-DS": 4, "C-RS1": 2, "C-RS2": 7, "C-CS1": 11, "C-CS2": 6}
+RS_2016 = {"C-RS1": ("RING_BLUE", "RING_GREEN"), "C-RS2": ("RING_ORANGE", "RING_YELLOW")}
+COSTS_2016 = {"RING_BLUE": 2, "RING_GREEN": 0, "RING_ORANGE": 1, "RING_YELLOW": 0}
+
+
+def machines_known(ls, places, costs, t=0.0):
+    """Our colour, PRODUCTION running at game time ``t``, the machines seen in their
+    zones (``places``: machine -> zone), ring ``costs``; ``ls.station_states`` all IDLE."""
+    for a in ls.agents:
+        a.hello()
+        a.status()
+    ls.refbox.game_state("PRODUCTION", "RUNNING", t)
+    ls.step()
+    for name, z in places.items():
+        ls.agents[0].observe(name, zone=z, zconf=0.99)
+    ls.refbox.rings(costs)
+    ls.station_states = dict.fromkeys(places, "IDLE")
+
+
+def production_setup(ls, orders, t=0.0, states=None):
+    """Our colour, PRODUCTION running, known machines, ring costs, idle stations (but
+    ``states``: machine -> state), orders."""
+    machines_known(ls, PLACES_2016, COSTS_2016, t)
+    ls.station_states.update(states or {})
+    ls.refbox.machines(ls.station_states, RS_2016)
+    bc, cc = ls.refbox.ms.enum("BaseColor"), ls.refbox.ms.enum("CapColor")
+    rc = ls.refbox.ms.enum("RingColor")
+    full = []
+    for o in orders:
+        o = dict(C0, **o)
+        o.setdefault("base_color", bc.Value("BASE_RED"))
+        o.setdefault("cap_color", cc.Value("CAP_BLACK"))
+        if "rings" in o:
+            o["ring_colors"] = [rc.Value(r) for r in o.pop("rings")]
+        full.append(o)
+    ls.refbox.orders(full)
+    ls.order_msgs = full
+    ls.step(n=2)
+
+
+def task_kinds(agent):
+    return [(t.task_id, t.WhichOneof("kind"), getattr(t, t.WhichOneof("kind")).machine
+             if t.WhichOneof("kind") not in ("explore_zone", "discard", "go_to") else None)
+            for t in agent.tasks()]
+
+
+FEEDS = ("mount_ring", "mount_cap", "retrieve_cap", "deliver")
+SLIDE = msgs.message_set("team").enum("MachineSide").Value("SLIDE")
+
+
+class Stations:
+    """The refbox's side of our stations, scripted: a PrepareMachine makes a station
+    PREPARED (the BS dispenses at once), a workpiece fed to a PREPARED station is
+    processed (DS: delivered, the gate recorded; others: ready at the output), one fed
+    to a station not yet prepared waits on its input, and a pickup empties the output.
+    States go out in MachineInfo whenever they change."""
+
+    def __init__(self, ls):
+        self.ls = ls
+        self.states = ls.station_states
+        self.instr: dict = {}
+        self.waiting: set = set()
+        self.deliveries: list = []          # (game time, gate)
+        self.waiting_order: dict = {}       # DS -> order of the workpiece on its input
+        self.slides: dict = {}              # RS -> additional bases on its slide
+        self.seen = 0
+
+    def _send(self):
+        self.ls.refbox.machines(self.states, RS_2016,
+                                **{rs: {"loaded_with": n} for rs, n in self.slides.items()})
+
+    def slide(self, machine):
+        """An additional base reached ``machine``'s slide."""
+        self.slides[machine] = self.slides.get(machine, 0) + 1
+        self._send()
+
+    def take_prepares(self, gt):
+        got = self.ls.refbox.received[self.seen:]
+        self.seen = len(self.ls.refbox.received)
+        changed = False
+        for m in got:
+            if m.DESCRIPTOR.name != "PrepareMachine" or self.states.get(m.machine) != "IDLE":
+                continue
+            self.instr[m.machine] = m
+            self.states[m.machine] = "READY-AT-OUTPUT" if m.machine.endswith("BS") else "PREPARED"
+            changed = True
+            if m.machine in self.waiting:
+                self._send()                # every state change goes out
+                self.waiting.discard(m.machine)
+                self._process(m.machine, gt)
+        if changed:
+            self._send()
+
+    def _process(self, machine, gt):
+        if machine.endswith("DS"):
+            gate = self.instr[machine].instruction_ds.gate
+            self.deliveries.append((gt, gate))
+            self.states[machine] = "IDLE"
+            self._count(self.waiting_order.pop(machine, None), gate, gt)
+        elif machine[2:4] == "RS":
+            cost = COSTS_2016[self.ls.refbox.ms.enum("RingColor").Name(
+                self.instr[machine].instruction_rs.ring_color)]
+            if self.slides.get(machine, 0) < cost:
+                self.states[machine] = "BROKEN"             # the refbox breaks it
+            else:
+                self.slides[machine] = self.slides.get(machine, 0) - cost
+                self.states[machine] = "READY-AT-OUTPUT"
+        else:
+            self.states[machine] = "READY-AT-OUTPUT"
+
+    def _count(self, order_id, gate, gt):
+        """The refbox counts a product for its order at the order's gate in the window."""
+        for o in self.ls.order_msgs:
+            if o["id"] == order_id and o["delivery_gate"] == gate and \
+                    o["delivery_period_begin"] <= gt <= o["delivery_period_end"]:
+                o["quantity_delivered_cyan"] += 1
+                self.ls.refbox.orders(self.ls.order_msgs)
+
+    def fed(self, machine, gt, task_id=None):
+        """A workpiece reached ``machine``'s input (``task_id``: the server's task)."""
+        if machine.endswith("DS"):
+            t = self.ls.server.kb.tasks.get(task_id)
+            p = self.ls.server.kb.products.get(t.product) if t is not None else None
+            self.waiting_order[machine] = p.order_id if p is not None else None
+        if self.states.get(machine) == "PREPARED":
+            self._process(machine, gt)
+            self._send()
+        else:
+            self.waiting.add(machine)
+
+    def taken(self, machine):
+        if self.states.get(machine) == "READY-AT-OUTPUT":
+            self.states[machine] = "IDLE"
+            self._send()
+
+
+def play(ls, until, *, t0=0.0, dt=0.5, steps=800, fail=None, drop=None, drive=3):
+    """Run the game from production time ``t0``: each robot drives to the station of a
+    task it gets (``drive`` steps), then reports it done; ``fail(agent, task)`` may
+    return a failure (TaskResult fields; ``fed=True``: the feed's workpiece reached
+    the station all the same), ``drop(agent, task)`` True makes a feed's
+    workpiece fall beside the station (reported done all the same).  True once
+    ``until(gt)`` holds.  ``ls.stations`` is the scripted :class:`Stations`."""
+    st = ls.stations = getattr(ls, "stations", None) or Stations(ls)
+    answered = {a.number: 0 for a in ls.agents}
+    doing: dict[int, list] = {a.number: [] for a in ls.agents}
+    gt = t0
+    pos = ls.server.production.positions
+    for _ in range(steps):
+        gt += dt
+        ls.refbox.game_state("PRODUCTION", "RUNNING", gt)
+        st.take_prepares(gt)
+        for a in ls.agents:
+            a.beat()
+            tasks = a.tasks()
+            new, answered[a.number] = tasks[answered[a.number]:], len(tasks)
+            for t in new:
+                kind = t.WhichOneof("kind")
+                machine = getattr(t, kind).machine if kind not in ("discard", "go_to") else None
+                if machine and machine in pos():
+                    x, y = pos()[machine]
+                    a.pose = (x + 0.3, y, 0.0)
+                    a.status()
+                doing[a.number].append([t, drive])
+            for item in list(doing[a.number]):
+                item[1] -= 1
+                if item[1] > 0:
+                    continue
+                doing[a.number].remove(item)
+                t = item[0]
+                kind = t.WhichOneof("kind")
+                outcome = fail(a, t) if fail else None
+                machine = getattr(t, kind).machine if kind not in ("discard", "go_to") else None
+                if outcome:
+                    outcome = dict(outcome)
+                    if outcome.pop("fed", False) and kind in FEEDS:
+                        st.fed(machine, gt, t.task_id)      # failed after it got there
+                    a.result(t.task_id, "FAILED", **outcome)
+                    continue
+                into = kind in FEEDS or (kind == "put_workpiece" and t.put_workpiece.side != SLIDE)
+                if into and not (drop and drop(a, t)):
+                    st.fed(machine, gt, t.task_id)
+                elif kind == "put_workpiece" and t.put_workpiece.side == SLIDE and not (
+                        drop and drop(a, t)):
+                    st.slide(machine)
+                elif kind == "get_workpiece":
+                    st.taken(machine)
+                a.result(t.task_id, holding=kind == "get_workpiece")
+        ls.step(dt=dt)
+        if until(gt):
+            return True
+    return False
