@@ -22,12 +22,17 @@ DECRYPT_FAILURE = "decrypt_failure"  #: bad ciphertext length or padding (wrong 
 UNKNOWN_TYPE = "unknown_type"        #: (comp_id, msg_type) not registered
 PARSE_ERROR = "parse_error"          #: protobuf did not parse or lacks required fields
 STREAM_BROKEN = "stream_broken"      #: a stream frame header made the stream unusable
+HANDSHAKE = "handshake"              #: secured link: a bad, missing or repeated hello
+AUTH_FAILURE = "auth_failure"        #: secured link: the tag did not check (altered, or wrong key)
+REPLAY = "replay"                    #: secured link: a sequence number seen before
 
 CAUSES = (TOO_SHORT, BAD_VERSION, BAD_CIPHER, SIZE_MISMATCH, OVERSIZE, PLAIN_ON_ENCRYPTED,
-          ENCRYPTED_ON_PLAIN, DECRYPT_FAILURE, UNKNOWN_TYPE, PARSE_ERROR, STREAM_BROKEN)
+          ENCRYPTED_ON_PLAIN, DECRYPT_FAILURE, UNKNOWN_TYPE, PARSE_ERROR, STREAM_BROKEN, HANDSHAKE,
+          AUTH_FAILURE, REPLAY)
 
 #: causes that mean "this peer does not share our key or crypto setting"
-CRYPTO_CAUSES = frozenset({PLAIN_ON_ENCRYPTED, ENCRYPTED_ON_PLAIN, DECRYPT_FAILURE, BAD_CIPHER})
+CRYPTO_CAUSES = frozenset({PLAIN_ON_ENCRYPTED, ENCRYPTED_ON_PLAIN, DECRYPT_FAILURE, BAD_CIPHER,
+                           HANDSHAKE, AUTH_FAILURE})
 
 
 class DropStats:
