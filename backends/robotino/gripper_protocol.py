@@ -113,7 +113,7 @@ def parse_line(line: bytes | str) -> GripperMessage | Rejected:
     if end < start + len(PREFIX):
         return Rejected("no '+' terminator", text)
     body, digits = text[start:end + 1], text[end + 1:].strip()
-    if not digits.isdigit() or len(digits) > 3:
+    if not (digits.isascii() and digits.isdigit()) or len(digits) > 3:
         return Rejected(f"bad checksum digits {digits!r}", text)
     got = int(digits)
     inner = body[len(PREFIX):-1]

@@ -87,8 +87,9 @@ def parse_yaml(text: str, filename: str):
     Raises :class:`SourceError` with ``file:line:col`` for syntax errors,
     refused tags and duplicate keys.
     """
-    loader = _Loader(text)
+    loader = None
     try:
+        loader = _Loader(text)            # its reader already refuses control characters
         node = loader.get_single_node()
         if node is None:
             return None
@@ -104,7 +105,8 @@ def parse_yaml(text: str, filename: str):
         raise SourceError(Diagnostic(Loc(filename, 1, 1), f"YAML: {exc}",
                                      "fix the YAML syntax")) from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 def _convert(loader: _Loader, node, filename: str, active: set):

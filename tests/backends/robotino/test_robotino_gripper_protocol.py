@@ -123,3 +123,8 @@ def test_error_state_reports_e_lines():
     out = lines(fw.fail("end stop", 0.1))
     assert out[0].state == "E" and out[0].text == "end stop"
     assert lines(fw.receive(b"AT S0 +", 0.2))[0].state == "E"
+
+
+def test_unicode_digits_in_the_checksum_are_rejected_not_raised():
+    # found by benchmarks/fuzz.py: '²'.isdigit() is true, int('²16') raises
+    assert isinstance(P.parse_line(b"AT HELLO +\xb216\r\n"), P.Rejected)

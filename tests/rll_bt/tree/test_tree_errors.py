@@ -81,3 +81,9 @@ def test_blackboard_key_types_are_checked_at_load(check):
             - set_blackboard: {key: $bb.n, value: one}
         """)
     assert "writes str to /n" in errs[0]
+
+
+def test_control_characters_are_a_yaml_error_not_a_crash(check):
+    # found by benchmarks/fuzz.py: PyYAML's reader refuses them before parsing starts
+    errs = check("root:\n  wait: {seconds: 1}\x18\n")
+    assert len(errs) == 1 and "YAML" in errs[0]
