@@ -96,6 +96,7 @@ class RobotAgent:
         self._next_status = now
         self._next_beacon = now
         self._attached: set[int] = set()
+        self.observers: list = []    # stepped(agent), task_started(agent, run), task_ended(agent, run, outcome)
         if config.color:
             self.refbox.set_color(config.color)
         if getattr(link, "connected", False):
@@ -117,6 +118,14 @@ class RobotAgent:
             self.tick()
         self._periodic(self.clock.now())
         self._flush()
+        self._notify("stepped")
+
+    def _notify(self, what: str, *args) -> None:
+        for obs in self.observers:
+            try:
+                getattr(obs, what, lambda *a: None)(self, *args)
+            except Exception:       # an observer must never stop the robot
+                log.exception("robot %d: observer %r failed in %s", self.config.robot_id, obs, what)
 
     def tick(self) -> Outcome | None:
         """Tick the current task's tree once, if there is one and the game
@@ -230,6 +239,7 @@ class RobotAgent:
         if len(self.services) != self._n_services:      # the tree's services were made just now
             self._services_changed()
         self.run = TaskRun(task, params, tree, self.clock, max_gap=max(0.5, 5 * self.config.tick_period))
+        self._notify("task_started", self.run)
         log.info("robot %d: task %d %s %s", me, tid, kind,
                  {k: v for k, v in params.items() if k not in ("task_id", "robot_id", "kind")})
         self._send(self._result(tid, "RUNNING"))
@@ -313,6 +323,7 @@ class RobotAgent:
             found = run.tree.blackboard.get("/found")
             self.feed.zone_searched(int(run.params["zone"]), found if isinstance(found, list) else None)
         result = self._result(run.task_id, outcome.status, code, text)
+        self._notify("task_ended", run, outcome)
         log.info("robot %d: task %d %s %s%s", self.config.robot_id, run.task_id, run.kind, outcome.status,
                  f" {code} {text}" if code != "NONE" else "")
         self.run = None

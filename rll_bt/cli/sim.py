@@ -75,6 +75,16 @@ def register(cli) -> None:
                         "agents' backends and the refbox's stations over TCP); a whole game takes "
                         "the game's real length, --out keeps each process's log")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    g = gp.add_argument_group("watching (Foxglove, see README)")
+    g.add_argument("--record", type=Path, metavar="FILE.mcap",
+                   help="record the game as MCAP: every refbox and team-server message, poses, scans, trees, "
+                        "the field (open it in Foxglove; `rll-bt replay FILE` redraws the report)")
+    g.add_argument("--live", type=int, nargs="?", const=8765, metavar="PORT",
+                   help="serve the same channels over Foxglove's WebSocket protocol (default port 8765; "
+                        "0: any free port); Foxglove: Open connection, ws://localhost:PORT")
+    g.add_argument("--record-camera", type=_seconds, default=0.0, metavar="HZ",
+                   help="also take camera frames for the recording, per robot and second (default 0: only the "
+                        "frames the robots' perception reads; a frame costs about 0.2 s of CPU)")
     g = gp.add_argument_group("speed knobs")
     g.add_argument("--dt", type=_positive, default=0.05, metavar="S", help="lockstep step (default 0.05 s)")
     g.add_argument("--hz", type=_positive, default=10.0, help="tree tick rate of the agents (default 10)")
@@ -84,6 +94,16 @@ def register(cli) -> None:
                    help="localiser preset of the agents (default cheap; with --processes passed to "
                         "every rll-bt agent)")
     gp.set_defaults(func=run)
+
+    p = cli.command("replay", "print what a game recording holds and draw its report again")
+    p.description = ("Read an MCAP recording made with `rll-bt sim --record`: print its topics, schemas and "
+                     "message counts and the game's result table, and draw field.png, timeline.png and "
+                     "score.png from it.")
+    p.add_argument("file", type=Path, metavar="FILE.mcap")
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help="where the PNGs go (default: FILE's folder / <FILE stem>_report)")
+    p.add_argument("--no-png", action="store_true", help="only print the summary")
+    p.set_defaults(func=replay)
 
 
 def options_from(args):
@@ -99,7 +119,8 @@ def options_from(args):
                            gui=args.gui, out=args.out, processes=args.processes, setup=args.setup,
                            exploration=args.exploration, production=args.production, dt=args.dt,
                            hz=args.hz, laser_rate=args.laser_rate, localisation=args.localisation,
-                           baseline=args.baseline)
+                           baseline=args.baseline, record=args.record, live=args.live,
+                           record_camera=args.record_camera)
     except ValueError as exc:
         raise UserError(str(exc)) from None
 
@@ -109,6 +130,9 @@ def run(args) -> int:
     from ..clock import WallClock
     from ..game import play
     options = options_from(args)
+    if options.processes and (options.record is not None or options.live is not None):
+        raise UserError("--record and --live watch a lockstep game; with --processes record each part "
+                        "(rll-bt agent --record, rll-bt teamserver --record)", where="--processes")
     wall = WallClock()
     try:
         summary = play(options, progress=not args.quiet, clock=wall)
@@ -119,4 +143,29 @@ def run(args) -> int:
     print(summary["table"])
     if options.out is not None:
         print(f"\nwrote {', '.join(summary['files'])} to {options.out}", file=sys.stderr)
+    if options.record is not None:
+        print(f"recorded {options.record} (rll-bt replay {options.record})", file=sys.stderr)
     return 0 if summary["finished"] else 1
+
+
+def replay(args) -> int:
+    from ..game import report
+    from ..game.replay import RecordingError, read, redraw, summary_lines
+    if not args.file.is_file():
+        raise UserError("file not found", where=str(args.file))
+    try:
+        rep = read(args.file)
+    except RecordingError as exc:
+        raise UserError(str(exc), where=str(args.file),
+                        hint="give a recording made with rll-bt sim --record") from None
+    for line in summary_lines(rep):
+        print(line)
+    if rep.recording.samples:
+        options = rep.options()
+        print()
+        print(report.table(report.summarise(rep.game_result(), options)))
+    if not args.no_png and rep.recording.samples:
+        out = args.out or args.file.parent / f"{args.file.stem}_report"
+        files = redraw(rep, out)
+        print(f"\nwrote {', '.join(p.name for p in files)} to {out}", file=sys.stderr)
+    return 0

@@ -34,9 +34,23 @@ from .interfaces import (
 from .lockstep import GameResult, LockstepGame
 from .options import GameOptions, max_exploration_points
 
-__all__ = ["Award", "Delivery", "GameStatus", "Simulation", "StationTruth", "TeamServerHandle",
-           "TeamServerOptions", "load_simulator", "load_teamserver", "GameResult", "LockstepGame",
-           "GameOptions", "max_exploration_points", "play", "finish"]
+__all__ = [
+    "Award",
+    "Delivery",
+    "GameOptions",
+    "GameResult",
+    "GameStatus",
+    "LockstepGame",
+    "Simulation",
+    "StationTruth",
+    "TeamServerHandle",
+    "TeamServerOptions",
+    "finish",
+    "load_simulator",
+    "load_teamserver",
+    "max_exploration_points",
+    "play",
+]
 
 
 def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
@@ -51,7 +65,11 @@ def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
         from .processes import ProcessGame
         game = ProcessGame(options, progress=bar, clock=clock)
     else:
-        game = LockstepGame(options, progress=bar, pace=clock if options.gui else None)
+        # a game watched live (--gui, --live) keeps to real time
+        game = LockstepGame(options, progress=bar, pace=clock if options.gui or options.live is not None else None)
+        if game.watch is not None and game.watch.port is not None:
+            import sys
+            print(f"Foxglove live: open connection ws://localhost:{game.watch.port}", file=sys.stderr)
     try:
         result = game.run()
         if bar is not None:

@@ -84,6 +84,10 @@ class LockstepGame:
             self.log = MessageLog(o.out / "messages.jsonl", self.clock,
                                   {"teamserver": self.team_reg}, self.ref_reg, key=o.key)
             self.bus.tap(self.log.tap)
+        self.watch = None
+        if o.record is not None or o.live is not None:
+            from .watch import GameWatch
+            self.watch = GameWatch(self, o)
         self.sim.attach_bus(self.bus)
         self._tmp = None
         state = o.state
@@ -111,6 +115,8 @@ class LockstepGame:
             self.start_agent(n, restarted=False)
         self.recorder = Recorder(self.sim, TEAM, self.robot_numbers, o.sample_period,
                                  snapshot=self.teamserver.snapshot)
+        if self.watch is not None:
+            self.recorder.listeners.append(self.watch.recorded)
 
     # -- parts -------------------------------------------------------------------------
     def start_agent(self, number: int, restarted: bool = True) -> RobotAgent:
@@ -119,14 +125,18 @@ class LockstepGame:
         o, bus, reg = self.options, self.bus, self.ref_reg
         name = f"R{number}"
         cfg = AgentConfig(robot_id=number, team_name=o.team_name, profile=o.profile, hz=o.hz)
+        backend = self.sim.backend(TEAM, number)
+        rw = self.watch.robot(number) if self.watch is not None else None
         agent = RobotAgent(
-            cfg, clock=self.clock, backend=self.sim.backend(TEAM, number),
+            cfg, clock=self.clock, backend=backend if rw is None else rw.tap(backend),
             link=bus.stream_client("teamserver", registry=self.team_reg, key=o.key, name=name),
             public=bus.peer("public", registry=reg, name=name),
             team=lambda color: bus.peer(color.lower(), registry=reg, key=o.key, name=name),
             services={"localisation": o.localisation},
             start_pose=self.sim.robot_pose(TEAM, number), restarted=restarted)
         self.agents[number] = agent
+        if rw is not None:
+            rw.attach(agent)
         if restarted:
             self._note("agent started", robot=number)
         return agent
@@ -157,6 +167,8 @@ class LockstepGame:
         if not self._started:
             self._started = True
             self.sim.start()
+            if self.watch is not None:
+                self.watch.stations()
             self.recorder.sample(force=True)
 
     def round(self) -> None:
@@ -175,6 +187,8 @@ class LockstepGame:
         self.sim.refbox_step()
         self.teamserver.tick()
         self.rounds += 1
+        if self.watch is not None:
+            self.watch.round()
         if self.pace is not None:
             self._keep_real_time()
         before = len(self.recorder.rec.samples)
@@ -230,7 +244,10 @@ class LockstepGame:
         done = done or self.finished()
         self.recorder.sample(force=True)
         self.recorder.close_tasks()
-        return self.result(done)
+        result = self.result(done)
+        if self.watch is not None:
+            self.watch.result(result)
+        return result
 
     def result(self, finished: bool) -> GameResult:
         return GameResult(finished=finished, status=self.sim.status(), recording=self.recorder.rec,
@@ -249,6 +266,8 @@ class LockstepGame:
         self.teamserver.close()
         if self.log is not None:
             self.log.close()
+        if self.watch is not None:
+            self.watch.close()
         self.sim.close()
         if self._tmp is not None:
             self._tmp.cleanup()

@@ -32,27 +32,16 @@ class _Counted(DropStats):
             self._counts[cause] = self._counts.get(cause, 0) + 1
 
 
-class MessageLog:
-    """Decodes tapped frames with the registry of their channel.
+class FrameDecoder:
+    """Decodes tapped frames with the registry of their channel, plain or
+    with the team key.  ``registries``: channel or address ->
+    :class:`MessageRegistry` (``default`` for the rest)."""
 
-    ``registries``: channel or address -> :class:`MessageRegistry`
-    (``default`` for the rest); ``key``: the team key; ``line_buffered``:
-    every line reaches the file at once (a process that may be killed).
-    """
-
-    def __init__(self, path: str | Path, clock, registries: dict[str, MessageRegistry],
-                 default: MessageRegistry, key: str | None = None, line_buffered: bool = False):
-        self.path = Path(path)
-        self.clock = clock
+    def __init__(self, registries: dict[str, MessageRegistry], default: MessageRegistry, key: str | None = None):
         self._codecs: dict[str, tuple[FrameCodec, FrameCodec | None]] = {}
         self._registries = registries
         self._default = default
         self._key = key
-        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8",  # noqa: SIM115 - closed by close()
-                                        buffering=1 if line_buffered else -1)
-        self.lines = 0
-        self.undecoded = 0
-        self.types: dict[str, int] = {}
 
     def _codec(self, channel: str) -> tuple[FrameCodec, FrameCodec | None]:
         pair = self._codecs.get(channel)
@@ -69,6 +58,25 @@ class MessageLog:
         if decoded is None and keyed is not None:
             decoded, cause = keyed.try_decode(frame)
         return (decoded.msg, None) if decoded is not None else (None, cause)
+
+
+class MessageLog(FrameDecoder):
+    """Writes tapped frames, decoded, as JSON lines (see the module doc).
+
+    ``key``: the team key; ``line_buffered``: every line reaches the file at
+    once (a process that may be killed).
+    """
+
+    def __init__(self, path: str | Path, clock, registries: dict[str, MessageRegistry],
+                 default: MessageRegistry, key: str | None = None, line_buffered: bool = False):
+        super().__init__(registries, default, key)
+        self.path = Path(path)
+        self.clock = clock
+        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8",  # noqa: SIM115 - closed by close()
+                                        buffering=1 if line_buffered else -1)
+        self.lines = 0
+        self.undecoded = 0
+        self.types: dict[str, int] = {}
 
     def tap(self, channel: str, source, frame: bytes) -> None:
         """A :meth:`rll_bt.comm.Bus.tap` callback."""

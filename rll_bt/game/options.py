@@ -53,6 +53,9 @@ class GameOptions:
     key: str = TEAM_KEY
     state: Path | None = None          # team server database (default: in ``out`` or a temp dir)
     sample_period: float = 1.0         # s between recorder samples
+    record: Path | None = None         # an MCAP recording of the game (rll_bt.game.watch)
+    live: int | None = None            # Foxglove WebSocket port for a live view (0: any free)
+    record_camera: float = 0.0         # camera frames taken for the recording itself, per robot and second
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:

@@ -43,6 +43,8 @@ class Recorder:
         self.period = period
         self.snapshot = snapshot          # () -> team server snapshot dict, or None
         self.rec = Recording(team=team)
+        #: ``fn(kind, data)`` for every "sample", "task" interval change and "event" (recordings, live views)
+        self.listeners: list = []
         props = ("zone", "light") if sim.profile.exploration_reports == "type+zone" else ("zone", "orientation")
         self.truth = {n: s.reported(props) for n, s in sim.stations().items() if s.team == team}
         self._next = -1e9
@@ -58,10 +60,17 @@ class Recorder:
         if cur is not None:
             cur["end"] = now
             cur["outcome"] = outcome or "CANCELLED"
+            self._emit("task", {"robot": robot, "index": len(runs) - 1, **cur})
         elif outcome is not None and runs and runs[-1]["outcome"] is None:
             runs[-1]["outcome"] = outcome
+            self._emit("task", {"robot": robot, "index": len(runs) - 1, **runs[-1]})
         if kind is not None:
             runs.append({"kind": kind, "id": task_id, "start": now, "end": None, "outcome": None})
+            self._emit("task", {"robot": robot, "index": len(runs) - 1, **runs[-1]})
+
+    def _emit(self, kind: str, data: dict) -> None:
+        for fn in self.listeners:
+            fn(kind, data)
 
     def close_tasks(self) -> None:
         for robot in list(self.rec.tasks):
@@ -69,6 +78,7 @@ class Recorder:
 
     def note(self, what: str, **data) -> None:
         self.rec.events.append({"t": round(self.sim.clock.now(), 3), "what": what, **data})
+        self._emit("event", self.rec.events[-1])
 
     def sample(self, force: bool = False) -> None:
         now = self.sim.clock.now()
@@ -83,19 +93,25 @@ class Recorder:
             rec.exploration_started = now - st.game_time
         rec.samples.append({"t": round(now, 3), "phase": st.phase, "game_time": round(st.game_time, 3),
                             "points": st.points.get(self.team, 0)})
+        out = {**rec.samples[-1], "now": now, "paths": {}, "stations": {}}
         for n in self.robots:
             p = self.sim.robot_pose(self.team, n)
             rec.paths.setdefault(n, []).append((round(now, 2), round(p.x, 3), round(p.y, 3)))
+            out["paths"][n] = rec.paths[n][-1]
         for name, s in self.sim.stations().items():
             hist = rec.stations.setdefault(name, [])
             if not hist or hist[-1][1] != s.state:
                 hist.append((round(now, 3), s.state))
+                out["stations"][name] = hist[-1]
         if rec.known_all_at is None and self.snapshot is not None and rec.exploration_started is not None:
             snap = self.snapshot()
             known = (snap or {}).get("known", {})
             if all(_matches(known.get(n), truth) for n, truth in self.truth.items()):
                 rec.known_all_at = now
                 rec.known_all_game_time = now - rec.exploration_started
+        if self.listeners:
+            self._emit("sample", {**out, "exploration_started": rec.exploration_started,
+                                  "known_all_at": rec.known_all_at, "known_all_game_time": rec.known_all_game_time})
 
     @staticmethod
     def _exploring(st) -> bool:
