@@ -152,7 +152,8 @@ def summary_lines(rep: Replay) -> list[str]:
     """What the recording holds: topics, their schemas and message counts."""
     m = rep.meta
     lines = [f"{rep.path}: {m.get('name', 'rll-bt')} recording, {m.get('profile', '?')} seed {m.get('seed', '?')}, "
-             f"{rep.end - rep.start:.1f} s of {m.get('kind', '?')} time, {sum(i['count'] for i in rep.topics.values())} "
+             f"{rep.end - rep.start:.1f} s of {m.get('kind', '?')} time, "
+             f"{sum(i['count'] for i in rep.topics.values())} "
              f"messages on {len(rep.topics)} topics" + ("" if rep.result else " (cut short: no /game/result)"), ""]
     width = max((len(t) for t in rep.topics), default=5)
     lines.append(f"{'topic':{width}}  {'messages':>8}  schema")

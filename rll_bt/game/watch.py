@@ -2,17 +2,24 @@
 
 Topics (times are the simulation clock, see :mod:`rll_bt.watch.sink`):
 
-| topic | schema | what |
-|---|---|---|
-| ``/refbox/<channel>/<Type>`` | the refbox's protobuf | every message the refbox sends (``public``, ``cyan``, ``magenta``, ``refbox`` the control stream) |
-| ``/robotN/<channel>/<Type>``, ``/teamserver/<channel>/<Type>`` | protobuf | every message a robot or the team server sends; ``link`` is the team-server link (AgentTask protocol) |
-| ``/robotN/pose``, ``/robotN/true_pose`` | ``foxglove.PoseInFrame`` | the agent's estimate; the simulation's ground truth |
-| ``/robotN/scan``, ``/robotN/camera``, ``/robotN/detections`` | ``foxglove.LaserScan``, ``foxglove.CompressedImage``, JSON | what the robot's skills read (:mod:`rll_bt.watch.robot`) |
-| ``/robotN/tree``, ``/robotN/tree/structure`` | JSON | every tick of the task trees |
-| ``/field`` | ``foxglove.SceneUpdate`` | the field, zones and stations (coloured by team, labelled with their state) |
-| ``/game/sample`` | JSON | the recorder's sample: phase, game time, points, true positions, station state changes |
-| ``/game/task``, ``/game/event`` | JSON | robot task intervals; faults and notes |
-| ``/game/stations``, ``/game/result`` | JSON | the stations as they really are; the end of the game and its summary |
+- ``/refbox/<channel>/<Type>`` (the refbox's protobuf): every message the
+  refbox sends (``public``, ``cyan``, ``magenta``, ``refbox`` the control stream);
+- ``/robotN/<channel>/<Type>``, ``/teamserver/<channel>/<Type>`` (protobuf):
+  every message a robot or the team server sends; ``link`` is the
+  team-server link (AgentTask protocol);
+- ``/robotN/pose``, ``/robotN/true_pose`` (``foxglove.PoseInFrame``): the
+  agent's estimate; the simulation's ground truth;
+- ``/robotN/scan``, ``/robotN/camera``, ``/robotN/detections``
+  (``foxglove.LaserScan``, ``foxglove.CompressedImage``, JSON): what the
+  robot's skills read (:mod:`rll_bt.watch.robot`);
+- ``/robotN/tree``, ``/robotN/tree/structure`` (JSON): every tick of the task trees;
+- ``/field`` (``foxglove.SceneUpdate``): the field, zones and stations
+  (coloured by team, labelled with their state);
+- ``/game/sample`` (JSON): the recorder's sample: phase, game time, points,
+  true positions, station state changes;
+- ``/game/task``, ``/game/event`` (JSON): robot task intervals; faults and notes;
+- ``/game/stations``, ``/game/result`` (JSON): the stations as they really
+  are; the end of the game and its summary.
 
 ``rll-bt replay`` rebuilds the game's recording from the ``/game/...``
 topics (:mod:`.replay`) and draws the report again.

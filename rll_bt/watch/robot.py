@@ -108,7 +108,7 @@ class RobotWatch:
         self.backend: Backend | None = None
         self._period = {"pose": _period(pose_hz), "scan": _period(scan_hz), "camera": _period(camera_hz),
                         "force": _period(force_camera_hz), "detections": _period(detections_hz)}
-        self._next = {k: -1e18 for k in self._period}
+        self._next = dict.fromkeys(self._period, -1e+18)
         self._last_scan_stamp = None
         self._tree = None
         self._run = None
@@ -165,7 +165,7 @@ class RobotWatch:
         if self.backend is not None and self._due("force", now):
             try:
                 img = self.backend.camera_image()
-            except Exception:    # noqa: BLE001 - no camera: nothing to record
+            except Exception:
                 self._period["force"] = None
                 return
             if img is not None:

@@ -144,7 +144,8 @@ class Watch:
         m = self._m
         ns = self.stamp(t)
         msg = m.PoseInFrame(timestamp=self._ts(ns), frame_id=frame,
-                            pose=m.Pose(position=m.Vector3(x=pose.x, y=pose.y, z=z), orientation=quaternion(pose.theta)))
+                            pose=m.Pose(position=m.Vector3(x=pose.x, y=pose.y, z=z),
+                                        orientation=quaternion(pose.theta)))
         self._log(topic, self._well_known(topic, "PoseInFrame"), msg, ns, pose)
 
     def scan(self, topic: str, scan, robot: Pose2D | None, t: float | None = None, frame: str = FIELD) -> None:

@@ -65,7 +65,7 @@ class LiveClient(threading.Thread):
                         self.first.setdefault(topic, bytes(m[13:]))
         except ConnectionClosedOK:             # the server stopped with the game
             pass
-        except Exception as exc:  # noqa: BLE001 - reported by the test
+        except Exception as exc:
             self.error = exc
 
 
