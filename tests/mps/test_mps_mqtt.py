@@ -6,13 +6,11 @@ from __future__ import annotations
 
 import threading
 
+import paho.mqtt.client as paho
 import pytest
-
-from backends.sim.mps import Broker, MqttMachines
-
 from mps_testkit import RunningWorld, wait_for
 
-paho = pytest.importorskip("paho.mqtt.client")
+from backends.sim.mps import Broker, MqttMachines
 
 
 class FakeRefbox:

@@ -43,7 +43,22 @@ _EXPORTS = {
     "Broker": "broker", "BrokerError": "broker",
 }
 
-__all__ = sorted(_EXPORTS)
+__all__ = [
+    "DEFAULT_STORAGE",
+    "Broker",
+    "BrokerError",
+    "Command",
+    "CommandError",
+    "Durations",
+    "Feedback",
+    "MachineHall",
+    "MpsMachine",
+    "MqttMachines",
+    "OpcuaMachines",
+    "Product",
+    "from_opcua",
+    "parse_mqtt",
+]
 
 
 def __getattr__(name: str):

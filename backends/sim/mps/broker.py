@@ -17,6 +17,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from typing import Self
 
 
 class BrokerError(RuntimeError):
@@ -51,7 +52,7 @@ class Broker:
         if reachable(host, self.port):
             raise BrokerError(f"{host}:{self.port} is already in use")
         self._dir = tempfile.TemporaryDirectory(prefix="rll-bt-broker-")
-        self._log = open(os.path.join(self._dir.name, "broker.log"), "wb")
+        self._log = open(os.path.join(self._dir.name, "broker.log"), "wb")  # noqa: SIM115 (closed by stop)
         self.proc = subprocess.Popen(self._command(), stdout=self._log, stderr=subprocess.STDOUT,
                                      stdin=subprocess.DEVNULL)
         deadline = time.monotonic() + timeout
@@ -77,8 +78,9 @@ class Broker:
                     f"    bind: {self.host}:{self.port}\n"
                     "plugins:\n  amqtt.plugins.authentication.AnonymousAuthPlugin:\n"
                     "    allow_anonymous: true\n")
-        return [sys.executable, "-c", "import sys; from amqtt.scripts.broker_script import main; "
-                "sys.argv[0] = 'amqtt'; sys.exit(main())", "-c", conf]
+        script = ("import sys; from amqtt.scripts.broker_script import main; "
+                  "sys.argv[0] = 'amqtt'; sys.exit(main())")
+        return [sys.executable, "-c", script, "-c", conf]
 
     def log(self) -> str:
         try:
@@ -103,7 +105,7 @@ class Broker:
         self._log.close()
         self._dir.cleanup()
 
-    def __enter__(self) -> "Broker":
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc) -> None:

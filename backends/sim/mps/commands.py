@@ -220,4 +220,4 @@ def from_opcua(station_type: str, action_id: int, data0: int, data1: int) -> Com
     raise CommandError(f"action id {action_id} is no command of a {station_type}")
 
 
-__all__ = ["Command", "CommandError", "parse_mqtt", "from_opcua", "STEPS", "TYPE_BASE", "TYPE_CODE"]
+__all__ = ["STEPS", "TYPE_BASE", "TYPE_CODE", "Command", "CommandError", "from_opcua", "parse_mqtt"]

@@ -10,7 +10,7 @@ world's thread; a front end queues it for its own thread).
 from __future__ import annotations
 
 import queue
-from typing import Callable, Iterable
+from collections.abc import Callable, Iterable
 
 from .commands import Command
 from .machine import Durations, Feedback, MpsMachine, Product
@@ -101,4 +101,4 @@ class MachineHall:
             m.update(now)
 
 
-__all__ = ["MachineHall", "DEFAULT_STORAGE", "default_feeders"]
+__all__ = ["DEFAULT_STORAGE", "MachineHall", "default_feeders"]

@@ -22,8 +22,8 @@ WP/NoWP, ``Status/Ready``), ``slide`` (``SlideCount``/``SlideCnt``) and
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 from .commands import Command
 
@@ -44,7 +44,7 @@ class Durations:
     storage: float = 17.5
     deliver: tuple[float, float, float] = (3.746, 4.746, 3.983)
 
-    def scaled(self, factor: float) -> "Durations":
+    def scaled(self, factor: float) -> Durations:
         """Every duration times ``factor`` (but at least 0)."""
         f = max(0.0, float(factor))
         return Durations(self.min_operation * f, self.belt_in_to_mid * f, self.belt_mid_to_out * f,
@@ -350,4 +350,4 @@ class MpsMachine:
         self._record(now, f"workpiece {wp.id} retrieved from {where}", workpiece=wp)
 
 
-__all__ = ["MpsMachine", "Durations", "Feedback", "Product", "Record", "BASES"]
+__all__ = ["BASES", "Durations", "Feedback", "MpsMachine", "Product", "Record"]

@@ -17,6 +17,7 @@ import logging
 import queue
 import threading
 import time
+from typing import Self
 
 from .commands import CommandError, parse_mqtt
 from .machine import Feedback
@@ -64,7 +65,7 @@ class MqttMachines:
         self._sender = threading.Thread(target=self._send_loop, name="mps-mqtt-out", daemon=True)
 
     # -- life -----------------------------------------------------------------
-    def start(self, timeout: float = 10.0) -> "MqttMachines":
+    def start(self, timeout: float = 10.0) -> MqttMachines:
         try:
             self._client.connect(self.host, self.port, keepalive=60)
         except OSError as e:
@@ -93,7 +94,7 @@ class MqttMachines:
         self._client.disconnect()
         self._client.loop_stop()
 
-    def __enter__(self) -> "MqttMachines":
+    def __enter__(self) -> Self:
         return self.start()
 
     def __exit__(self, *exc) -> None:
@@ -146,4 +147,4 @@ class MqttMachines:
             self._last[machine] = time.monotonic()
 
 
-__all__ = ["MqttMachines", "feedback_message", "PREFIX"]
+__all__ = ["PREFIX", "MqttMachines", "feedback_message"]
