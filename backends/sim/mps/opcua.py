@@ -3,8 +3,9 @@
 What the refbox's OPC-UA back-end (``src/libs/mps_comm/opcua/`` of the
 refbox, read, not copied) expects of an MPS PLC:
 
-- an endpoint ``opc.tcp://<ip>:<port>/`` without security; the league's
-  simulator serves each station on its own port, 4840 (C-BS) upwards;
+- an endpoint ``opc.tcp://<ip>:<port>/`` without security; the refbox's
+  station config and the league's simulator give each station its own
+  port, 4840 (C-BS) .. 4846 (C-SS) and 4850 (M-BS) .. 4856 (M-SS);
 - two register blocks under ``Objects/2:DeviceSet/4:CPX-E-CEC-C1-PN/
   4:Resources/4:Application/3:GlobalVars/4:G`` (``device="codesys"``: the
   CODESYS soft-PLC's ``4:CODESYS Control Win V3/3:Resources/...``, which the
@@ -40,9 +41,10 @@ from .machine import Feedback
 
 log = logging.getLogger(__name__)
 
-#: the league simulator's ports: C-BS first, in this order, then the M- stations
-PORT_ORDER = ("C-BS", "C-CS1", "C-CS2", "C-RS1", "C-RS2", "C-DS", "C-SS",
-              "M-BS", "M-CS1", "M-CS2", "M-RS1", "M-RS2", "M-DS", "M-SS")
+#: port offsets as the refbox's default station config and the league's
+#: simulator: cyan 4840 (C-BS) .. 4846 (C-SS), magenta 4850 (M-BS) .. 4856
+PORT_ORDER = ("BS", "CS1", "CS2", "RS1", "RS2", "DS", "SS")
+MAGENTA_OFFSET = 10
 DEVICES = {"plc": ("CPX-E-CEC-C1-PN", 4), "codesys": ("CODESYS Control Win V3", 3)}
 NAMESPACES = ("http://opcfoundation.org/UA/DI/",               # 2: DeviceSet
               "http://rll-bt/mps/GlobalVars",                   # 3: GlobalVars (codesys: Resources)
@@ -50,9 +52,15 @@ NAMESPACES = ("http://opcfoundation.org/UA/DI/",               # 2: DeviceSet
 STATUS_BITS = ("Busy", "Ready", "Error", "Enable", "unused0", "unused1", "inSensor", "outSensor")
 
 
-def default_ports(machines, base: int = 4840) -> dict[str, int]:
-    """Port per machine: ``base`` + its place in the league simulator's order."""
-    return {m: base + PORT_ORDER.index(m) if m in PORT_ORDER else None for m in machines}
+def default_ports(machines, base: int = 4840) -> dict[str, int | None]:
+    """Port per machine: ``base`` + its place in :data:`PORT_ORDER` (+10
+    for magenta): C-BS 4840, C-SS 4846, M-BS 4850, M-SS 4856."""
+    ports: dict[str, int | None] = {}
+    for m in machines:
+        team, _, kind = m.partition("-")
+        ports[m] = (base + PORT_ORDER.index(kind) + (MAGENTA_OFFSET if team == "M" else 0)
+                    if kind in PORT_ORDER and team in ("C", "M") else None)
+    return ports
 
 
 @dataclass
