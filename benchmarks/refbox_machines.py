@@ -1,0 +1,276 @@
+"""Manual check: a REAL refbox drives the PyBullet world's stations over MQTT.
+
+Not part of the suite (the refbox cannot be shipped with the project); run
+it by hand against a refbox binary you built yourself (see
+docs/league.md, "Playing against the real referee box")::
+
+    python benchmarks/refbox_machines.py --refbox /path/to/rcll-refbox/bin/refbox
+
+It starts an MQTT broker (amqtt) and the world's cyan stations on it,
+starts the refbox with every cyan station ``connection: mqtt`` (magenta stays
+mockup), names the team, goes to PRODUCTION, reports the machines where the
+refbox placed them (read from the refbox's own field printout), and then plays
+the robot's hand in the world: it puts workpieces on inputs and slides and
+takes products off outputs while the refbox prepares each station type
+(PrepareMachine on the encrypted team channel).  For each step it prints the
+machine states the refbox announced (MachineInfo), the seconds from the
+prepare to READY-AT-OUTPUT (or to the delivery/store being done) and what
+the world shows, and exits 0 only when every step went as the refbox's
+rules want.  Durations are the Festo ones (``--speed`` scales them).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+TEAM, KEY = "Carologistics", "randomkey"
+CYAN_STATIONS = ("C-BS", "C-CS1", "C-CS2", "C-RS1", "C-RS2", "C-DS", "C-SS")
+TYPES = {"BS": "BS", "CS1": "CS", "CS2": "CS", "RS1": "RS", "RS2": "RS", "DS": "DS", "SS": "SS"}
+
+
+def custom_cfg(broker_port: int, exploration_time: int) -> str:
+    lines = ["%YAML 1.2", "%TAG ! tag:fawkesrobotics.org,cfg/", "---", "# rll-bt check", "---",
+             "llsfrb:", "  game:", f"    teams: [{TEAM}]", "    crypto-keys:", f"      {TEAM}: {KEY}",
+             "    random-machine-down-times: false", f"    exploration-time: {exploration_time}",
+             "  mps:", "    stations:"]
+    for name in CYAN_STATIONS:
+        lines += [f"      {name}:", "        active: true", f"        type: {TYPES[name[2:]]}",
+                  "        connection: mqtt", "        host: 127.0.0.1", f"        port: !tcp-port {broker_port}"]
+    return "\n".join(lines) + "\n"
+
+
+class WorldThread:
+    """The world stepped on the wall clock; ``call`` runs a function on its thread."""
+
+    def __init__(self, world, hall, dt=0.02):
+        self.world, self.hall, self.dt = world, hall, dt
+        self._calls, self._lock, self._stop = [], threading.Lock(), threading.Event()
+        self._thread = threading.Thread(target=self._loop, daemon=True)
+        self._thread.start()
+
+    def _loop(self):
+        t0, w0 = time.monotonic(), self.world.time
+        while not self._stop.is_set():
+            with self._lock:
+                calls, self._calls = self._calls, []
+            for fn, box, done in calls:
+                try:
+                    box.append(fn())
+                except Exception as e:  # noqa: BLE001 (handed back)
+                    box.append(e)
+                done.set()
+            self.hall.update()
+            ahead = (self.world.time - w0) - (time.monotonic() - t0)
+            if ahead > 0:
+                time.sleep(ahead)
+            self.world.step(self.dt)
+
+    def call(self, fn):
+        box, done = [], threading.Event()
+        with self._lock:
+            self._calls.append((fn, box, done))
+        done.wait(10)
+        if isinstance(box[0], Exception):
+            raise box[0]
+        return box[0]
+
+    def stop(self):
+        self._stop.set()
+        self._thread.join(5)
+
+
+class Team:
+    """The team's side of the refbox: control over TCP 4444, reports and
+    prepares on the cyan channel, MachineInfo states collected."""
+
+    def __init__(self, host="127.0.0.1"):
+        from rll_bt import msgs
+        from rll_bt.comm import MessageRegistry, StreamClient, UdpPeer
+        self.ms = msgs.message_set("rcll2025")
+        reg = MessageRegistry.from_message_set(self.ms)
+        self.ctl = StreamClient(host, 4444, registry=reg, channel="control")
+        self.peer = UdpPeer(host, 4446, 4441, registry=reg, channel="team", key=KEY)
+        self.states: dict[str, list[tuple[float, str]]] = {}
+        self.points = 0
+        self.field: dict[str, tuple[str, int]] = {}
+        self._stop = threading.Event()
+        self._t = threading.Thread(target=self._listen, daemon=True)
+        self._t.start()
+
+    def _listen(self):
+        while not self._stop.is_set():
+            self.peer.wait(0.1)
+            for r in self.peer.receive():
+                if r.type_name.endswith("MachineInfo"):
+                    for m in r.msg.machines:
+                        if m.HasField("zone"):
+                            self.field[m.name] = (self.ms.enum("Zone").Name(m.zone), m.rotation)
+                        seq = self.states.setdefault(m.name, [])
+                        if not seq or seq[-1][1] != m.state:
+                            seq.append((time.monotonic(), m.state))
+            self.ctl.wait(0.0)
+            for r in self.ctl.receive():
+                if r.type_name.endswith("GameState"):
+                    self.points = r.msg.points_cyan
+
+    def control(self, name, **fields):
+        msg = self.ms.get(name)(**fields)
+        assert self.ctl.wait_connected(20), "refbox TCP 4444 not reachable"
+        assert self.ctl.send(msg), f"{name} not sent"
+
+    def send(self, name, **fields):
+        self.peer.send(self.ms.get(name)(**fields))
+
+    def wait_state(self, machine, state, since, timeout=60.0):
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            for t, s in self.states.get(machine, []):
+                if t >= since and s == state:
+                    return t
+            time.sleep(0.05)
+        return None
+
+    def close(self):
+        self._stop.set()
+        self._t.join(2)
+        self.peer.close()
+        self.ctl.close()
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--refbox", required=True, help="path of the refbox binary (bin/refbox)")
+    ap.add_argument("--seed", type=int, default=1, help="world seed (default 1)")
+    ap.add_argument("--speed", type=float, default=1.0, help="station durations times this (default 1)")
+    args = ap.parse_args(argv)
+    from backends.sim import World
+    from backends.sim.mps import Broker, Durations, MachineHall, MqttMachines
+
+    run_dir = tempfile.mkdtemp(prefix="rll-bt-refbox-check-")
+    broker = Broker("amqtt")
+    world = World("rcll2025", seed=args.seed)
+    hall = MachineHall(world, CYAN_STATIONS, durations=Durations().scaled(args.speed))
+    served = MqttMachines(hall, broker.host, broker.port).start()
+    wt = WorldThread(world, hall)
+    cfg = os.path.join(run_dir, "check.yaml")
+    with open(cfg, "w") as f:
+        f.write(custom_cfg(broker.port, exploration_time=5))
+    out = open(os.path.join(run_dir, "refbox.out"), "w")  # noqa: SIM115 (closed below)
+    refbox = subprocess.Popen([args.refbox, "--cfg-custom", cfg], cwd=run_dir, stdout=out,
+                              stderr=subprocess.STDOUT)
+    print(f"refbox pid {refbox.pid}, logs in {run_dir}", file=sys.stderr)
+    team = None
+    results = []
+    try:
+        team = Team()
+        time.sleep(8)
+        # one at a time: RUNNING before the phase would start a training game
+        for name, fields in (("SetTeamName", {"team_name": TEAM, "team_color": "CYAN"}),
+                             ("SetGamePhase", {"phase": "SETUP"}), ("SetGameState", {"state": "RUNNING"})):
+            team.control(name, **fields)
+            time.sleep(0.5)
+        # the field is generated in SETUP (the solver is checked only while the
+        # previous phase is PRE_GAME); MachineInfo flows once it is done
+        deadline = time.monotonic() + 180
+        while not team.states and time.monotonic() < deadline:
+            time.sleep(0.5)
+        team.control("SetGamePhase", phase="PRODUCTION")
+        field = _field(team)
+        print("refbox field: " + ", ".join(f"{m} {z}/{r}" for m, (z, r) in sorted(field.items())),
+              file=sys.stderr)
+        entries = [{"name": m, "type": TYPES[m[2:]], "zone": z, "rotation": r}
+                   for m, (z, r) in field.items() if m.startswith("C-")]
+        for _ in range(3):
+            team.send("MachineReport", team_color="CYAN", machines=entries)
+            time.sleep(1)
+        results = _play(team, wt, world, hall)
+    finally:
+        if team:
+            team.close()
+        refbox.terminate()
+        try:
+            refbox.wait(10)
+        except subprocess.TimeoutExpired:
+            refbox.kill()
+        out.close()
+        wt.stop()
+        served.stop()
+        broker.stop()
+        world.close()
+    print(f"\n{'step':34} {'ok':3} {'s':>6}  refbox states / world")
+    for step, ok, secs, text in results:
+        print(f"{step:34} {'yes' if ok else 'NO':3} {secs:6.1f}  {text}")
+    print(f"cyan points: {team.points if team else '?'}; MQTT refusals: {len(served.errors)}")
+    return 0 if results and all(ok for _, ok, _, _ in results) else 1
+
+
+def _field(team, timeout=180.0) -> dict[str, tuple[str, int]]:
+    """Where the refbox placed the cyan machines: its MachineInfo carries the
+    ground truth once the exploration period is over."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if len(team.field) >= 7:
+            return dict(team.field)
+        time.sleep(0.5)
+    raise RuntimeError(f"the refbox sent no field (MachineInfo zones: {team.field})")
+
+
+def _play(team, wt, world, hall):
+    results = []
+
+    def step(label, machine, final, prepare, before=None, after_ready=None, check=None, timeout=60):
+        if before:
+            wt.call(before)
+        t0 = time.monotonic()
+        team.send("PrepareMachine", team_color="CYAN", machine=machine, **prepare)
+        t = team.wait_state(machine, final, t0, timeout)
+        ok = t is not None
+        result = wt.call(check) if check and ok else ""
+        if ok and after_ready:
+            wt.call(after_ready)
+        idle = team.wait_state(machine, "IDLE", (t or t0) + 0.01, 30) if ok else None
+        seen = [s for tt, s in team.states.get(machine, []) if tt >= t0]
+        ok = ok and idle is not None and (not check or bool(result))
+        results.append((label, ok, (t - t0) if t else float("nan"), f"{'>'.join(seen)} | {result}"))
+        print(results[-1], file=sys.stderr)
+
+    take = lambda m, s: (lambda: world.remove_workpiece(m, s))            # noqa: E731
+    put = lambda m, s, *a, **k: (lambda: world.spawn_workpiece(m, s, *a, **k))   # noqa: E731
+    step("BS dispense BASE_RED to output", "C-BS", "READY-AT-OUTPUT",
+         {"instruction_bs": {"side": "OUTPUT", "color": "BASE_RED"}},
+         after_ready=take("C-BS", "output"),
+         check=lambda: (lambda wp: wp and f"output {wp.base}")(world.workpiece_at("C-BS", "output")))
+    step("CS1 retrieve cap", "C-CS1", "READY-AT-OUTPUT",
+         {"instruction_cs": {"operation": "RETRIEVE_CAP"}},
+         before=put("C-CS1", "input", "BASE_BLACK", cap="CAP_BLACK"),
+         after_ready=take("C-CS1", "output"),
+         check=lambda: hall["C-CS1"].cap_buffer)
+    step("CS1 mount cap", "C-CS1", "READY-AT-OUTPUT",
+         {"instruction_cs": {"operation": "MOUNT_CAP"}},
+         before=put("C-CS1", "input", "BASE_RED"), after_ready=take("C-CS1", "output"),
+         check=lambda: (lambda wp: wp and wp.cap and f"output {wp.base}+{wp.cap}")(world.workpiece_at("C-CS1", "output")))
+    for _ in range(2):
+        wt.call(put("C-RS1", "slide", "BASE_RED"))
+        time.sleep(0.5)
+    step("RS1 mount RING_ORANGE (feeder 1)", "C-RS1", "READY-AT-OUTPUT",
+         {"instruction_rs": {"ring_color": "RING_ORANGE"}},
+         before=put("C-RS1", "input", "BASE_SILVER"), after_ready=take("C-RS1", "output"),
+         check=lambda: (lambda wp: wp and wp.rings and f"output rings {wp.rings}")(world.workpiece_at("C-RS1", "output")))
+    step("DS deliver (order 0, consume)", "C-DS", "WAIT-IDLE",
+         {"instruction_ds": {"order_id": 0}},
+         before=put("C-DS", "input", "BASE_RED", cap="CAP_BLACK"),
+         check=lambda: hall["C-DS"].delivered and f"delivered to slot {hall['C-DS'].delivered[-1].data['slot']}")
+    step("SS retrieve shelf 0 slot 1", "C-SS", "READY-AT-OUTPUT",
+         {"instruction_ss": {"operation": "RETRIEVE", "shelf": 0, "slot": 1}},
+         after_ready=take("C-SS", "output"),
+         check=lambda: "retrieved" if any("retrieved" in r.text for r in hall["C-SS"].records) else "")
+    return results
+
+
+if __name__ == "__main__":
+    sys.exit(main())
