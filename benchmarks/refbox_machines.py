@@ -61,7 +61,7 @@ class WorldThread:
             for fn, box, done in calls:
                 try:
                     box.append(fn())
-                except Exception as e:  # noqa: BLE001 (handed back)
+                except Exception as e:
                     box.append(e)
                 done.set()
             self.hall.update()
@@ -241,10 +241,17 @@ def _play(team, wt, world, hall):
 
     take = lambda m, s: (lambda: world.remove_workpiece(m, s))            # noqa: E731
     put = lambda m, s, *a, **k: (lambda: world.spawn_workpiece(m, s, *a, **k))   # noqa: E731
+    def output(machine, describe):
+        """A check: the workpiece at ``machine``'s output described, or "" when there is none."""
+        def check():
+            wp = world.workpiece_at(machine, "output")
+            return describe(wp) if wp else ""
+        return check
+
     step("BS dispense BASE_RED to output", "C-BS", "READY-AT-OUTPUT",
          {"instruction_bs": {"side": "OUTPUT", "color": "BASE_RED"}},
          after_ready=take("C-BS", "output"),
-         check=lambda: (lambda wp: wp and f"output {wp.base}")(world.workpiece_at("C-BS", "output")))
+         check=output("C-BS", lambda wp: f"output {wp.base}"))
     step("CS1 retrieve cap", "C-CS1", "READY-AT-OUTPUT",
          {"instruction_cs": {"operation": "RETRIEVE_CAP"}},
          before=put("C-CS1", "input", "BASE_BLACK", cap="CAP_BLACK"),
@@ -253,14 +260,14 @@ def _play(team, wt, world, hall):
     step("CS1 mount cap", "C-CS1", "READY-AT-OUTPUT",
          {"instruction_cs": {"operation": "MOUNT_CAP"}},
          before=put("C-CS1", "input", "BASE_RED"), after_ready=take("C-CS1", "output"),
-         check=lambda: (lambda wp: wp and wp.cap and f"output {wp.base}+{wp.cap}")(world.workpiece_at("C-CS1", "output")))
+         check=output("C-CS1", lambda wp: wp.cap and f"output {wp.base}+{wp.cap}"))
     for _ in range(2):
         wt.call(put("C-RS1", "slide", "BASE_RED"))
         time.sleep(0.5)
     step("RS1 mount RING_ORANGE (feeder 1)", "C-RS1", "READY-AT-OUTPUT",
          {"instruction_rs": {"ring_color": "RING_ORANGE"}},
          before=put("C-RS1", "input", "BASE_SILVER"), after_ready=take("C-RS1", "output"),
-         check=lambda: (lambda wp: wp and wp.rings and f"output rings {wp.rings}")(world.workpiece_at("C-RS1", "output")))
+         check=output("C-RS1", lambda wp: wp.rings and f"output rings {wp.rings}"))
     step("DS deliver (order 0, consume)", "C-DS", "WAIT-IDLE",
          {"instruction_ds": {"order_id": 0}},
          before=put("C-DS", "input", "BASE_RED", cap="CAP_BLACK"),

@@ -106,7 +106,7 @@ def run_stations(args) -> int:
 
 
 def _loop(world, hall, args) -> int:
-    printed = {m: 0 for m in hall.machines}
+    printed = dict.fromkeys(hall.machines, 0)
     t0, w0 = time.monotonic(), world.time
     while args.duration is None or world.time - w0 < args.duration:
         hall.update()

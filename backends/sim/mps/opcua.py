@@ -158,7 +158,7 @@ class OpcuaMachines:
                 await self._build(st)
                 await st.server.start()
                 started.append(st)
-        except BaseException as e:     # noqa: BLE001 (handed to start())
+        except BaseException as e:
             self._failure = e if isinstance(e, OSError) else OSError(f"OPC-UA server: {e}")
             self._ready.set()
             for st in started:

@@ -11,10 +11,10 @@ import threading
 import pytest
 from asyncua import ua
 from asyncua.sync import Client
-from mps_testkit import RunningWorld, wait_for
 
 from backends.sim.mps import OpcuaMachines
 from backends.sim.mps.broker import free_port
+from tests.support.mps_world import RunningWorld, wait_for
 
 PLC_PATH = ["0:Objects", "2:DeviceSet", "4:CPX-E-CEC-C1-PN", "4:Resources", "4:Application",
             "3:GlobalVars", "4:G"]

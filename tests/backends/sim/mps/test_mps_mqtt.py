@@ -8,9 +8,9 @@ import threading
 
 import paho.mqtt.client as paho
 import pytest
-from mps_testkit import RunningWorld, wait_for
 
 from backends.sim.mps import Broker, MqttMachines
+from tests.support.mps_world import RunningWorld, wait_for
 
 
 class FakeRefbox:

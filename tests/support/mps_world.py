@@ -40,7 +40,7 @@ class RunningWorld:
             for fn, box, done in calls:
                 try:
                     box.append(("ok", fn()))
-                except Exception as e:  # noqa: BLE001 (handed back to the caller)
+                except Exception as e:
                     box.append(("err", e))
                 done.set()
             self.hall.update()
