@@ -175,10 +175,8 @@ def main(argv=None) -> int:
             team.control(name, **fields)
             time.sleep(0.5)
         # the field is generated in SETUP (the solver is checked only while the
-        # previous phase is PRE_GAME); MachineInfo flows once it is done
-        deadline = time.monotonic() + 180
-        while not team.states and time.monotonic() < deadline:
-            time.sleep(0.5)
+        # previous phase is PRE_GAME); the refbox logs when it is done
+        _wait_log(os.path.join(run_dir, "refbox.out"), "the machine generation is finished", 180)
         team.control("SetGamePhase", phase="PRODUCTION")
         field = _field(team)
         print("refbox field: " + ", ".join(f"{m} {z}/{r}" for m, (z, r) in sorted(field.items())),
@@ -207,6 +205,16 @@ def main(argv=None) -> int:
         print(f"{step:34} {'yes' if ok else 'NO':3} {secs:6.1f}  {text}")
     print(f"cyan points: {team.points if team else '?'}; MQTT refusals: {len(served.errors)}")
     return 0 if results and all(ok for _, ok, _, _ in results) else 1
+
+
+def _wait_log(path: str, text: str, timeout: float) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        with open(path, errors="replace") as f:
+            if text in f.read():
+                return
+        time.sleep(0.5)
+    raise RuntimeError(f"the refbox did not log {text!r} within {timeout:.0f} s")
 
 
 def _field(team, timeout=180.0) -> dict[str, tuple[str, int]]:
