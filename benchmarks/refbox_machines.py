@@ -33,7 +33,7 @@ CYAN_STATIONS = ("C-BS", "C-CS1", "C-CS2", "C-RS1", "C-RS2", "C-DS", "C-SS")
 TYPES = {"BS": "BS", "CS1": "CS", "CS2": "CS", "RS1": "RS", "RS2": "RS", "DS": "DS", "SS": "SS"}
 
 
-def custom_cfg(broker_port: int, exploration_time: int) -> str:
+def custom_cfg(broker_port: int, exploration_time: int, port_offset: int = 0) -> str:
     lines = ["%YAML 1.2", "%TAG ! tag:fawkesrobotics.org,cfg/", "---", "# rll-bt check", "---",
              "llsfrb:", "  game:", f"    teams: [{TEAM}]", "    crypto-keys:", f"      {TEAM}: {KEY}",
              "    random-machine-down-times: false", f"    exploration-time: {exploration_time}",
@@ -41,7 +41,39 @@ def custom_cfg(broker_port: int, exploration_time: int) -> str:
     for name in CYAN_STATIONS:
         lines += [f"      {name}:", "        active: true", f"        type: {TYPES[name[2:]]}",
                   "        connection: mqtt", "        host: 127.0.0.1", f"        port: !tcp-port {broker_port}"]
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n" + comm_cfg(port_offset)
+
+
+def comm_cfg(offset: int) -> str:
+    """``llsfrb/comm`` keys moving every refbox port by ``offset`` (0: the defaults), so a
+    check can run beside another refbox on the same machine."""
+    if not offset:
+        return ""
+    text = f"  comm:\n    server-port: !tcp-port {4444 + offset}\n"
+    for peer, send, recv in (("public", 4444, 4445), ("cyan", 4441, 4446), ("magenta", 4442, 4447)):
+        text += (f"    {peer}-peer: {{host: !ipv4 127.0.0.1, send-port: !udp-port {send + offset}, "
+                 f"recv-port: !udp-port {recv + offset}}}\n")
+    return text
+
+
+def main_cfg_args(refbox: str, run_dir: str, offset: int) -> list[str]:
+    """``--cfg-main FILE`` moving the websocket port by ``offset`` (the refbox takes
+    that port from its main config only, not from --cfg-custom)."""
+    if not offset:
+        return []
+    src = os.path.join(os.path.dirname(os.path.realpath(refbox)), "..", "cfg", "main", "default_main.yaml")
+    with open(src) as f:
+        text = f.read()
+    dst = os.path.join(run_dir, "main.yaml")
+    with open(dst, "w") as f:
+        f.write(text.replace("port: 1234", f"port: {1234 + offset}"))
+    return ["--cfg-main", dst]
+
+
+def port_free(port: int) -> bool:
+    import socket
+    with socket.socket() as s:
+        return s.connect_ex(("127.0.0.1", port)) != 0
 
 
 class WorldThread:
@@ -88,13 +120,13 @@ class Team:
     """The team's side of the refbox: control over TCP 4444, reports and
     prepares on the cyan channel, MachineInfo states collected."""
 
-    def __init__(self, host="127.0.0.1"):
+    def __init__(self, host="127.0.0.1", offset=0):
         from rll_bt import msgs
         from rll_bt.comm import MessageRegistry, StreamClient, UdpPeer
         self.ms = msgs.message_set("rcll2025")
         reg = MessageRegistry.from_message_set(self.ms)
-        self.ctl = StreamClient(host, 4444, registry=reg, channel="control")
-        self.peer = UdpPeer(host, 4446, 4441, registry=reg, channel="team", key=KEY)
+        self.ctl = StreamClient(host, 4444 + offset, registry=reg, channel="control")
+        self.peer = UdpPeer(host, 4446 + offset, 4441 + offset, registry=reg, channel="team", key=KEY)
         self.states: dict[str, list[tuple[float, str]]] = {}
         self.points = 0
         self.field: dict[str, tuple[str, int]] = {}
@@ -147,10 +179,15 @@ def main(argv=None) -> int:
     ap.add_argument("--refbox", required=True, help="path of the refbox binary (bin/refbox)")
     ap.add_argument("--seed", type=int, default=1, help="world seed (default 1)")
     ap.add_argument("--speed", type=float, default=1.0, help="station durations times this (default 1)")
+    ap.add_argument("--port-offset", type=int, default=0,
+                    help="move every refbox port by N (TCP 4444+N ...), to run beside another refbox")
     args = ap.parse_args(argv)
     from backends.sim import World
     from backends.sim.mps import Broker, Durations, MachineHall, MqttMachines
 
+    if not port_free(4444 + args.port_offset):
+        print(f"TCP {4444 + args.port_offset} is taken (another refbox?): use --port-offset", file=sys.stderr)
+        return 3
     run_dir = tempfile.mkdtemp(prefix="rll-bt-refbox-check-")
     broker = Broker("amqtt")
     world = World("rcll2025", seed=args.seed)
@@ -159,15 +196,16 @@ def main(argv=None) -> int:
     wt = WorldThread(world, hall)
     cfg = os.path.join(run_dir, "check.yaml")
     with open(cfg, "w") as f:
-        f.write(custom_cfg(broker.port, exploration_time=5))
+        f.write(custom_cfg(broker.port, exploration_time=5, port_offset=args.port_offset))
     out = open(os.path.join(run_dir, "refbox.out"), "w")  # noqa: SIM115 (closed below)
-    refbox = subprocess.Popen([args.refbox, "--cfg-custom", cfg], cwd=run_dir, stdout=out,
+    command = [args.refbox, *main_cfg_args(args.refbox, run_dir, args.port_offset), "--cfg-custom", cfg]
+    refbox = subprocess.Popen(command, cwd=run_dir, stdout=out,
                               stderr=subprocess.STDOUT)
     print(f"refbox pid {refbox.pid}, logs in {run_dir}", file=sys.stderr)
     team = None
     results = []
     try:
-        team = Team()
+        team = Team(offset=args.port_offset)
         time.sleep(8)
         # one at a time: RUNNING before the phase would start a training game
         for name, fields in (("SetTeamName", {"team_name": TEAM, "team_color": "CYAN"}),
