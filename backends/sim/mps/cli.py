@@ -27,6 +27,9 @@ def register(cli) -> None:
                     "and/or as Festo PLCs over OPC-UA (--opcua).  Runs until --duration or Ctrl-C.")
     p.add_argument("--profile", default="rcll2025", help="rules profile (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0, help="field layout seed (default: %(default)s)")
+    p.add_argument("--game", metavar="FILE",
+                   help="build the field of a stored game (rll-bt JSON, or a refbox archive of game reports: "
+                        "its first game); its ring stations' feeders hold the game's colours")
     p.add_argument("--machines", metavar="LIST",
                    help="comma-separated stations to serve (default: all of the world's)")
     p.add_argument("--mqtt", metavar="HOST:PORT", help="serve over MQTT through this broker")
@@ -67,10 +70,20 @@ def run_stations(args) -> int:
         profile = rules.profile(args.profile)
     except ValueError as exc:
         raise UserError(str(exc), where="--profile") from None
-    world = World(profile, seed=args.seed)
+    layout, feeders = None, None
+    if args.game:
+        from ..stored import StoredGameError, load_game
+        try:
+            game = load_game(args.game)
+        except StoredGameError as exc:
+            raise UserError(str(exc), where="--game") from None
+        if game.profile != profile.name:
+            raise UserError(f"the stored game is {game.profile}, not {profile.name}", where="--game")
+        layout, feeders = game.layout(args.seed), dict(game.ring_colors)
+    world = World(profile, seed=args.seed, layout=layout)
     machines = args.machines.split(",") if args.machines else None
     try:
-        hall = MachineHall(world, machines)
+        hall = MachineHall(world, machines, feeders=feeders)
     except KeyError as exc:
         world.close()
         raise UserError(str(exc.args[0]), where="--machines") from None
