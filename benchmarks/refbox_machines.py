@@ -6,10 +6,11 @@ docs/league.md, "Playing against the real referee box")::
 
     python benchmarks/refbox_machines.py --refbox /path/to/rcll-refbox/bin/refbox
 
-It starts an MQTT broker (amqtt) and the world's cyan stations on it,
-starts the refbox with every cyan station ``connection: mqtt`` (magenta stays
-mockup), names the team, goes to PRODUCTION, reports the machines where the
-refbox placed them (read from the refbox's own field printout), and then plays
+It starts an MQTT broker (amqtt), starts the refbox with every cyan station
+``connection: mqtt`` on it (magenta stays mockup), names the team, goes to
+PRODUCTION, builds the world with the refbox's field (the ground truth its
+MachineInfo carries after the exploration period) and serves its cyan
+stations on the broker, reports the machines, and then plays
 the robot's hand in the world: it puts workpieces on inputs and slides and
 takes products off outputs while the refbox prepares each station type
 (PrepareMachine on the encrypted team channel).  For each step it prints the
@@ -130,6 +131,7 @@ class Team:
         self.states: dict[str, list[tuple[float, str]]] = {}
         self.points = 0
         self.field: dict[str, tuple[str, int]] = {}
+        self.last_info = None
         self._stop = threading.Event()
         self._t = threading.Thread(target=self._listen, daemon=True)
         self._t.start()
@@ -139,6 +141,7 @@ class Team:
             self.peer.wait(0.1)
             for r in self.peer.receive():
                 if r.type_name.endswith("MachineInfo"):
+                    self.last_info = r.msg
                     for m in r.msg.machines:
                         if m.HasField("zone"):
                             self.field[m.name] = (self.ms.enum("Zone").Name(m.zone), m.rotation)
@@ -184,16 +187,14 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     from backends.sim import World
     from backends.sim.mps import Broker, Durations, MachineHall, MqttMachines
+    from backends.sim.stored import StoredGame
 
     if not port_free(4444 + args.port_offset):
         print(f"TCP {4444 + args.port_offset} is taken (another refbox?): use --port-offset", file=sys.stderr)
         return 3
     run_dir = tempfile.mkdtemp(prefix="rll-bt-refbox-check-")
     broker = Broker("amqtt")
-    world = World("rcll2025", seed=args.seed)
-    hall = MachineHall(world, CYAN_STATIONS, durations=Durations().scaled(args.speed))
-    served = MqttMachines(hall, broker.host, broker.port).start()
-    wt = WorldThread(world, hall)
+    world = hall = served = wt = None        # built once the refbox has told its field
     cfg = os.path.join(run_dir, "check.yaml")
     with open(cfg, "w") as f:
         f.write(custom_cfg(broker.port, exploration_time=5, port_offset=args.port_offset))
@@ -221,10 +222,22 @@ def main(argv=None) -> int:
               file=sys.stderr)
         entries = [{"name": m, "type": TYPES[m[2:]], "zone": z, "rotation": r}
                    for m, (z, r) in field.items() if m.startswith("C-")]
+        # the world takes the refbox's field: its stations where the refbox placed its machines
+        # (only the broker had to be up when the refbox started; the stations connect now)
+        game = StoredGame.from_machine_info(team.last_info)
+        world = World("rcll2025", seed=args.seed, layout=game.layout())
+        hall = MachineHall(world, CYAN_STATIONS, durations=Durations().scaled(args.speed),
+                           feeders=dict(game.ring_colors))
+        served = MqttMachines(hall, broker.host, broker.port).start()
+        wt = WorldThread(world, hall)
+        placed = {m: (world.profile.zone_name(world.station(m).zone), world.station(m).rotation)
+                  for m in CYAN_STATIONS}
+        results.append(("world field = refbox field", placed == {m: field[m] for m in CYAN_STATIONS}, 0.0,
+                        ", ".join(f"{m} {z}/{r}" for m, (z, r) in sorted(placed.items()))))
         for _ in range(3):
             team.send("MachineReport", team_color="CYAN", machines=entries)
             time.sleep(1)
-        results = _play(team, wt, world, hall)
+        results += _play(team, wt, world, hall)
     finally:
         if team:
             team.close()
@@ -234,14 +247,17 @@ def main(argv=None) -> int:
         except subprocess.TimeoutExpired:
             refbox.kill()
         out.close()
-        wt.stop()
-        served.stop()
+        if wt:
+            wt.stop()
+        if served:
+            served.stop()
         broker.stop()
-        world.close()
+        if world:
+            world.close()
     print(f"\n{'step':34} {'ok':3} {'s':>6}  refbox states / world")
     for step, ok, secs, text in results:
         print(f"{step:34} {'yes' if ok else 'NO':3} {secs:6.1f}  {text}")
-    print(f"cyan points: {team.points if team else '?'}; MQTT refusals: {len(served.errors)}")
+    print(f"cyan points: {team.points if team else '?'}; MQTT refusals: {len(served.errors) if served else '?'}")
     return 0 if results and all(ok for _, ok, _, _ in results) else 1
 
 

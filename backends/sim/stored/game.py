@@ -121,6 +121,25 @@ class StoredGame:
             machines[m] = {"zone": prof.zone_number(zone), "rotation": rot % 360, "x": x, "y": y}
         return FieldLayout.from_dict({"profile": prof.name, "seed": seed, "machines": machines})
 
+    @classmethod
+    def from_machine_info(cls, machine_info, profile: str = "rcll2025") -> StoredGame:
+        """The field a refbox announces: a MachineInfo (message of the profile's
+        set) whose machines carry ``zone`` and ``rotation`` (the refbox sends
+        the ground truth once the exploration period is over), with each ring
+        station's colours.  Machines without a zone are left out."""
+        from rll_bt import msgs
+        zone_enum = msgs.message_set(profile).enum("Zone")
+        ring_enum = msgs.message_set(profile).enum("RingColor")
+        machines, colors = {}, {}
+        for m in machine_info.machines:
+            if m.HasField("zone") and m.zone:
+                machines[m.name] = (zone_enum.Name(m.zone), int(m.rotation))
+            if len(m.ring_colors) >= 2:
+                colors[m.name] = (ring_enum.Name(m.ring_colors[0]), ring_enum.Name(m.ring_colors[1]))
+        game = cls(profile, machines, ring_colors=colors, name="from MachineInfo")
+        game.check()
+        return game
+
     # -- the refbox's game reports ----------------------------------------------------------
     @classmethod
     def from_report(cls, report: dict, profile: str = "rcll2025") -> StoredGame:

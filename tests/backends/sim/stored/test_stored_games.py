@@ -128,3 +128,19 @@ def test_the_archive_reader_never_fails_other_than_clearly(tail):
         except StoredGameError:
             continue
         assert all(isinstance(g, StoredGame) for g in games)
+
+
+def test_the_field_a_refbox_announces_becomes_the_worlds():
+    from rll_bt import msgs
+    ms = msgs.message_set("rcll2025")
+    info = ms.MachineInfo(machines=[
+        ms.Machine(name="C-RS1", type="RS", zone=ms.enum("Zone").Value("C_Z63"), rotation=270,
+                   ring_colors=[ms.enum("RingColor").Value("RING_ORANGE"), ms.enum("RingColor").Value("RING_GREEN")]),
+        ms.Machine(name="M-BS", type="BS", zone=ms.enum("Zone").Value("M_Z44"), rotation=45),
+        ms.Machine(name="C-BS", type="BS"),                   # not announced yet
+    ])
+    game = StoredGame.from_machine_info(info)
+    assert game.machines == {"C-RS1": ("C_Z63", 270), "M-BS": ("M_Z44", 45)}
+    assert game.ring_colors == {"C-RS1": ("RING_ORANGE", "RING_GREEN")}
+    layout = game.layout()
+    assert layout["M-BS"].rotation_deg == 45 and layout["C-RS1"].zone == 63
