@@ -104,7 +104,8 @@ def run_stations(args) -> int:
                 raise Unavailable(str(exc)) from None
             print(f"stations on MQTT {host}:{port}: {', '.join(hall.machines)}", file=sys.stderr)
         if args.opcua:
-            served = OpcuaMachines(hall, args.opcua_host, base_port=args.opcua_base_port, device=args.device)
+            served = OpcuaMachines(hall, args.opcua_host, base_port=args.opcua_base_port, device=args.device,
+                                   progress=lambda line: print(line, file=sys.stderr, flush=True))
             try:
                 opened.append(served.start())
             except OSError as exc:

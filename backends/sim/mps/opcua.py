@@ -87,15 +87,17 @@ class OpcuaMachines:
 
     ``ports`` {machine: port} (default :func:`default_ports` from
     ``base_port``); ``device`` "plc" (the Festo CPX-E node names) or
-    "codesys".  :meth:`start` returns once every server listens (raises
+    "codesys"; ``progress``: called with a line as each server comes up (each
+    takes a second or more to build).  :meth:`start` returns once every server listens (raises
     ``OSError`` when a port is taken); :meth:`stop` ends them.  ``errors``
     lists refused register writes; ``received`` every command taken."""
 
     def __init__(self, hall, host: str = "127.0.0.1", *, ports: dict[str, int] | None = None,
-                 base_port: int = 4840, device: str = "plc"):
+                 base_port: int = 4840, device: str = "plc", progress=None):
         if device not in DEVICES:
             raise ValueError(f"unknown device {device!r} (known: {', '.join(DEVICES)})")
         self.hall, self.host, self.device = hall, host, device
+        self._progress = progress                # called with a line per server started
         ports = dict(ports or default_ports(hall.machines, base_port))
         missing = [m for m in hall.machines if ports.get(m) is None]
         if missing:
@@ -143,7 +145,7 @@ class OpcuaMachines:
         self.stop()
 
     def _run(self) -> None:
-        logging.getLogger("asyncua").setLevel(logging.WARNING)
+        logging.getLogger("asyncua").setLevel(logging.ERROR)   # its no-security notices are expected here
         self._loop = asyncio.new_event_loop()
         try:
             self._loop.run_until_complete(self._serve())
@@ -158,6 +160,9 @@ class OpcuaMachines:
                 await self._build(st)
                 await st.server.start()
                 started.append(st)
+                if self._progress:
+                    self._progress(f"OPC-UA {st.machine} on {self.host}:{st.port} "
+                                   f"({len(started)}/{len(self.stations)})")
         except BaseException as e:
             self._failure = e if isinstance(e, OSError) else OSError(f"OPC-UA server: {e}")
             self._ready.set()
