@@ -190,3 +190,22 @@ def test_a_write_that_is_no_command_is_refused(rig):
     plcs["C-BS"].write("In", 399)                # a cap-station id on the base station
     wait_for(lambda: len(served.errors) > n, what="refusal")
     assert "C-BS" in served.errors[-1]
+
+
+def test_the_codesys_node_names_of_the_refbox_plc_simulation_mode():
+    running = RunningWorld(rate=2.0, machines=("C-DS",)).start()
+    port = free_port()
+    served = OpcuaMachines(running.hall, ports={"C-DS": port}, device="codesys").start()
+    try:
+        path = ["0:Objects", "2:DeviceSet", "4:CODESYS Control Win V3", "3:Resources", "4:Application",
+                "3:GlobalVars", "4:G"]
+        plc = FakeRefboxPlc(port, path)
+        try:
+            plc.write("Basic", 23, 2)                  # green blink
+            wait_for(lambda: running.call(lambda: running.world.lights("C-DS"))["GREEN"] == "BLINK",
+                     what="green blink")
+        finally:
+            plc.close()
+    finally:
+        served.stop()
+        running.stop()
