@@ -15,7 +15,7 @@ from __future__ import annotations
 import enum
 import logging
 
-from rll_bt.backend import BackendError
+from rll_bt.backend import BackendError, SensorLost
 
 from .errors import SkillError, SkillFailure
 
@@ -61,6 +61,8 @@ class Activity:
             self._on_start()
         except SkillFailure as exc:
             self._finish(Status.FAILURE, exc.code, exc.message)
+        except SensorLost as exc:
+            self._finish(Status.FAILURE, SkillError.SENSOR_LOST, f"{self.name}: {exc}")
         return self
 
     def poll(self) -> Status:
@@ -76,6 +78,8 @@ class Activity:
             result = self._step(now)
         except SkillFailure as exc:
             self._finish(Status.FAILURE, exc.code, exc.message)
+        except SensorLost as exc:          # the backend stopped the robot itself
+            self._finish(Status.FAILURE, SkillError.SENSOR_LOST, f"{self.name}: {exc}")
         except BackendError as exc:
             self._finish(Status.FAILURE, SkillError.INTERNAL, f"{self.name}: {exc}")
         else:

@@ -23,6 +23,7 @@ class SkillError(enum.Enum):
     CANCELLED = "CANCELLED"              # stopped by the caller, not a fault
     INVALID_TASK = "INVALID_TASK"        # a goal outside the field, an unknown place
     INTERNAL = "INTERNAL"                # the backend failed in an unexpected way
+    SENSOR_LOST = "SENSOR_LOST"          # the laser or camera stopped delivering; the robot stopped
 
 
 class SkillFailure(Exception):

@@ -62,7 +62,7 @@ log = logging.getLogger("teamserver.dispatch")
 
 UNUSABLE_STATES = ("BROKEN", "DOWN")
 #: errors after which the same step is simply tried again
-RETRY_ERRORS = {"NAVIGATION_FAILED", "LOCALISATION_LOST", "MACHINE_NOT_FOUND", "ALIGN_FAILED",
+RETRY_ERRORS = {"NAVIGATION_FAILED", "LOCALISATION_LOST", "MACHINE_NOT_FOUND", "ALIGN_FAILED", "SENSOR_LOST",
                 "GRAB_FAILED", "TIMEOUT", "NOT_RUNNING", "MACHINE_BROKEN", "NONE"}
 
 

@@ -13,22 +13,37 @@ Options (all keywords):
     without it ``holding`` is None (the gripper cannot tell).
 ``gripper_config``
     a :class:`gripper.GripperConfig` (axis scale, speeds, timing, limits).
+``robot_config``
+    a robot configuration file (:mod:`.config`; a path, dict or
+    :class:`~.config.RobotConfig`): the base's device, the gripper, and the
+    laser and camera (:class:`~.parts.SensorParts`) with their mounting
+    poses.  Keywords given here win over the file.
 ``cycle_time`` (0.005 .. 0.010 s), ``read_timeout`` (0.2 s), ``nodata_timeout``
 (2 s), ``deadman`` (0.5 s), ``recover_bound`` (2), ``emergency_bumper`` (True),
 ``handshake_timeout`` (1 s), ``kinematics``, ``ramp_limits``, ``clock``
     passed to :class:`base.RobotinoBase`.
 
-The base has no laser and no camera (those raise CapabilityError).
+Without a configured laser or camera those raise CapabilityError.  With
+them, a device that stops delivering (port closed, no data for the
+configured ``faults.stale`` seconds) stops the base at once (a watcher
+thread) and makes :meth:`drive`, :meth:`laser_scan` or :meth:`camera_image`
+raise :class:`~rll_bt.backend.SensorLost` until it is back (its driver
+reopens it by itself).
 """
 from __future__ import annotations
+
+import logging
+import threading
 
 from rll_bt.backend import (
     Backend,
     BackendError,
     Battery,
+    CameraImage,
     Capability,
     CapabilityError,
     GripperStatus,
+    LaserScan,
     Odometry,
     Pose2D,
     wrap_angle,
@@ -39,6 +54,8 @@ from .base import BaseReadings, LinkStats, RobotinoBase
 from .gripper import ArduinoGripper, GripperConfig
 from .holding import HoldingSensor
 
+log = logging.getLogger(__name__)
+
 EMPTY_VOLTAGE, FULL_VOLTAGE = 22.0, 24.5      # Fawkes' state-of-charge guess
 
 
@@ -48,28 +65,89 @@ class RobotinoBackend(Backend):
     def __init__(self, device: str | None = None, *, gripper_device: str | None = None,
                  holding_sensor: HoldingSensor | str | None = None,
                  gripper_config: GripperConfig | None = None, clock: Clock | None = None,
-                 **base_options):
+                 robot_config=None, **base_options):
         self.clock = clock or WallClock()
+        self.config = None
+        if robot_config is not None:
+            from .config import as_config
+            self.config = cfg = as_config(robot_config)
+            if cfg.base["type"] != "robotino3":
+                raise BackendError(f"{cfg.path or 'robot config'}: base type {cfg.base['type']} is not a "
+                                   "Robotino 3 serial base (open it with the robotino_rest backend)")
+            device = device or cfg.base.get("device")
+            for key in ("cycle_time", "emergency_bumper"):
+                if key in cfg.base:
+                    base_options.setdefault(key, cfg.base[key])
+            if cfg.gripper:
+                gripper_device = gripper_device or cfg.gripper["device"]
+                holding_sensor = holding_sensor or cfg.gripper.get("holding_sensor")
         if isinstance(holding_sensor, str):
             holding_sensor = HoldingSensor.parse(holding_sensor)
         self._holding_sensor = holding_sensor
         self._closed = False
+        self._parts = None
+        self.sensor_stops = 0
+        self._stop_watch = threading.Event()
+        self._watcher: threading.Thread | None = None
         self._base = RobotinoBase(device, clock=self.clock, **base_options)
         self._base.open()
         self._gripper: ArduinoGripper | None = None
-        if gripper_device:
-            try:
+        try:
+            if gripper_device:
                 self._gripper = ArduinoGripper(gripper_device, config=gripper_config, clock=self.clock,
                                                holding=self._sensor_holding).open()
-            except BaseException:
-                self._base.close()
-                raise
+            if self.config is not None and (self.config.laser or self.config.camera):
+                from .parts import SensorParts
+                self._parts = SensorParts(self.config, self.clock).start()
+                self._watcher = threading.Thread(target=self._watch, name="robotino-sensor-watch", daemon=True)
+                self._watcher.start()
+        except BaseException:
+            if self._gripper is not None:
+                self._gripper.close()
+            self._base.close()
+            raise
 
     # -- interface ----------------------------------------------------------
     @property
     def capabilities(self) -> Capability:
         caps = Capability.DRIVE | Capability.ODOMETRY | Capability.BUMPER | Capability.BATTERY
-        return caps | Capability.GRIPPER if self._gripper is not None else caps
+        if self._gripper is not None:
+            caps |= Capability.GRIPPER
+        if self._parts is not None and self._parts.laser is not None:
+            caps |= Capability.LASER
+        if self._parts is not None and self._parts.camera is not None:
+            caps |= Capability.CAMERA
+        return caps
+
+    # -- sensors -------------------------------------------------------------------
+    @property
+    def parts(self):
+        """The laser and camera drivers (:class:`~.parts.SensorParts`), or None."""
+        return self._parts
+
+    def _watch(self) -> None:
+        """Stop the base the moment a sensor is lost (and keep it stopped)."""
+        was_lost = False
+        while not self._stop_watch.wait(0.02):
+            lost = self._parts.lost()
+            if lost is not None:
+                self._base.stop_now()
+                if not was_lost:
+                    self.sensor_stops += 1
+                    log.warning("%s; base stopped", lost)
+            elif was_lost:
+                log.warning("sensors back; driving allowed again")
+            was_lost = lost is not None
+
+    def laser_scan(self) -> LaserScan | None:
+        if self._parts is None or self._parts.laser is None:
+            raise CapabilityError(f"{self.name}: no laser (configure one in the robot config)")
+        return self._parts.laser_scan()
+
+    def camera_image(self, camera: str = "front") -> CameraImage | None:
+        if self._parts is None or self._parts.camera is None:
+            raise CapabilityError(f"{self.name}: no camera (configure one in the robot config)")
+        return self._parts.camera_image(camera)
 
     def _check_open(self) -> None:
         if self._closed:
@@ -77,6 +155,11 @@ class RobotinoBackend(Backend):
 
     def drive(self, vx: float, vy: float, omega: float) -> None:
         self._check_open()
+        if self._parts is not None and (vx or vy or omega):
+            lost = self._parts.lost()
+            if lost is not None:
+                self._base.stop_now()
+                raise lost
         try:
             self._base.set_velocity(vx, vy, omega)
         except ValueError as exc:
@@ -130,6 +213,11 @@ class RobotinoBackend(Backend):
         if self._closed:
             return
         self._closed = True
+        self._stop_watch.set()
+        if self._watcher is not None:
+            self._watcher.join(timeout=1.0)
+        if self._parts is not None:
+            self._parts.close()
         if self._gripper is not None:
             self._gripper.close()
         self._base.close()

@@ -59,6 +59,13 @@ def register(cli) -> None:
                    help="directory for the device symlinks (default: a new temporary one)")
     p.add_argument("--firmware", default="1.2.3", metavar="VERSION",
                    help="firmware version to report (2.x drops the gyro; default 1.2.3)")
+    p.add_argument("--laser", choices=("urg", "tim"), default=None,
+                   help="also emulate a laser: urg (Hokuyo URG-04LX, SCIP 2.0 on a pty) or tim "
+                        "(SICK TiM571, CoLa on a TCP port)")
+    p.add_argument("--camera", action="store_true", help="also emulate the camera (MJPEG over HTTP on loopback)")
+    p.add_argument("--config-out", default=None, metavar="FILE",
+                   help="write the robot configuration of the emulated devices to FILE "
+                        "(for rll-bt agent/robotino check --robot-config)")
     p.add_argument("--duration", type=_non_negative, default=0.0, metavar="S",
                    help="stop after S seconds (default: run until Ctrl-C)")
     p.add_argument("--report", type=_non_negative, default=5.0, metavar="S",
@@ -84,6 +91,9 @@ def register(cli) -> None:
     p.add_argument("--omega", type=_finite, default=0.0, help="turn rate rad/s (|omega| <= 3.5)")
     p.add_argument("--seconds", type=_finite, default=1.0, help="how long to drive (0 < S <= 120)")
     p.set_defaults(func=_drive)
+
+    from .check import register as register_check
+    register_check(sub)
 
 
 # -- emulate ----------------------------------------------------------------------
@@ -116,11 +126,24 @@ def _emulate(args) -> int:
     faulthandler.register(signal.SIGUSR1, file=sys.__stderr__, all_threads=True)
     clock = CLOCK
     firmware = BaseFirmware(sw_version=args.firmware, start=clock.now())
+    rig = None
     try:
         emu = RobotinoEmulator(gripper=args.gripper, faults=faults, link_dir=args.link_dir,
-                               clock=clock, firmware=firmware).start()
+                               clock=clock, firmware=firmware)
+        if args.laser or args.camera or args.config_out:
+            from .rig import EmulatedRobot
+            rig = EmulatedRobot(laser=args.laser, camera=args.camera, emulator=emu, link_dir=emu.link_dir,
+                                clock=clock).start()
+        else:
+            emu.start()
     except OSError as exc:
-        raise UserError(f"cannot create the emulator's ptys: {exc}", where=args.link_dir) from None
+        raise UserError(f"cannot create the emulator's ptys or sockets: {exc}", where=args.link_dir) from None
+    if args.config_out:
+        try:
+            rig.write_config(args.config_out)
+        except OSError as exc:
+            rig.stop()
+            raise UserError(f"cannot write the robot configuration: {exc}", where=args.config_out) from None
     # stop on SIGINT and SIGTERM alike, also when started in the background of a
     # non-interactive shell (which starts it with SIGINT ignored); installed before
     # the device paths go out, as whoever reads them may stop it at once
@@ -137,6 +160,13 @@ def _emulate(args) -> int:
         print(f"  base:    {emu.device}", file=sys.stderr)
         if emu.gripper_device:
             print(f"  gripper: {emu.gripper_device}", file=sys.stderr)
+        if rig is not None and rig.laser_runner is not None:
+            where = rig.laser_runner.link if args.laser == "urg" else "%s:%d" % rig.laser_runner.address
+            print(f"  laser:   {where} ({args.laser})", file=sys.stderr)
+        if rig is not None and rig.camera_server is not None:
+            print(f"  camera:  {rig.camera_server.url}", file=sys.stderr)
+        if args.config_out:
+            print(f"  config:  {args.config_out}", file=sys.stderr)
         print("press Ctrl-C to stop", file=sys.stderr, flush=True)
         _serve(emu, args)
     except KeyboardInterrupt:
@@ -145,7 +175,10 @@ def _emulate(args) -> int:
         for s, handler in old.items():
             signal.signal(s, handler)
         stats = emu.stats()
-        emu.stop()
+        if rig is not None:
+            rig.stop()
+        else:
+            emu.stop()
     print("summary: " + json.dumps(stats, sort_keys=True), flush=True)
     return EXIT_OK
 

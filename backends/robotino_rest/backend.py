@@ -12,8 +12,13 @@ PC), ``timeout`` (s per request), ``refresh``, ``deadman``, ``method``
 (``"POST"`` or ``"PUT"`` for omnidrive), ``sid``, ``laser_mount``
 (:class:`Pose2D` of the laser in the robot frame), ``camera_extrinsics``,
 ``camera_hfov`` (rad; intrinsics are derived from the image size), ``clock``.
-Battery and gripper are not offered (the API's power fields are not
-documented).
+``robot_config`` (a robot configuration file, :mod:`backends.robotino.config`,
+with ``base: {type: robotino4, url: ...}``) adds the same parts a Robotino
+3 gets: the configured laser and camera replace ``/data/scan0`` and
+``/cam0`` (a lost one stops the robot and raises
+:class:`~rll_bt.backend.SensorLost`, as there), and the gripper Arduino
+gives the gripper capability.  Battery is not offered (the API's power
+fields are not documented).
 """
 from __future__ import annotations
 
@@ -31,6 +36,7 @@ from rll_bt.backend import (
     CameraImage,
     CameraIntrinsics,
     Capability,
+    CapabilityError,
     LaserScan,
     Odometry,
     Pose2D,
@@ -62,7 +68,12 @@ class RobotinoRestBackend(Backend):
                  refresh: float = 0.1, deadman: float = 0.5, method: str = "POST",
                  sid: str | None = "rll_bt", laser_mount: Pose2D = Pose2D(),
                  camera_extrinsics: CameraExtrinsics | None = None,
-                 camera_hfov: float = math.radians(60.0), clock: Clock | None = None):
+                 camera_hfov: float = math.radians(60.0), clock: Clock | None = None, robot_config=None):
+        self.config = None
+        if robot_config is not None:
+            from backends.robotino.config import as_config
+            self.config = as_config(robot_config)
+            base_url = self.config.base.get("url", base_url)
         if not 0 < refresh <= MAX_REFRESH:
             raise ValueError(f"refresh must be in (0, {MAX_REFRESH}] s, got {refresh}")
         if method not in ("POST", "PUT"):
@@ -86,13 +97,60 @@ class RobotinoRestBackend(Backend):
             self.client.get_json("/data/odometry")
         except RestError as exc:
             raise BackendUnavailable(f"Robotino REST API not reachable: {exc}") from None
+        self._parts = self._gripper = None
+        try:
+            self._compose()
+        except BaseException:
+            self._closed = True
+            raise
         self._thread = threading.Thread(target=self._run, name="robotino-rest-drive", daemon=True)
         self._thread.start()
 
+    def _compose(self) -> None:
+        cfg = self.config
+        if cfg is None:
+            return
+        if cfg.gripper:
+            from backends.robotino.gripper import ArduinoGripper
+            self._gripper = ArduinoGripper(cfg.gripper["device"], clock=self.clock).open()
+        if cfg.laser or cfg.camera:
+            from backends.robotino.parts import SensorParts
+            try:
+                self._parts = SensorParts(cfg, self.clock).start()
+            except BaseException:
+                if self._gripper is not None:
+                    self._gripper.close()
+                raise
+
     @property
     def capabilities(self) -> Capability:
-        return (Capability.DRIVE | Capability.ODOMETRY | Capability.BUMPER | Capability.LASER
+        caps = (Capability.DRIVE | Capability.ODOMETRY | Capability.BUMPER | Capability.LASER
                 | Capability.CAMERA)
+        return caps | Capability.GRIPPER if self._gripper is not None else caps
+
+    @property
+    def parts(self):
+        return self._parts
+
+    def _need_gripper(self):
+        if self._gripper is None:
+            raise CapabilityError(f"{self.name}: no gripper (configure one in the robot config)")
+        return self._gripper
+
+    def gripper_open(self) -> None:
+        self._need_gripper().open_gripper()
+
+    def gripper_close(self) -> None:
+        self._need_gripper().close_gripper()
+
+    def gripper_move(self, x: float, y: float, z: float) -> None:
+        self._need_gripper().move(x, y, z)
+
+    def gripper_status(self):
+        return self._need_gripper().status()
+
+    def holding(self) -> bool | None:
+        return None
 
     # -- motion ---------------------------------------------------------------
     def drive(self, vx: float, vy: float, omega: float) -> None:
@@ -101,6 +159,11 @@ class RobotinoRestBackend(Backend):
             raise BackendError(f"velocity must be finite, got {values}")
         if self._closed:
             raise BackendError("robotino_rest backend is closed")
+        if self._parts is not None and any(values):
+            lost = self._parts.lost()
+            if lost is not None:
+                self.stop()
+                raise lost
         with self._lock:
             self._command = values
             self._command_time = self.clock.now()
@@ -162,6 +225,8 @@ class RobotinoRestBackend(Backend):
         return tuple(_numbers(self._get("/data/distancesensorarray"), 9, "/data/distancesensorarray"))
 
     def laser_scan(self) -> LaserScan | None:
+        if self._parts is not None and self._parts.laser is not None:
+            return self._parts.laser_scan()
         data = self._get("/data/scan0")
         if not isinstance(data, dict):
             raise BackendError(f"/data/scan0: expected an object, got {str(data)[:80]}")
@@ -179,6 +244,8 @@ class RobotinoRestBackend(Backend):
         return LaserScan(self.clock.now(), angle_min, increment, rmin, rmax, r, self.laser_mount)
 
     def camera_image(self, camera: str = "front") -> CameraImage | None:
+        if self._parts is not None and self._parts.camera is not None:
+            return self._parts.camera_image(camera)
         if camera != "front":
             raise BackendError(f"robotino_rest has one camera ('front'), not {camera!r}")
         import cv2
@@ -206,3 +273,7 @@ class RobotinoRestBackend(Backend):
         self._wake.set()
         self._thread.join(timeout=2.0)
         self._post((0.0, 0.0, 0.0))
+        if self._parts is not None:
+            self._parts.close()
+        if self._gripper is not None:
+            self._gripper.close()

@@ -34,7 +34,7 @@ from .types import (
 )
 
 __all__ = [
-    "Backend", "BackendError", "BackendUnavailable", "CapabilityError", "Capability",
+    "Backend", "BackendError", "BackendUnavailable", "CapabilityError", "Capability", "SensorLost",
     "open_backend", "available_backends",
     "Battery", "CameraExtrinsics", "CameraImage", "CameraIntrinsics", "Detections",
     "GripperState", "GripperStatus", "LaserScan", "LightDetection", "Odometry", "Pose2D",
@@ -54,6 +54,17 @@ class BackendUnavailable(BackendError):
 
 class CapabilityError(BackendError):
     """The backend does not have the capability that was used."""
+
+
+class SensorLost(BackendError):
+    """A sensor the robot needs (``device``: "laser", "camera") stopped
+    delivering: its port closed or no data came for too long.  The backend
+    has stopped the base; skills fail with ``SENSOR_LOST``.  It passes once
+    the device is back."""
+
+    def __init__(self, device: str, message: str):
+        super().__init__(message)
+        self.device = device
 
 
 class Capability(enum.Flag):

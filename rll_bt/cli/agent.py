@@ -58,8 +58,12 @@ def register(cli) -> None:
     g.add_argument("--backend", required=True, metavar="NAME", help="backend (rll_bt.backends entry point)")
     g.add_argument("--backend-opt", action="append", type=_kv, default=[], metavar="K=V",
                    help="backend option (value read as YAML), repeatable")
+    g.add_argument("--robot-config", type=Path, metavar="FILE",
+                   help="robot configuration (YAML: base, laser, camera, gripper, their ports and mounting "
+                        "poses) for the robotino backend")
     g.add_argument("--start-pose", type=_pose, metavar="X,Y,THETA",
-                   help="field pose at start, for backends that only know odometry")
+                   help="field pose at start, for backends that only know odometry (without it the robot "
+                        "localises globally)")
     g = p.add_argument_group("team server")
     g.add_argument("--teamserver", type=_hostport, default=("127.0.0.1", TEAM_SERVER_PORT), metavar="HOST:PORT",
                    help=f"team server address (default 127.0.0.1:{TEAM_SERVER_PORT})")

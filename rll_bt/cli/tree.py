@@ -220,8 +220,14 @@ def _backend(args, clock):
         factory = plugins.load("rll_bt.backends", args.backend)
     except KeyError as exc:
         raise UserError(str(exc.args[0]), hint="`--backend` names an installed backend") from None
+    robot_config = getattr(args, "robot_config", None)
     try:
         params = inspect.signature(factory).parameters
+        if robot_config is not None:
+            if "robot_config" not in params:
+                raise UserError(f"backend {args.backend!r} takes no robot configuration",
+                                where=f"--robot-config {robot_config}", hint="use --backend robotino")
+            opts["robot_config"] = str(robot_config)
         if "clock" in params and "clock" not in opts:
             opts["clock"] = clock
         # a backend that builds its own world plays the run's rules profile
@@ -234,7 +240,8 @@ def _backend(args, clock):
     except BackendUnavailable as exc:
         raise Unavailable(str(exc), where=f"backend {args.backend}") from None
     except (BackendError, TypeError, ValueError, OSError) as exc:
-        raise UserError(f"cannot open backend {args.backend!r}: {exc}", hint="check --backend-opt values") from None
+        raise UserError(f"cannot open backend {args.backend!r}: {exc}",
+                        hint="check --backend-opt values (and --robot-config)") from None
 
 
 def _run(args) -> int:
