@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import logging
 import threading
+from dataclasses import replace
 
 from rll_bt.backend import (
     Backend,
@@ -81,11 +82,14 @@ class RobotinoBackend(Backend):
             if cfg.gripper:
                 gripper_device = gripper_device or cfg.gripper["device"]
                 holding_sensor = holding_sensor or cfg.gripper.get("holding_sensor")
+                self._gripper_origin = tuple(cfg.gripper.get("origin", (0.0, 0.0, 0.0)))
         if isinstance(holding_sensor, str):
             holding_sensor = HoldingSensor.parse(holding_sensor)
         self._holding_sensor = holding_sensor
         self._closed = False
         self._parts = None
+        if not hasattr(self, "_gripper_origin"):
+            self._gripper_origin = (0.0, 0.0, 0.0)
         self.sensor_stops = 0
         self._stop_watch = threading.Event()
         self._watcher: threading.Thread | None = None
@@ -196,10 +200,14 @@ class RobotinoBackend(Backend):
         self._need_gripper().close_gripper()
 
     def gripper_move(self, x: float, y: float, z: float) -> None:
-        self._need_gripper().move(x, y, z)
+        ox, oy, oz = self._gripper_origin
+        self._need_gripper().move(x - ox, y - oy, z - oz)
 
     def gripper_status(self) -> GripperStatus:
-        return self._need_gripper().status()
+        st = self._need_gripper().status()
+        if any(self._gripper_origin):
+            st = replace(st, position=tuple(v + o for v, o in zip(st.position, self._gripper_origin)))
+        return st
 
     def holding(self) -> bool | None:
         return self._sensor_holding()

@@ -88,10 +88,11 @@ def check_laser(cfg, args) -> dict:
         finite = s.ranges[s.ranges < math.inf]
         front = s.ranges[len(s.ranges) // 2]
         model = laser.info.get("PROD") or laser.info.get("DeviceIdent") or laser.kind
-        return {"found": True, "where": where, "rate_hz": round(rate, 1),
-                "first": f"{model}: {len(s.ranges)} beams over {math.degrees(s.angle_increment * (len(s.ranges) - 1)):.0f} deg, "
-                         f"{len(finite)} with an echo ({finite.min():.2f}..{finite.max():.2f} m), ahead {front:.2f} m"
-                if len(finite) else f"{model}: {len(s.ranges)} beams, no echo"}
+        span = math.degrees(s.angle_increment * (len(s.ranges) - 1))
+        first = f"{model}: {len(s.ranges)} beams over {span:.0f} deg, "
+        first += (f"{len(finite)} with an echo ({finite.min():.2f}..{finite.max():.2f} m), ahead {front:.2f} m"
+                  if len(finite) else "no echo")
+        return {"found": True, "where": where, "rate_hz": round(rate, 1), "first": first}
     finally:
         laser.close()
 

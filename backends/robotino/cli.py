@@ -161,7 +161,7 @@ def _emulate(args) -> int:
         if emu.gripper_device:
             print(f"  gripper: {emu.gripper_device}", file=sys.stderr)
         if rig is not None and rig.laser_runner is not None:
-            where = rig.laser_runner.link if args.laser == "urg" else "%s:%d" % rig.laser_runner.address
+            where = rig.laser_runner.link if args.laser == "urg" else "{}:{}".format(*rig.laser_runner.address)
             print(f"  laser:   {where} ({args.laser})", file=sys.stderr)
         if rig is not None and rig.camera_server is not None:
             print(f"  camera:  {rig.camera_server.url}", file=sys.stderr)

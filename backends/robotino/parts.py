@@ -43,7 +43,8 @@ def make_camera(cfg: RobotConfig, clock: Clock):
         source = cfg.resolve(source)
     return CameraGrabber(source, intrinsics=intr, extrinsics=cfg.camera_extrinsics(), clock=clock,
                          hfov=math.radians(spec.get("hfov", 60.0)), timeout=float(spec.get("timeout", 1.0)),
-                         latency=float(spec.get("latency", 0.0)), size=tuple(spec["size"]) if spec.get("size") else None)
+                         latency=float(spec.get("latency", 0.0)),
+                         size=tuple(spec["size"]) if spec.get("size") else None)
 
 
 class SensorParts:

@@ -31,18 +31,20 @@ def ray_mask(robot: SimRobot | None) -> int:
     return ALL_GROUPS if robot is None else ALL_GROUPS & ~robot.ray_group
 
 
-def laser_scan(cid: int, robot: SimRobot, stamp: float) -> LaserScan:
+def laser_ranges(cid: int, robot: SimRobot, angles: np.ndarray, noisy: bool = True) -> np.ndarray:
+    """Ranges (m) along ``angles`` (rad, laser frame) from the robot's laser
+    mount; ``inf`` where nothing is hit within range; the robot's laser noise
+    when ``noisy``."""
     p = pybullet()
     cfg, g = robot.config, robot.config.geometry
-    n = cfg.laser_beams
-    angle_min = -cfg.laser_fov / 2.0
-    inc = cfg.laser_fov / (n - 1) if n > 1 else 0.0
+    angles = np.asarray(angles, dtype=float)
+    n = len(angles)
     rmin, rmax = cfg.laser_range
     mx, my, mz = g.laser_mount
     pose = robot.pose
     c, s = math.cos(pose.theta), math.sin(pose.theta)
     ox, oy = pose.x + c * mx - s * my, pose.y + s * mx + c * my
-    a = pose.theta + angle_min + inc * np.arange(n)
+    a = pose.theta + angles
     start = np.empty((n, 3))
     start[:, 0], start[:, 1], start[:, 2] = ox, oy, mz
     end = start.copy()
@@ -52,9 +54,19 @@ def laser_scan(cid: int, robot: SimRobot, stamp: float) -> LaserScan:
                           physicsClientId=cid)
     ranges = np.array([hit[2] for hit in hits]) * rmax
     ranges[np.array([hit[0] for hit in hits]) < 0] = np.inf
-    if cfg.laser_noise > 0.0:
+    if noisy and cfg.laser_noise > 0.0:
         ranges = ranges + robot.rng.normal(0.0, cfg.laser_noise, n)
-    ranges = np.where(np.isfinite(ranges), np.clip(ranges, rmin, rmax), np.inf)
+    return np.where(np.isfinite(ranges), np.clip(ranges, rmin, rmax), np.inf)
+
+
+def laser_scan(cid: int, robot: SimRobot, stamp: float) -> LaserScan:
+    cfg, g = robot.config, robot.config.geometry
+    n = cfg.laser_beams
+    angle_min = -cfg.laser_fov / 2.0
+    inc = cfg.laser_fov / (n - 1) if n > 1 else 0.0
+    rmin, rmax = cfg.laser_range
+    mx, my, _ = g.laser_mount
+    ranges = laser_ranges(cid, robot, angle_min + inc * np.arange(n))
     return LaserScan(stamp, angle_min, inc, rmin, rmax, ranges, mount=Pose2D(mx, my, 0.0))
 
 

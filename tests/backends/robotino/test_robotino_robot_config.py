@@ -80,7 +80,7 @@ def test_a_configuration_file_is_checked_against_its_schema(tmp_path):
 def test_every_shipped_tree_builds_on_the_robotino_backend_with_its_parts(rig):
     backend = open_backend("robotino", robot_config=rig.config())
     try:
-        assert ALL | Capability.BUMPER | Capability.BATTERY == backend.capabilities
+        assert backend.capabilities == ALL | Capability.BUMPER | Capability.BATTERY
         _every_tree_builds(backend)
     finally:
         backend.close()

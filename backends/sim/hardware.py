@@ -1,0 +1,241 @@
+"""Emulated hardware fed by the PyBullet world: each simulated robot as the
+devices a real Robotino has, speaking their real protocols.
+
+    hw = WorldHardware(world, laser="urg").start()
+    rig = hw.add(("CYAN", 1))           # the robot must be in the world
+    backend = open_backend("robotino", robot_config=rig.config())   # in an agent
+    ...                                  # the world's owner, after every world.step():
+    hw.sync()
+
+Per robot (:class:`WorldRig`, on an :class:`~backends.robotino.rig.EmulatedRobot`):
+
+* the base firmware on a pty: the wheels' actual speeds (what the firmware's
+  motor loop makes of the host's set-points) drive the robot in the world,
+  which moves it (and stops it at obstacles); the host integrates its own
+  odometry from the measured wheel speeds, as on the real robot;
+* the laser (URG on a pty, TiM on a TCP port): the ranges are the world's
+  ray casts (:func:`backends.sim.sensors.laser_ranges`, the robot's laser
+  noise included) for the device's own beam angles from the robot's laser
+  mount, taken every scan period;
+* the camera (MJPEG over HTTP): the frames the world renders from the
+  robot's camera (:meth:`World.camera_image`), at ``camera_fps``;
+* the gripper Arduino on a pty: its commanded axis targets and finger state
+  drive the world's gripper; the axis positions and its moving/idle state
+  it reports are the world gripper's; whether a workpiece is held reaches
+  the host through IR distance sensor 8 of the base (the configuration's
+  ``holding_sensor: distance:8>1.5``), as a team wires a sensor into the jaws.
+
+Everything the world does happens in :meth:`WorldHardware.sync`, on the
+thread that steps the world (PyBullet is not thread-safe); the device
+threads only read what it stored.  Device time is the wall clock.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import threading
+
+import numpy as np
+
+from backends.robotino.arduino import GripperFirmware
+from backends.robotino.gripper_protocol import StepsPerMetre
+from backends.robotino.kinematics import OmniKinematics
+from rll_bt.clock import Clock, WallClock
+
+from . import sensors
+
+log = logging.getLogger(__name__)
+
+#: the gripper API's (x, y, z) = the Arduino's axes (metres) + this origin
+GRIPPER_ORIGIN = (0.0, -0.10, 0.0)
+HOLDING_SENSOR = "distance:8>1.5"
+HOLDING_VOLTS, EMPTY_VOLTS = 2.5, 0.3
+
+
+class WorldGripperFirmware(GripperFirmware):
+    """The gripper sketch whose axes are the world gripper's: positions and
+    moving/idle come from :meth:`follow`, which the rig calls every sync."""
+
+    def __init__(self):
+        super().__init__(speed=1e12, home_time=0.0)
+        self.pending = False            # a command the world has not taken yet
+        self.moves = 0                  # X/Y/Z commands received (homing does not move the world's gripper)
+        self.world_busy = False
+        self.world_position: list[float] | None = None
+
+    def _command(self, cmd, value, out):
+        super()._command(cmd, value, out)
+        if cmd in "XYZ":
+            self.moves += 1
+        if cmd in "XYZOG":
+            self.pending = True
+            if self.status != "E":
+                self._set_status("M", out)
+
+    def advance(self, now: float) -> bytes:
+        if self._booting_until is not None:
+            return super().advance(now)
+        out: list[bytes] = []
+        self._now = now
+        if self.world_position is not None:
+            self.position = list(self.world_position)
+        busy = self.pending or self.world_busy
+        if self.status == "M" and not busy:
+            self._homing_until = None
+            self._set_status("I", out)
+        elif self.status == "M" and now >= self._next_report:
+            self._next_report = now + self.moving_report_period
+            out.append(self.status_line())
+        return b"".join(out)
+
+
+class WorldRig:
+    """One robot's devices, coupled to the world (see the module doc)."""
+
+    def __init__(self, world, key: tuple[str, int], *, laser: str = "urg", laser_model: str | None = None,
+                 camera_fps: float = 5.0, clock: Clock | None = None, link_dir: str | None = None):
+        from backends.robotino.emulator import RobotinoEmulator
+        from backends.robotino.rig import EmulatedRobot
+        self.world = world
+        self.key = key
+        self.robot = world.robots[key]
+        self.clock = clock or WallClock()
+        cfg, g = self.robot.config, self.robot.config.geometry
+        self.kinematics = OmniKinematics()
+        self.steps = StepsPerMetre()
+        self.gripper_fw = WorldGripperFirmware()
+        emu = RobotinoEmulator(gripper=True, link_dir=link_dir, clock=self.clock, gripper_firmware=self.gripper_fw)
+        mx, my, mz = g.laser_mount
+        cx, cy, cz = g.camera_mount
+        self.rig = EmulatedRobot(
+            laser=laser, laser_model=laser_model, camera=camera_fps > 0, gripper=True, emulator=emu,
+            link_dir=emu.link_dir, clock=self.clock, laser_source=self._laser_source, frame_source=self._frame,
+            camera_fps=max(camera_fps, 0.1), laser_mount={"x": mx, "y": my, "z": mz, "yaw": 0.0},
+            camera_mount={"x": cx, "y": cy, "z": cz, "pitch": math.degrees(cfg.camera_pitch)},
+            camera_hfov=math.degrees(cfg.camera_hfov), holding_sensor=HOLDING_SENSOR, name=f"R{key[1]}")
+        self.angles = self.rig.laser_angles()
+        self._lock = threading.Lock()
+        self._ranges_mm: np.ndarray | None = None
+        self._image = None
+        self._image_seq = 0
+        self._image_sent = -1
+        self.camera_period = 1.0 / camera_fps if camera_fps > 0 else math.inf
+        self.scan_period = self.rig.laser_device.model.scan_period if self.rig.laser_device else math.inf
+        self._next_scan = self._next_frame = -math.inf
+        self._forwarded: tuple | None = None
+        self.scans = self.frames = 0
+
+    # -- what the device threads read ---------------------------------------------------
+    def _laser_source(self, t: float) -> np.ndarray:
+        with self._lock:
+            if self._ranges_mm is None:
+                return np.full(len(self.angles), np.nan)
+            return self._ranges_mm
+
+    def _frame(self):
+        with self._lock:
+            if self._image is None or self._image_seq == self._image_sent:
+                return None
+            self._image_sent = self._image_seq
+            return self._image
+
+    def config(self, **faults) -> dict:
+        cfg = self.rig.config(**faults)
+        cfg["gripper"]["origin"] = list(GRIPPER_ORIGIN)
+        return cfg
+
+    # -- the world's side -----------------------------------------------------------------
+    def sync(self, world_time: float) -> None:
+        r = self.robot
+        emu = self.rig.base
+        now = self.clock.now()
+        with emu.lock:
+            fw = emu.firmware
+            fw.advance(now)
+            rpm = [m.ss for m in fw.motors[:3]]
+            fw.distance[8] = HOLDING_VOLTS if r.holding is not None else EMPTY_VOLTS
+            self._sync_gripper(world_time)
+        vx, vy, w = self.kinematics.inverse(*rpm)
+        r.drive(vx, vy, w, world_time)
+        if world_time >= self._next_scan:
+            self._next_scan = max(self._next_scan + self.scan_period, world_time)
+            ranges = sensors.laser_ranges(self.world.cid, r, self.angles, noisy=True)
+            with self._lock:
+                self._ranges_mm = ranges * 1000.0
+            self.scans += 1
+        if world_time >= self._next_frame and self.rig.camera_server is not None \
+                and self.rig.camera_server.clients > 0:
+            self._next_frame = max(self._next_frame + self.camera_period, world_time)
+            image = self.world.camera_image(r).image
+            with self._lock:
+                self._image = image
+                self._image_seq += 1
+            self.frames += 1
+
+    def _sync_gripper(self, world_time: float) -> None:
+        fw, g = self.gripper_fw, self.robot.gripper
+        ox, oy, oz = GRIPPER_ORIGIN
+        tx, ty, tz = self.steps.to_metres(tuple(int(round(v)) for v in fw.target))
+        target = (tx + ox, ty + oy, tz + oz)
+        want = (fw.moves, fw.is_open)
+        if want != self._forwarded:
+            old = self._forwarded
+            try:
+                if fw.moves and (old is None or old[0] != fw.moves):
+                    from .gripper import X_RANGE, Y_RANGE, Z_RANGE
+                    clamped = tuple(min(max(v, lo), hi) for v, (lo, hi) in zip(target, (X_RANGE, Y_RANGE, Z_RANGE)))
+                    g.command("move", clamped, now=world_time)
+                if (old is None or old[1] != fw.is_open) and (fw.is_open != g.is_open or g.busy):
+                    g.command("open" if fw.is_open else "close", now=world_time)
+            except Exception as exc:            # a target the world refuses: the Arduino reports an error
+                log.warning("%s: gripper command refused by the world: %s", self.robot.name, exc)
+            self._forwarded = want
+        fw.pending = False
+        fw.world_busy = g.busy
+        px, py, pz = g.position
+        fw.world_position = [(px - ox) * self.steps.x, (py - oy) * self.steps.y, (pz - oz) * self.steps.z]
+        if not fw.moves:          # the axes were only homed: the sketch's targets are where the world's gripper is
+            fw.target = list(fw.world_position)
+
+
+class WorldHardware:
+    """Every robot's :class:`WorldRig`; :meth:`sync` after each world step."""
+
+    def __init__(self, world, *, laser: str = "urg", laser_model: str | None = None, camera_fps: float = 5.0,
+                 clock: Clock | None = None):
+        self.world = world
+        self.laser = laser
+        self.laser_model = laser_model
+        self.camera_fps = camera_fps
+        self.clock = clock or WallClock()
+        self.rigs: dict[tuple[str, int], WorldRig] = {}
+
+    def add(self, key: tuple[str, int]) -> WorldRig:
+        rig = WorldRig(self.world, key, laser=self.laser, laser_model=self.laser_model,
+                       camera_fps=self.camera_fps, clock=self.clock)
+        rig.rig.start()
+        self.rigs[key] = rig
+        return rig
+
+    def sync(self) -> None:
+        t = self.world.time
+        for rig in self.rigs.values():
+            rig.sync(t)
+
+    def stats(self) -> dict:
+        out = {}
+        for (team, n), rig in self.rigs.items():
+            emu = rig.rig.base
+            s = emu.stats()
+            laser = rig.rig.laser_device
+            out[f"{team}/{n}"] = {"base_frames": s["frames"], "watchdog_trips": s["watchdog_trips"],
+                                  "watchdog_motion_stops": s["watchdog_motion_stops"],
+                                  "scans_sent": laser.scans_sent if laser else 0, "scans_computed": rig.scans,
+                                  "frames_rendered": rig.frames,
+                                  "frames_sent": rig.rig.camera_server.frames_sent if rig.rig.camera_server else 0}
+        return out
+
+    def stop(self) -> None:
+        for rig in self.rigs.values():
+            rig.rig.stop()
+        self.rigs.clear()

@@ -1,0 +1,126 @@
+"""A simulated robot as emulated hardware (real ptys, sockets and HTTP): the
+robotino backend drives the world's robot through the base firmware, its
+laser scans decode to the ranges the world computes, its camera frames are
+the world's renders, its gripper moves the world's gripper."""
+import math
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from backends.sim import sensors
+from backends.sim.hardware import WorldHardware
+from rll_bt.backend import Pose2D, open_backend
+
+
+class Running:
+    """The world stepped on the wall clock in a thread of its own (as the game
+    process does), the devices synced after each step; ``lock`` holds it
+    while a test reads PyBullet itself."""
+
+    def __init__(self, world, hw):
+        self.world, self.hw = world, hw
+        self.lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._loop, daemon=True)
+        self._thread.start()
+
+    def _loop(self):
+        last = time.monotonic()
+        while not self._stop.is_set():
+            with self.lock:
+                now = time.monotonic()
+                dt = min(now - last, 0.1)
+                if dt >= 0.01:
+                    self.world.step(dt)
+                    last = now
+                self.hw.sync()
+            time.sleep(0.005)
+
+    def stop(self):
+        self._stop.set()
+        self._thread.join(timeout=2)
+
+    def run(self, seconds, until=None):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            if until is not None and until():
+                return True
+            time.sleep(0.01)
+        return until() if until is not None else True
+
+
+@pytest.fixture(params=["urg", "tim"])
+def rigged(request, make_world):
+    world = make_world("rcll2016", seed=3)
+    world.add_robot("CYAN", 1, pose=Pose2D(3.0, 2.0, 0.3), laser_noise=0.0)
+    hw = WorldHardware(world, laser=request.param, camera_fps=5.0)
+    rig = hw.add(("CYAN", 1))
+    running = Running(world, hw)
+    backend = open_backend("robotino", robot_config=rig.config())
+    yield world, hw, rig, backend, running
+    backend.close()
+    running.stop()
+    hw.stop()
+
+
+def test_scans_decode_to_the_ranges_the_world_computes(rigged):
+    world, hw, rig, backend, running = rigged
+    running.run(0.5)
+    scan = backend.laser_scan()
+    robot = world.robots[("CYAN", 1)]
+    with running.lock:
+        truth = sensors.laser_ranges(world.cid, robot, rig.angles, noisy=False)
+    dev = rig.rig.laser_device
+    if rig.rig.laser_kind == "urg":
+        m = dev.model
+        truth = truth[m.amin:m.amax + 1]
+        limit = m.dmax / 1000.0
+    else:
+        limit = dev.model.range_mm[1] / 1000.0
+    assert len(scan.ranges) == len(truth)
+    seen = np.isfinite(truth) & (truth <= limit)
+    assert seen.sum() > 0.5 * len(truth)
+    assert np.allclose(scan.ranges[seen], truth[seen], atol=0.0006)          # millimetres on the wire
+    assert np.all(np.isinf(scan.ranges[~seen]))
+    angles = scan.angle_min + scan.angle_increment * np.arange(len(scan.ranges))
+    expected = rig.angles[m.amin:m.amax + 1] if rig.rig.laser_kind == "urg" else rig.angles
+    assert np.allclose(angles, expected, atol=1e-4)
+    assert scan.mount.x == pytest.approx(robot.config.geometry.laser_mount[0])
+
+
+def test_the_base_drives_the_worlds_robot_and_the_camera_shows_the_worlds_view(rigged):
+    world, hw, rig, backend, running = rigged
+    robot = world.robots[("CYAN", 1)]
+    start = robot.pose
+    odo0 = backend.odometry().pose
+    end = time.monotonic() + 1.5
+    while time.monotonic() < end:
+        backend.drive(0.2, 0.0, 0.0)
+        running.run(0.05)
+    backend.stop()
+    running.run(0.8)
+    moved = robot.pose.relative_to(start)
+    odo = backend.odometry().pose.relative_to(odo0)
+    assert 0.15 < moved.x < 0.4 and abs(moved.y) < 0.03
+    assert odo.x == pytest.approx(moved.x, abs=0.03)                 # the host's odometry from the wheels
+    assert hw.stats()["CYAN/1"]["watchdog_motion_stops"] == 0
+    frame = backend.camera_image()
+    assert frame.image.shape == (240, 320, 3) and abs(frame.stamp - time.monotonic()) < 1.5
+    assert frame.intrinsics.fx == pytest.approx(160 / math.tan(robot.config.camera_hfov / 2), rel=1e-3)
+    assert frame.image.std() > 5                                     # a rendered view, not a blank
+
+
+def test_the_gripper_moves_the_worlds_gripper_and_holding_comes_from_the_world(rigged):
+    world, hw, rig, backend, running = rigged
+    robot = world.robots[("CYAN", 1)]
+    assert running.run(3.0, until=lambda: backend.gripper_status().state.value == "idle")
+    backend.gripper_move(0.05, 0.02, 0.4)
+    assert running.run(10.0, until=lambda: np.allclose(robot.gripper.position, (0.05, 0.02, 0.4), atol=0.002)
+                       and backend.gripper_status().state.value == "idle")
+    assert np.allclose(backend.gripper_status().position, (0.05, 0.02, 0.4), atol=0.002)
+    assert backend.holding() is False
+    robot.holding = 1                       # what the world says is in the jaws reaches the host
+    assert running.run(2.0, until=lambda: backend.holding() is True)
+    robot.holding = None
