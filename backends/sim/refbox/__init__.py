@@ -5,10 +5,12 @@ Layers (each usable alone):
 
 - :class:`RefboxGame` (:mod:`.game`): the pure game core.  No threads, no
   sockets; it takes a clock and moves only in :meth:`RefboxGame.tick`.
-  What differs between rule sets is ``game.rules`` (:mod:`.ruleset`:
-  2016; :mod:`.ruleset2025`: no EXPLORATION phase, zone + rotation reports
-  in the first 180 s of PRODUCTION (:mod:`.exploration2025`), orders by id
-  (:mod:`.orders2025`), the storage station (:mod:`.storage`)).
+  What differs between rule sets is ``game.rules`` (:mod:`.rulesets`, one
+  module per rule set: :mod:`.rulesets.rcll2016`; :mod:`.rulesets.rcll2025`:
+  no EXPLORATION phase, zone + rotation reports in the first 180 s of
+  PRODUCTION (:mod:`.exploration2025`), orders by id (:mod:`.orders2025`),
+  the storage station (:mod:`.stations.ss`)).  Stations are a package with
+  one module per station type (:mod:`.stations`).
 - :class:`RefboxNode` (:mod:`.node`): the game behind the refbox's channels
   (public plain, cyan/magenta AES-128-CBC, TCP control stream) over UDP or the
   in-process bus.
@@ -83,10 +85,15 @@ from .events import Event
 from .exploration2016 import ReportEntry
 from .game import PendingDelivery, RefboxGame
 from .node import RefboxNode
-from .ruleset import Rules2016, rules_for
-from .ruleset2025 import Rules2025
-from .stations import BSInstruction, CSInstruction, DSInstruction, RSInstruction, StationConfig
-from .storage import SSInstruction
+from .rulesets import Rules2016, Rules2025, rules_for
+from .stations import (
+    BSInstruction,
+    CSInstruction,
+    DSInstruction,
+    RSInstruction,
+    SSInstruction,
+    StationConfig,
+)
 from .timing import Timing, parse_phase_lengths
 from .world import RefboxWorld, SlotEvent, TableWorld, Workpiece
 

@@ -110,7 +110,7 @@ def _settings(args):
     """Validated (profile, timing, keys) from the arguments; UserError otherwise."""
     from rll_bt import rules
 
-    from .ruleset import rules_for
+    from .rulesets import rules_for
     from .timing import Timing, parse_phase_lengths
     try:
         prof = rules.profile(args.profile)

@@ -11,7 +11,7 @@ phases, firing station timers at their exact times, activating orders.
 Robots' beacons, reports, prepare and reset requests come in as plain values
 (:meth:`beacon`, :meth:`machine_report`, :meth:`prepare`, :meth:`reset_machine`);
 everything that differs between rule sets is asked of ``game.rules``
-(:mod:`.ruleset`, :mod:`.ruleset2025`); the network node
+(:mod:`.rulesets`); the network node
 (:mod:`.node`) turns wire messages into these calls and the game state back
 into messages.  ``game_time`` is game seconds since the current phase began.
 """
@@ -20,17 +20,18 @@ from __future__ import annotations
 import logging
 import random
 from collections import deque
-from dataclasses import dataclass
 
 from rll_bt import rules as R
 from rll_bt.rules import CYAN, MAGENTA, TEAMS, machine_team
 
 from . import events as E
+from . import team_requests
+from .deliveries import Deliveries, PendingDelivery
 from .exploration2016 import ReportEntry
 from .ledger import Ledger, PointsEntry
 from .mockup import Mockup
 from .robots import RobotRegistry
-from .ruleset import rules_for
+from .rulesets import rules_for
 from .stations import CapStation, Station, StationConfig, make_station
 from .timing import (
     EXPLORATION,
@@ -53,23 +54,6 @@ log = logging.getLogger("backends.sim.refbox")
 REFBOX_TEAM = "LLSF"
 
 
-@dataclass(frozen=True)
-class PendingDelivery:
-    """A delivery the referee has not confirmed yet (OrderInfo ``unconfirmed_deliveries``):
-    delivery ``id``, ``team``, the DS ``machine``, the ``order`` it was prepared for, the
-    workpiece, the production ``game_time`` it was delivered at and the game time the
-    referee confirms it (``confirm_at``)."""
-
-    id: int
-    team: str
-    machine: str
-    order: int | None
-    workpiece: Workpiece
-    gate: int
-    game_time: float
-    confirm_at: float
-
-
 class RefboxGame:
     """One game of the simulated refbox.
 
@@ -80,7 +64,7 @@ class RefboxGame:
     fixes placement, light codes, type strings, ring costs, orders and down
     periods.  ``timing``: phase lengths and speed (default: the profile's).
     ``config``: station durations and rules.  ``rules``: the rule set of the
-    profile (:func:`~.ruleset.rules_for`).  ``mockup``: play stations without robots
+    profile (:func:`~.rulesets.rules_for`).  ``mockup``: play stations without robots
     (:mod:`.mockup`: virtual robots take products off outputs and feed prepared
     stations; off by default, for games with robots in the world); ``game.mockup`` is
     the :class:`~.mockup.Mockup` or None.
@@ -115,8 +99,7 @@ class RefboxGame:
                                                        self.rng("exploration"), feedback_time)
         self.feedback_until: dict[str, float] = {}  # 2016: machine -> time its feedback ends
         self.orders = self.rules.make_orders(self.profile, self.rng("orders"), self.timing)
-        self.pending_deliveries: list[PendingDelivery] = []
-        self._delivery_ids = 0
+        self.deliveries = Deliveries(self)
         self.mockup = Mockup(self) if mockup else None
         self.stations: dict[str, Station] = {
             m: make_station(m, machine_team(m), self) for m in self.profile.machines()}
@@ -223,35 +206,15 @@ class RefboxGame:
                 channel_team: str | None = None, *, sent_at: float | None = None) -> str:
         """A PrepareMachine (``sent_at``: its Unix time, 2025).  Returns what became of it:
         "prepared", "broken", "done" (an SS CHANGE_INFO) or "ignored: <why>" (with an
-        attention message where the refbox sends one)."""
-        st = self._team_machine("prepare", team_color, machine, channel_team)
-        if isinstance(st, str):
-            return st
-        why = self.rules.stale_prepare(self, sent_at)
-        if why:
-            return f"ignored: {why}"
-        why = self.rules.refuse_prepare(self, st)
-        if why:
-            self._attention(team_color, f"Prepare refused: {why}")
-            return f"ignored: {why}"
-        if st.state != "IDLE":
-            return self.rules.prepare_busy(self, st)
-        if instruction is None and not self.rules.missing_instruction_breaks:
-            return f"ignored: prepare for {machine} without instruction"
-        st.prepare(instruction)
-        if st.state == "BROKEN":
-            return "broken"
-        return "done" if st.state == "IDLE" else "prepared"
+        attention message where the refbox sends one); :mod:`.team_requests`."""
+        return team_requests.prepare(self, team_color, machine, instruction, channel_team,
+                                     sent_at=sent_at)
 
     def reset_machine(self, team_color: str, machine: str,
                       channel_team: str | None = None) -> str:
         """A ResetMachine: the team's station goes BROKEN (the usual broken time, then
         IDLE with its slots cleared).  Returns "broken" or "ignored: <why>"."""
-        st = self._team_machine("reset", team_color, machine, channel_team)
-        if isinstance(st, str):
-            return st
-        st.reset(f"Machine {machine} resetted by the team {team_color}")
-        return "broken"
+        return team_requests.reset_machine(self, team_color, machine, channel_team)
 
     def station_down(self, machine: str, seconds: float) -> None:
         """The operator takes ``machine`` DOWN now for ``seconds`` of game time (one of
@@ -265,22 +228,6 @@ class RefboxGame:
         st.down, st.down_done = (now, now + float(seconds)), False
         self.tick()
         st.update(self.game_time)
-
-    def _team_machine(self, what: str, team_color: str, machine: str, channel_team):
-        """The station ``machine`` of ``team_color`` for a team request, or why it is
-        ignored ("ignored: ..."; with the refbox's attention messages)."""
-        if self.phase != PRODUCTION or self.state != RUNNING:
-            return f"ignored: not in PRODUCTION/RUNNING ({self.phase}/{self.state})"
-        if channel_team is not None and channel_team != team_color:
-            self._attention(channel_team, f"Invalid {what} for team {team_color} of team "
-                                          f"{channel_team}")
-            return "ignored: wrong channel"
-        st = self.stations.get(machine)
-        if st is None or st.team != team_color:
-            self._attention(team_color if team_color in TEAMS else None,
-                            f"{what.capitalize()} received for invalid machine {machine}")
-            return "ignored: not a machine of that team"
-        return st
 
     # -- time ---------------------------------------------------------------------
     def tick(self) -> None:
@@ -412,38 +359,14 @@ class RefboxGame:
             self.mockup.on_state(station, previous)
 
     def deliver(self, station: Station, wp: Workpiece, gate: int, game_time: float) -> None:
-        """The DS ``station`` consumed ``wp``: judge it now, or list it as unconfirmed for
-        ``config.delivery_confirm`` game seconds first."""
-        self._delivery_ids += 1
-        d = PendingDelivery(self._delivery_ids, station.team, station.name,
-                            getattr(station.instruction, "order_id", None), wp, gate, game_time,
-                            game_time + self.config.delivery_confirm)
-        if self.config.delivery_confirm > 0:
-            self.pending_deliveries.append(d)
-            self.emit(E.DELIVERY, f"{d.team} delivered {wp} (delivery {d.id}, unconfirmed)",
-                      team=d.team, machine=d.machine, game_time=game_time, order=d.order,
-                      how="unconfirmed", workpiece=wp, delivery=d.id)
-            return
-        self._judge_delivery(d)
+        """The DS ``station`` consumed ``wp`` at ``game_time``: judged now, or listed as
+        unconfirmed for ``config.delivery_confirm`` game seconds first (:mod:`.deliveries`)."""
+        self.deliveries.deliver(station, wp, gate, game_time)
 
-    def _judge_delivery(self, d: PendingDelivery) -> None:
-        res = self.rules.judge_delivery(self.profile, self.orders, d.team, d.workpiece, d.gate,
-                                        d.game_time, self.ring_costs, d.order)
-        for pts, reason in res.awards:
-            self.award(d.team, pts, reason, machine=d.machine, game_time=d.game_time,
-                       order=res.order)
-        self.emit(E.DELIVERY, f"{d.team} delivered {d.workpiece} at gate {d.gate}: {res.how}",
-                  team=d.team, machine=d.machine, game_time=d.game_time,
-                  points=res.points, order=res.order, how=res.how, workpiece=d.workpiece,
-                  delivery=d.id)
-        if res.attention:
-            self._attention(d.team, res.attention)
-
-    def _confirm_deliveries(self) -> None:
-        due = [d for d in self.pending_deliveries if d.confirm_at <= self.game_time]
-        for d in due:
-            self.pending_deliveries.remove(d)
-            self._judge_delivery(d)
+    @property
+    def pending_deliveries(self) -> list[PendingDelivery]:
+        """Deliveries the referee has not confirmed yet."""
+        return self.deliveries.pending
 
     # -- internals ---------------------------------------------------------------------
     def _attention(self, team: str | None, text: str, time_to_show: float = 10.0) -> None:
@@ -508,7 +431,7 @@ class RefboxGame:
                 self.stations[name].update(self.game_time)
             if self.mockup is not None:
                 self.mockup.fire(self.game_time)
-            self._confirm_deliveries()
+            self.deliveries.confirm_due()
 
     def _activate_orders(self) -> None:
         for o in self.orders:

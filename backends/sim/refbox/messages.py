@@ -16,8 +16,7 @@ from rll_bt import msgs as M
 from rll_bt.rules import CYAN, MAGENTA, TEAMS, machine_team
 
 from .exploration2016 import ReportEntry
-from .stations import BSInstruction, CSInstruction, DSInstruction, RSInstruction
-from .storage import SSInstruction
+from .stations import BSInstruction, CSInstruction, DSInstruction, RSInstruction, SSInstruction
 
 REFBOX_TEAM, REFBOX_PEER, REFBOX_NUMBER = "LLSF", "RefBox", 0
 #: largest protobuf that fits a 1024-byte AES-128-CBC datagram (8 header + 16 IV +

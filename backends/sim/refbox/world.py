@@ -11,7 +11,7 @@ logic runs and is tested without physics.
 Slots (as the PyBullet world): ``input``; ``output`` (not on a DS);
 ``slide`` (RS, holds many); ``shelf0``..``shelf2`` (CS).  The storage
 station (2025) has only ``input`` and ``output``: what it stores is kept by
-the refbox (:mod:`.storage`), not in the world.  Colours are the
+the refbox (:mod:`.stations.ss`), not in the world.  Colours are the
 ``llsf_msgs`` enum names (``BASE_RED``, ``RING_BLUE``, ``CAP_GREY``); lights
 are ``OFF``/``ON``/``BLINK`` for ``RED``, ``YELLOW``, ``GREEN``.
 """

@@ -1,6 +1,6 @@
 """Today's rules (refbox HEAD, 2022+), as the refbox code plays them.
 
-What changes against :class:`~.ruleset.Rules2016`:
+What changes against :class:`~.rcll2016.Rules2016`:
 
 - phases SETUP -> PRODUCTION (+ overtime); EXPLORATION is never entered
   (the operator cannot switch to it either); the first ``exploration_time``
@@ -21,13 +21,13 @@ from __future__ import annotations
 
 import random
 
-from . import events as E
-from .exploration2025 import Exploration2025
-from .orders2025 import judge_delivery_2025, schedule_2025
-from .ruleset import Rules2016
-from .stations import READY_AT_OUTPUT, STATE_LIGHTS_2025
-from .timing import EXPLORATION, PRODUCTION, RUNNING, SETUP
-from .world import ALL_OFF
+from .. import events as E
+from ..exploration2025 import Exploration2025
+from ..orders2025 import judge_delivery_2025, schedule_2025
+from ..stations import READY_AT_OUTPUT, STATE_LIGHTS_2025
+from ..timing import EXPLORATION, PRODUCTION, RUNNING, SETUP
+from ..world import ALL_OFF
+from .rcll2016 import Rules2016
 
 PRODUCTION_PREPARE_TIMEOUT = 5.0
 

@@ -41,10 +41,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from rll_bt.rules import BASE_COLORS
-
-from . import events as E
-from .world import ALL_OFF, BLINK, INPUT, ON, OUTPUT, SHELF_SLOTS, SLIDE, Workpiece, describe, lights, station_slots
+from .. import events as E
+from ..world import ALL_OFF, BLINK, INPUT, ON, OUTPUT, Workpiece, describe, lights, station_slots
 
 IDLE, PREPARED, PROCESSING = "IDLE", "PREPARED", "PROCESSING"
 READY_AT_OUTPUT, WAIT_IDLE, BROKEN, DOWN = "READY-AT-OUTPUT", "WAIT-IDLE", "BROKEN", "DOWN"
@@ -97,28 +95,6 @@ class StationConfig:
 
     def cap_of(self, kind: str) -> str:
         return dict(self.cs_caps)[kind]
-
-
-@dataclass(frozen=True)
-class BSInstruction:
-    side: str          # "INPUT" | "OUTPUT"
-    color: str         # BASE_*
-
-
-@dataclass(frozen=True)
-class RSInstruction:
-    ring_color: str    # RING_*
-
-
-@dataclass(frozen=True)
-class CSInstruction:
-    operation: str     # "RETRIEVE_CAP" | "MOUNT_CAP"
-
-
-@dataclass(frozen=True)
-class DSInstruction:
-    gate: int = 0               # 2016: 1-3 (0 = any)
-    order_id: int | None = None  # 2017+: the order to deliver
 
 
 class StationHost(Protocol):
@@ -405,149 +381,3 @@ class Station:
 def _light_text(lights: dict) -> str:
     on = [f"{c}-{s}" for c, s in lights.items() if s != "OFF"]
     return " ".join(on) or "off"
-
-
-class BaseStation(Station):
-    kind, duration_key = "BS", "bs_dispense"
-
-    def validate(self, instr) -> str | None:
-        if not isinstance(instr, BSInstruction):
-            return "prepare without base station instruction"
-        if instr.side not in ("INPUT", "OUTPUT"):
-            return f"invalid side {instr.side}"
-        if instr.color not in BASE_COLORS:
-            return f"invalid base color {instr.color}"
-        return None
-
-    def on_prepared(self) -> None:
-        # the BS goes straight to dispensing
-        self._set_state(PROCESSING, f"dispensing {self.instruction.color}")
-        self.deadline = self.now + self.duration
-
-    def finish(self) -> None:
-        side = self.instruction.side.lower()         # MachineSide INPUT/OUTPUT -> slot
-        if self.host.world.workpiece_at(self.name, side) is not None:
-            self.break_(f"cannot dispense, {side} is occupied")
-            return
-        self._ready(Workpiece(self.instruction.color), side)
-
-
-class RingStation(Station):
-    kind, duration_key = "RS", "rs_mount"
-
-    def validate(self, instr) -> str | None:
-        if not isinstance(instr, RSInstruction):
-            return "prepare without ring station instruction"
-        colors = self.host.rs_colors(self.name)
-        if instr.ring_color not in colors:
-            return f"invalid ring color {instr.ring_color} (has {', '.join(colors)})"
-        return None
-
-    def on_put(self, slot: str, wp) -> None:
-        if slot == SLIDE and self.active:
-            self.host.world.remove_workpiece(self.name, SLIDE, getattr(wp, "id", None))
-            self.load_slide()
-            return
-        super().on_put(slot, wp)
-
-    def load_slide(self) -> None:
-        """One additional base fed to the slide: +``additional_base`` points, or BROKEN
-        when more than ``slide_max`` are loaded."""
-        self.bases_added += 1
-        if self.slide_loaded > self.host.config.slide_max:
-            if self.state != BROKEN:
-                self.break_(f"too many additional bases loaded ({self.slide_loaded})")
-            return
-        self.host.award(self.team, self.host.profile.scoring.additional_base,
-                        f"added additional base to {self.name}", machine=self.name)
-
-    def start(self, wp: Workpiece) -> str | None:
-        color = self.instruction.ring_color
-        need = self.host.ring_cost(color)
-        if self.slide_loaded < need:
-            return f"insufficient bases ({self.slide_loaded} < {need}) for {color}"
-        if wp.cap is not None or len(wp.rings) >= 3:
-            return f"cannot mount a ring on {wp}"
-        self.bases_used += need
-        return None
-
-    def finish(self) -> None:
-        self._ready(self.inside.with_ring(self.instruction.ring_color))
-
-
-class CapStation(Station):
-    kind, duration_key = "CS", "cs_process"
-
-    def validate(self, instr) -> str | None:
-        if not isinstance(instr, CSInstruction):
-            return "prepare without cap station instruction"
-        if instr.operation == "RETRIEVE_CAP":
-            return "cannot retrieve while already holding a cap" if self.cap_buffer else None
-        if instr.operation == "MOUNT_CAP":
-            return None if self.cap_buffer else "cannot mount without a buffered cap"
-        return f"invalid cap station operation {instr.operation}"
-
-    def on_take(self, slot: str, wp: Workpiece | None) -> None:
-        if slot in SHELF_SLOTS and self.host.config.refill_shelf:
-            self.spawn_carrier(slot)
-            return
-        super().on_take(slot, wp)
-
-    def carrier(self) -> Workpiece:
-        cfg = self.host.config
-        return Workpiece(cfg.carrier_base, (), cfg.cap_of(self.name[2:]))
-
-    def spawn_carrier(self, slot: str) -> None:
-        """Put a cap carrier on shelf ``slot`` unless something is there."""
-        if self.host.world.workpiece_at(self.name, slot) is None:
-            c = self.carrier()
-            self.host.world.spawn_workpiece(self.name, slot, c.base, (), c.cap)
-
-    def start(self, wp: Workpiece) -> str | None:
-        if self.instruction.operation == "RETRIEVE_CAP" and wp.cap is None:
-            return f"no cap to retrieve on {wp}"
-        if self.instruction.operation == "MOUNT_CAP" and wp.cap is not None:
-            return f"cannot mount a cap on capped {wp}"
-        return None
-
-    def finish(self) -> None:
-        wp = self.inside
-        if self.instruction.operation == "RETRIEVE_CAP":
-            self.cap_buffer = wp.cap
-            pts = self.host.profile.scoring.cap_retrieved
-            if pts:
-                self.host.award(self.team, pts, f"retrieved cap at {self.name}", machine=self.name)
-            self._ready(wp.with_cap(None))
-        else:
-            cap, self.cap_buffer = self.cap_buffer, None
-            self._ready(wp.with_cap(cap))
-
-
-class DeliveryStation(Station):
-    kind, duration_key = "DS", "ds_deliver"
-
-    def validate(self, instr) -> str | None:
-        if not isinstance(instr, DSInstruction):
-            return "prepare without delivery station instruction"
-        return self.host.rules.validate_ds(self.host, instr)
-
-    def finish(self) -> None:
-        wp, self.inside = self.inside, None
-        self.host.deliver(self, wp, self.host.rules.delivery_gate(self.host, self.instruction),
-                          self.now)
-        self._idle("delivered")
-
-
-KINDS = {"BS": BaseStation, "RS": RingStation, "CS": CapStation, "DS": DeliveryStation}
-
-
-def make_station(name: str, team: str, host: StationHost) -> Station:
-    kind = name[2:4]
-    if kind == "SS":
-        from .storage import StorageStation  # built on Station: imported here, not above
-        return StorageStation(name=name, team=team, host=host)
-    try:
-        cls = KINDS[kind]
-    except KeyError:
-        raise ValueError(f"no station model for {name!r}") from None
-    return cls(name=name, team=team, host=host)

@@ -22,9 +22,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from . import events as E
-from .stations import Station
-from .world import OUTPUT, Workpiece
+from .. import events as E
+from ..world import OUTPUT, Workpiece
+from .base import Station
 
 SHELVES, SLOTS = 6, 8                    # SS-MAX-SHELF 5, SS-MAX-SLOT 7
 OPERATIONS = ("STORE", "RETRIEVE", "CHANGE_INFO")

@@ -1,11 +1,12 @@
 """What differs between rule sets inside the game core, behind one object.
 
-:func:`rules_for` picks the rule set of a profile.  The game core asks it
+The package (:func:`~backends.sim.refbox.rulesets.rules_for`) picks the rule
+set of a profile.  The game core asks it
 for the phase sequence, the exploration model and when reports are taken,
 the signal-tower lights of a station, the order schedule, PrepareMachine
 checks, the delivery judgement and the down periods, and nothing else in the
 core names a year.  :class:`Rules2016` is the 2016 refbox (tag 2016-1);
-:class:`~.ruleset2025.Rules2025` today's (HEAD) refbox, a subclass that
+:class:`~.rcll2025.Rules2025` today's (HEAD) refbox, a subclass that
 overrides what changed.
 """
 from __future__ import annotations
@@ -14,9 +15,9 @@ import random
 
 from rll_bt.rules import CYAN, machine_type, mirror_machine_name
 
-from .exploration2016 import Exploration2016
-from .orders2016 import judge_delivery_2016, schedule_2016
-from .timing import EXPLORATION, PRODUCTION, SETUP
+from ..exploration2016 import Exploration2016
+from ..orders2016 import judge_delivery_2016, schedule_2016
+from ..timing import EXPLORATION, PRODUCTION, SETUP
 
 
 class Rules2016:
@@ -130,17 +131,3 @@ class Rules2016:
     def down_earliest(self, timing) -> float:
         return 0.1 * float(timing.production)
 
-
-def _rulesets() -> dict:
-    from .ruleset2025 import Rules2025  # a subclass of Rules2016
-    return {"rcll2016": Rules2016, "rcll2025": Rules2025}
-
-
-def rules_for(profile) -> Rules2016:
-    """The rule set playing ``profile``; ValueError for a profile without one."""
-    sets = _rulesets()
-    try:
-        return sets[profile.name]()
-    except KeyError:
-        raise ValueError(f"the simulated refbox does not play {profile.name!r} "
-                         f"(it plays: {', '.join(sets)})") from None
