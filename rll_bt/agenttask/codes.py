@@ -19,7 +19,7 @@ ALIGN_FAILED                NOT_AT_POSITION
 GRAB_FAILED                 GRASPING_FAILED
 PUT_FAILED                  MACHINE_POINT_OCCUPIED while the gripper still holds
                             the workpiece, NO_WORKPIECE_IN_GRIPPER once it is empty
-GRIPPER_ERROR               INTERNAL_ERROR
+GRIPPER_ERROR, SENSOR_LOST  INTERNAL_ERROR
 TIMEOUT, MACHINE_BROKEN,
 NOT_RUNNING                 UNKNOWN
 INVALID_TASK                INVALID_TARGET (the task reader says WRONG_TEAM,
@@ -56,6 +56,7 @@ TO_LEAGUE = {
     "NOT_RUNNING": "UNKNOWN",
     "INVALID_TASK": "INVALID_TARGET",
     "INTERNAL": "INTERNAL_ERROR",
+    "SENSOR_LOST": "INTERNAL_ERROR",
 }
 
 #: league ErrorCode name -> rll-bt ErrorCode name
