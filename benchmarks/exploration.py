@@ -30,25 +30,26 @@ import sys
 import time
 from pathlib import Path
 
+from games.batch import fmt, median, run_batch
+from games.options import GameOptions, published
 from rll_bt import rules
-from rll_bt.game.batch import fmt, median, run_batch
-from rll_bt.game.options import STRATEGIES, GameOptions
 
 
 def main(argv=None) -> int:
+    strategies_known = published("strategy", "htn")       # the team server's own list
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--profile", default="rcll2016", choices=rules.PROFILES)
     ap.add_argument("--seeds", type=int, default=30, help="seeds 1..N (default 30)")
     ap.add_argument("--first-seed", type=int, default=1)
-    ap.add_argument("--strategies", default=",".join(STRATEGIES))
+    ap.add_argument("--strategies", default=",".join(strategies_known))
     ap.add_argument("--jobs", type=int, default=2, help="games in parallel (default 2)")
     ap.add_argument("--per-seed", action="store_true", help="also print every game")
     ap.add_argument("--json", type=Path, help="write every game's numbers here")
     args = ap.parse_args(argv)
     strategies = [s for s in args.strategies.split(",") if s]
-    bad = set(strategies) - set(STRATEGIES)
+    bad = set(strategies) - set(strategies_known)
     if bad:
-        ap.error(f"unknown strategy {', '.join(sorted(bad))} (known: {', '.join(STRATEGIES)})")
+        ap.error(f"unknown strategy {', '.join(sorted(bad))} (known: {', '.join(strategies_known)})")
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     games = [GameOptions(profile=args.profile, seed=s, strategy=st, until="exploration", setup=1.0)
              for st in strategies for s in seeds]

@@ -20,9 +20,9 @@ import sys
 import time
 from pathlib import Path
 
+from games.batch import fmt, mean, median, run_batch
+from games.options import GameOptions
 from rll_bt import rules
-from rll_bt.game.batch import fmt, mean, median, run_batch
-from rll_bt.game.options import GameOptions
 
 VARIANTS = {"htn": False, "baseline": True}
 #: how the simulated refbox judges a delivery (backends/sim/refbox/orders2016.py, orders2025.py)

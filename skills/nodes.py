@@ -28,12 +28,14 @@ from py_trees.common import Status as TreeStatus
 
 from rll_bt import rules
 from rll_bt.backend import Capability, Pose2D
+from rll_bt.plugins import offers
 from rll_bt.tree import Input, Node, Output, register_service, write_error
 
 from .activity import Activity, Status
 from .context import SkillContext
 from .errors import SkillError
 from .exploration import ExploreZone
+from .localisation.config import PRESETS
 from .localisation.relocalise import Relocalise
 from .manipulation import ApproachStation, GrabFrom, PutOnto, place_for
 from .manipulation.station import back_off_distance
@@ -302,9 +304,11 @@ NODE_TYPES = (NavigateToPose, NavigateToZone, NavigateToStation, ExploreZoneNode
               Grab, Put, BackOff, TurnNode, RelocaliseNode, Localised, HoldingWorkpiece)
 
 
+@offers(localisation=PRESETS)
 def register(registry) -> None:
     """Entry point ``rll_bt.nodes: skills``: add the skill node types and the
-    ``skills`` service factory."""
+    ``skills`` service factory; publishes the localisation presets the service
+    builds from the agent's ``services["localisation"]`` (``choices["localisation"]``)."""
     register_service("skills", skills_service, replace=True)
     for cls in NODE_TYPES:
         registry.register(cls, replace=True)

@@ -2,7 +2,7 @@
 
 Entry point ``rll_bt.teamservers: htn`` -> :func:`open_teamserver`, which
 returns an :class:`InProcessTeamServer` implementing
-:class:`rll_bt.game.interfaces.TeamServerHandle`: a :class:`TeamServer` on
+:class:`rll_bt.contracts.TeamServerHandle`: a :class:`TeamServer` on
 the transports the game hands it, that can be killed and restarted from its
 state database mid-game, and that reports its view for the game report.
 
@@ -14,9 +14,11 @@ look-ahead, so no caps retrieved ahead either; see
 """
 from __future__ import annotations
 
-from rll_bt.game.interfaces import TeamServerHandle, TeamServerOptions
+from rll_bt.contracts import TeamServerHandle, TeamServerOptions
+from rll_bt.plugins import offers
 
 from . import model as M
+from .exploration.strategies import STRATEGIES
 from .exploration.symmetry import consistent_set
 from .exploration.view import sure_properties
 from .links import RefboxLink
@@ -98,6 +100,8 @@ class InProcessTeamServer(TeamServerHandle):
         srv.close()
 
 
+@offers(strategy=tuple(STRATEGIES))
 def open_teamserver(**options) -> InProcessTeamServer:
-    """Entry point ``rll_bt.teamservers: htn`` (options of :class:`InProcessTeamServer`)."""
+    """Entry point ``rll_bt.teamservers: htn`` (options of :class:`InProcessTeamServer`);
+    publishes the exploration strategies it plays (``choices["strategy"]``)."""
     return InProcessTeamServer(**options)

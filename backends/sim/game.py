@@ -2,7 +2,7 @@
 
 Entry point ``rll_bt.simulators: pybullet`` -> :func:`open_game`, which
 returns a :class:`PyBulletGame` implementing
-:class:`rll_bt.game.interfaces.Simulation`: a :class:`~backends.sim.world.World`
+:class:`rll_bt.contracts.Simulation`: a :class:`~backends.sim.world.World`
 whose clock everything runs on, and the simulated refbox that drives its
 stations.  With ``refbox="here"`` (lockstep) that is a
 :class:`~backends.sim.refbox.RefboxGame` in this process, put on the
@@ -20,12 +20,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from rll_bt.backend import Pose2D
-from rll_bt.game.interfaces import Award, Delivery, GameStatus, Simulation, StationTruth
+from rll_bt.contracts import Award, Delivery, GameStatus, Simulation, StationTruth
+from rll_bt.plugins import offers
 
 from .backend import SimBackend
 from .refbox import RefboxGame, RefboxNode, Timing
 from .refbox.view import GameView, SnapshotView
-from .world import World
+from .world import PERCEPTION_MODES, World
 
 REFBOX_MODES = ("here", "process")
 SNAPSHOT_PERIOD = 0.25       # s between two snapshots of a refbox process
@@ -181,6 +182,8 @@ class PyBulletGame(Simulation):
         self.world.close()
 
 
+@offers(perception=PERCEPTION_MODES)
 def open_game(**options) -> PyBulletGame:
-    """Entry point ``rll_bt.simulators: pybullet`` (options of :class:`PyBulletGame`)."""
+    """Entry point ``rll_bt.simulators: pybullet`` (options of :class:`PyBulletGame`);
+    publishes its perception modes (``choices["perception"]``)."""
     return PyBulletGame(**options)

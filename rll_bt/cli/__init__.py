@@ -19,7 +19,7 @@ from ..errors import UserError
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_UNAVAILABLE, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
 
 #: kernel command modules, each with ``register(cli)``
-_KERNEL_COMMANDS = ("rll_bt.cli.refbox", "rll_bt.cli.tree", "rll_bt.cli.treexml", "rll_bt.cli.agent", "rll_bt.cli.sim")
+_KERNEL_COMMANDS = ("rll_bt.cli.refbox", "rll_bt.cli.tree", "rll_bt.cli.treexml", "rll_bt.cli.agent")
 
 GROUP_HELP = {
     "refbox": "talk to (or simulate) the referee box",

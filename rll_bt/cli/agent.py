@@ -38,7 +38,7 @@ def _hostport(text: str) -> tuple[str, int]:
 
 def register(cli) -> None:
     from ..comm import DEFAULT_HOST, LAYOUTS, TEAM_SERVER_PORT
-    from ..game.options import LOCALISATION
+    from ..plugins import Choices
     p = cli.command("agent", help="run a robot agent: team-server tasks as behaviour trees on a backend")
     p.description = ("Run one robot's agent on the wall clock with real sockets. "
                      + __doc__.split("\n\n")[1].replace("\n", " "))
@@ -86,9 +86,10 @@ def register(cli) -> None:
     g.add_argument("--trees", type=Path, metavar="DIR",
                    help="directory of <task kind>.yaml (default: installed trees/)")
     g.add_argument("--hz", type=_positive_float, default=10.0, help="tree tick rate in Hz (default 10)")
-    g.add_argument("--localisation", default="standard", choices=LOCALISATION, metavar="PRESET",
-                   help="localiser preset: standard (accuracy; the default) or cheap (fewer particles and "
-                        "beams, for several simulated robots on one machine)")
+    g.add_argument("--localisation", default="standard", metavar="PRESET",
+                   choices=Choices("rll_bt.nodes", "localisation"),   # published by the skills' entry point
+                   help="localiser preset (%(choices)s): standard (accuracy; the default) or cheap (fewer "
+                        "particles and beams, for several simulated robots on one machine)")
     g.add_argument("--seconds", type=_positive_float, metavar="S", help="stop after S seconds")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_agent)

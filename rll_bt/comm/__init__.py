@@ -8,7 +8,9 @@
 - :mod:`.udp`, :mod:`.tcp`, :mod:`.bus`: transports with one interface
   (:class:`~.transport.Transport`): ``send(msg)``, ``receive()``,
   ``events()``, ``wait(timeout)``, ``close()``, ``stats``.
-- :mod:`.ports`: the competition and sim port layouts.
+- :mod:`.ports`: the competition and sim port layouts, :func:`free_ports`.
+- :mod:`.msglog`: a message log (decoded frames as JSON lines).
+- :mod:`.jsonlink`: framed JSON request/reply links between processes.
 """
 from .bus import Bus, BusPeer, BusStreamClient, BusStreamServer
 from .codec import Decoded, FrameCodec
@@ -51,6 +53,7 @@ from .ports import (
                      TEAM_SERVER_PORT,
                      Layout,
                      PeerPorts,
+                     free_ports,
                      layout,
 )
 from .registry import MessageRegistry, comp_type_of
@@ -67,7 +70,7 @@ __all__ = [
     "MAX_DATAGRAM", "MAX_STREAM_PAYLOAD", "MESSAGE_HEADER_SIZE", "FrameHeader", "FrameHeaderV1",
     "MessageHeader", "StreamReassembler", "CHANNELS", "COMPETITION", "CYAN", "DEFAULT_HOST",
     "LAYOUTS", "MAGENTA", "PUBLIC", "REFBOX_STREAM_PORT", "SIM", "TEAM_COLORS",
-    "TEAM_SERVER_PORT", "Layout", "PeerPorts", "layout", "MessageRegistry", "comp_type_of",
+    "TEAM_SERVER_PORT", "Layout", "PeerPorts", "free_ports", "layout", "MessageRegistry", "comp_type_of",
     "CAUSES", "DropStats", "StreamClient", "StreamServer", "CONNECTED", "DISCONNECTED",
     "LinkEvent", "Received", "Transport", "UdpPeer",
 ]

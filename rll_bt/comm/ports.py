@@ -15,6 +15,7 @@ robot (or the monitor).
 """
 from __future__ import annotations
 
+import socket
 from dataclasses import dataclass
 
 PUBLIC, CYAN, MAGENTA = "public", "cyan", "magenta"
@@ -77,3 +78,18 @@ def layout(name: str) -> Layout:
         return LAYOUTS[name]
     except KeyError:
         raise ValueError(f"unknown port layout {name!r}; one of {', '.join(LAYOUTS)}") from None
+
+
+def free_ports(count: int, tcp: bool = False, host: str = "127.0.0.1") -> list[int]:
+    """``count`` distinct UDP (or TCP) ports the system has free right now (bound and released)."""
+    socks, ports = [], []
+    try:
+        for _ in range(count):
+            s = socket.socket(socket.AF_INET, socket.SOCK_STREAM if tcp else socket.SOCK_DGRAM)
+            s.bind((host, 0))
+            socks.append(s)
+            ports.append(s.getsockname()[1])
+    finally:
+        for s in socks:
+            s.close()
+    return ports

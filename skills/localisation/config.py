@@ -15,6 +15,10 @@ from dataclasses import dataclass, field, replace
 
 from .motion import OmniMotionModel
 
+#: the presets a running robot may be given (``rll-bt agent --localisation``;
+#: ``fixed`` is for timing only)
+PRESETS = ("cheap", "standard")
+
 
 @dataclass(frozen=True)
 class AmclConfig:

@@ -5,8 +5,8 @@ import socket
 import pytest
 
 import rll_bt.agent
+from games.options import published
 from rll_bt.cli import main
-from rll_bt.game.options import LOCALISATION
 from skills.localisation.config import AmclConfig
 
 pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
@@ -36,7 +36,7 @@ def made(monkeypatch):
     return seen
 
 
-@pytest.mark.parametrize("preset", LOCALISATION)
+@pytest.mark.parametrize("preset", published("localisation"))
 def test_the_preset_reaches_the_agents_skills(made, preset):
     assert main(_args("--localisation", preset)) == 0
     assert made[-1]["localisation"] == preset
@@ -56,8 +56,8 @@ def test_an_unknown_preset_is_a_usage_error(capsys):
 
 
 def test_the_processes_game_starts_its_agents_with_the_games_preset(tmp_path, monkeypatch):
-    from rll_bt.game import GameOptions
-    from rll_bt.game.processes import ProcessGame
+    from games import GameOptions
+    from games.processes import ProcessGame
     cmds = {}
     monkeypatch.setattr(ProcessGame, "_spawn", lambda self, name, cmd: cmds.__setitem__(name, cmd))
     monkeypatch.setattr(ProcessGame, "_wait_for", lambda self, ready, what: None)    # no refbox to wait for

@@ -6,8 +6,8 @@ import cv2
 import numpy as np
 import pytest
 
+from games import GameOptions, LockstepGame, progress
 from rll_bt.cli import main
-from rll_bt.game import GameOptions, LockstepGame, progress
 
 pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
 

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from rll_bt.game.msglog import MessageLog
+from rll_bt.comm.msglog import MessageLog
 from tests.support.games import in_production, running, short_game, tasks
 
 pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out

@@ -7,6 +7,7 @@ import threading
 import numpy as np
 import pytest
 
+from backends.remote import BackendServer
 from rll_bt.backend import (
     Backend,
     Capability,
@@ -22,7 +23,6 @@ from rll_bt.backend import (
 )
 from rll_bt.cli import main
 from rll_bt.clock import SimClock
-from rll_bt.game.remote import BackendServer
 
 pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
 
@@ -163,8 +163,8 @@ def test_production_across_the_station_link(tmp_path):
     a base dispensed, taken off the BS, a cap carrier taken off the CS shelf and fed to its
     input, the cap retrieved.  Every step crosses the station link: the refbox's spawns into
     the world, the robot's takes and puts back to the refbox."""
-    from rll_bt.game import GameOptions
-    from rll_bt.game.processes import ProcessGame
+    from games import GameOptions
+    from games.processes import ProcessGame
     opts = GameOptions(seed=3, robots=1, setup=1.0, exploration=3.0, production=300.0, strategy="oracle",
                        processes=True, out=tmp_path / "game")
     game = ProcessGame(opts)

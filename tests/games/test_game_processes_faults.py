@@ -7,8 +7,8 @@ import os
 
 import pytest
 
-from rll_bt.game import GameOptions, finish
-from rll_bt.game.processes import ProcessGame
+from games import GameOptions, finish
+from games.processes import ProcessGame
 from tests.support.games import PRODUCTION_KINDS
 
 pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out

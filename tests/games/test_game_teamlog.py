@@ -6,11 +6,11 @@ import time
 
 import pytest
 
+from games.teamlog import LoggedStreamServer, WallToSim, merge_into, read_lines, task_runs
 from rll_bt import msgs
 from rll_bt.clock import SimClock
 from rll_bt.comm import MessageRegistry, StreamClient
-from rll_bt.game.msglog import MessageLog
-from rll_bt.game.teamlog import LoggedStreamServer, WallToSim, merge_into, read_lines, task_runs
+from rll_bt.comm.msglog import MessageLog
 
 pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
 

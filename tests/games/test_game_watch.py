@@ -18,10 +18,10 @@ import pytest
 from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
 
+from games import GameOptions, LockstepGame
+from games.plots import draw_all
+from games.replay import JsonDecoderFactory, RecordingError, read, redraw
 from rll_bt.cli import main
-from rll_bt.game import GameOptions, LockstepGame
-from rll_bt.game.plots import draw_all
-from rll_bt.game.replay import JsonDecoderFactory, RecordingError, read, redraw
 
 pytestmark = pytest.mark.slow
 

@@ -3,7 +3,7 @@ the oracle strategy (robots go straight to the stations), a short production,
 a team server that drops a robot after 3 s without a heartbeat."""
 from __future__ import annotations
 
-from rll_bt.game import GameOptions, LockstepGame
+from games import GameOptions, LockstepGame
 from teamserver.dispatch import DispatchConfig
 
 PRODUCTION_KINDS = ("get_workpiece", "put_workpiece", "retrieve_cap", "mount_ring", "mount_cap",

@@ -7,7 +7,7 @@ from rll_bt import msgs
 from rll_bt.cli import main
 from rll_bt.clock import SimClock
 from rll_bt.comm import MessageRegistry
-from rll_bt.game.interfaces import TeamServerOptions
+from rll_bt.contracts import TeamServerOptions
 from teamserver import model as M
 from teamserver.caps import FREE
 from teamserver.cli import PLANNER_NAMES

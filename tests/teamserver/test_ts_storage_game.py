@@ -10,7 +10,7 @@ import math
 
 import pytest
 
-from rll_bt.game import GameOptions, LockstepGame
+from games import GameOptions, LockstepGame
 from teamserver.dispatch import DispatchConfig
 from teamserver.planning.planner import StoragePolicy
 

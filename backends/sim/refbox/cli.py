@@ -222,7 +222,7 @@ def _open_world(args, prof):
 
 def _message_log(path, game):
     """A tap writing the node's messages to ``path`` (JSON lines, the game's clock)."""
-    from rll_bt.game.msglog import MessageLog
+    from rll_bt.comm.msglog import MessageLog
 
     from .node import RefboxNode
     log = MessageLog(path, game.clock, {}, RefboxNode.registry(game), line_buffered=True)
@@ -275,9 +275,7 @@ def cmd_sim(args) -> int:
     if args.snapshot:
         import os
 
-        from rll_bt.game.child import write_snapshot
-
-        from .view import GameView, snapshot
+        from .view import GameView, snapshot, write_snapshot
         view, pid = GameView(game), os.getpid()
 
         def write() -> None:

@@ -6,7 +6,7 @@ a bad exploration never eats into production points.
 """
 from __future__ import annotations
 
-from rll_bt.game.interfaces import Award
+from rll_bt.contracts import Award
 
 # one award: team, phase, points (may be negative), reason, game time, machine, order
 PointsEntry = Award

@@ -22,7 +22,7 @@ only through :class:`RemoteWorld`, a :class:`~.world.RefboxWorld`::
         world.pump()                       # slot events and commands, in order
         node.step()
 
-Wire: the framing of :mod:`rll_bt.game.remote`, each frame a 4-byte
+Wire: the framing of :mod:`rll_bt.comm.jsonlink`, each frame a 4-byte
 big-endian length and a UTF-8 JSON object.
 
 - The refbox calls: ``{"id", "m": method, "a": [args], "k": {kwargs}}``,
@@ -54,7 +54,7 @@ from __future__ import annotations
 import json
 from collections.abc import Callable
 
-from rll_bt.game.remote import FramedClient, FramedServer, LinkClosed, parse_address
+from rll_bt.comm.jsonlink import FramedClient, FramedServer, LinkClosed, parse_address
 
 from .world import SlotEvent, Workpiece, WorldLost
 

@@ -21,7 +21,7 @@ import json
 import os
 from pathlib import Path
 
-from rll_bt.game.interfaces import Award, Delivery, GameStatus
+from rll_bt.contracts import Award, Delivery, GameStatus
 
 from . import events as E
 
@@ -76,6 +76,13 @@ def snapshot(view) -> dict:
             "deliveries": [dataclasses.asdict(d) for d in view.deliveries()],
             "stations": {m: {"state": s, "light": list(lights.get(m, ()))} for m, s in view.station_states().items()},
             "orders": view.orders(), "station_log": view.station_log()}
+
+
+def write_snapshot(path: Path, snap: dict) -> None:
+    """Replace the snapshot file at ``path`` at once (a reader never sees half of it)."""
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(snap, default=str))
+    os.replace(tmp, path)
 
 
 class SnapshotView:

@@ -1,8 +1,10 @@
 """DESIGN.md's import direction, enforced on the source tree.
 
-- rll_bt never imports skills, backends or teamserver (it uses entry points);
+- rll_bt never imports skills, backends, teamserver or games (it uses entry points);
 - skills never imports a concrete backend (only rll_bt.backend);
-- backends never imports skills or teamserver.
+- backends never imports skills or teamserver;
+- games (the application) finds every plug-in through entry points, and no
+  plug-in imports the application.
 """
 import ast
 from pathlib import Path
@@ -14,9 +16,11 @@ from tests.support import REPO
 ROOT = REPO
 
 FORBIDDEN = {
-    "rll_bt": {"skills", "backends", "teamserver"},
-    "skills": {"backends"},
-    "backends": {"skills", "teamserver"},
+    "rll_bt": {"skills", "backends", "teamserver", "games"},
+    "skills": {"backends", "games"},
+    "backends": {"skills", "teamserver", "games"},
+    "teamserver": {"games"},
+    "games": {"skills", "backends", "teamserver"},
 }
 
 

@@ -86,3 +86,56 @@ def test_installed_groups_resolve():
     for group in plugins.GROUPS:
         for name, ep in plugins.discover(group).items():
             assert ep.load() is not None, (group, name)
+
+
+# -- option choices published by plug-ins ---------------------------------------------------
+@pytest.fixture
+def choice_group(monkeypatch):
+    mod = types.ModuleType("rll_bt_test_choices_plugin")
+
+    @plugins.offers(mode=("fast", "exact"))
+    def first(**kw):
+        return kw
+
+    @plugins.offers(mode=("exact", "rendered"), speed=("1", "2"))
+    def second(**kw):
+        return kw
+    mod.first, mod.second = first, second
+    mod.silent = lambda **kw: kw
+    monkeypatch.setitem(sys.modules, mod.__name__, mod)
+    group = "rll_bt.test_choices"
+    eps = {n: EntryPoint(n, f"{mod.__name__}:{n}", group) for n in ("first", "second", "silent")}
+    real = plugins.discover
+    monkeypatch.setattr(plugins, "discover", lambda g: eps if g == group else real(g))
+    return group
+
+
+def test_choices_are_what_the_entry_points_publish(choice_group):
+    assert plugins.choices(choice_group, "mode", "first") == ("fast", "exact")
+    assert plugins.choices(choice_group, "mode") == ("fast", "exact", "rendered")   # each once, in order
+    assert plugins.choices(choice_group, "speed") == ("1", "2")
+    assert plugins.choices(choice_group, "mode", "silent") == ()
+    with pytest.raises(KeyError, match="first"):
+        plugins.choices(choice_group, "mode", "nope")
+
+
+def test_lazy_choices_load_on_first_use(choice_group, monkeypatch):
+    loads = []
+    real = plugins.choices
+    monkeypatch.setattr(plugins, "choices", lambda *a: loads.append(a) or real(*a))
+    c = plugins.Choices(choice_group, "mode")
+    assert loads == []
+    assert "rendered" in c and "slow" not in c and list(c) == ["fast", "exact", "rendered"]
+    assert len(loads) == 1
+
+
+def test_the_shipped_plugins_publish_their_choices():
+    """What rll-bt sim and rll-bt agent offer comes from the plug-ins themselves."""
+    from skills.localisation.config import AmclConfig
+    from teamserver.exploration.strategies import STRATEGIES
+    assert plugins.choices("rll_bt.teamservers", "strategy", "htn") == tuple(STRATEGIES)
+    assert plugins.choices("rll_bt.simulators", "perception", "pybullet") == ("oracle", "rendered")
+    presets = plugins.choices("rll_bt.nodes", "localisation")
+    assert presets == ("cheap", "standard")
+    for name in presets:
+        AmclConfig.preset(name)

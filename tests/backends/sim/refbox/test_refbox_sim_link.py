@@ -17,7 +17,7 @@ import pytest
 from backends.sim.refbox import BSInstruction, RefboxGame, RSInstruction, TableWorld, Workpiece
 from backends.sim.refbox.link import RemoteWorld, StationServer
 from backends.sim.refbox.world import WorldLost
-from rll_bt.game.remote import free_ports
+from rll_bt.comm import free_ports
 
 RLL_BT = str(Path(sys.executable).parent / "rll-bt")
 

@@ -11,7 +11,7 @@ channel and the team-server link encrypted with the team key), so the same
 bytes as in a real game; a seeded game is deterministic.
 
 The simulator and the team server come from the ``rll_bt.simulators`` and
-``rll_bt.teamservers`` entry points (:mod:`.interfaces`).  Faults for tests
+``rll_bt.teamservers`` entry points (:mod:`rll_bt.contracts`).  Faults for tests
 and demonstrations: :meth:`kill_agent`, :meth:`start_agent`,
 :meth:`restart_teamserver`, :meth:`station_down`.
 """
@@ -22,11 +22,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .. import msgs
-from ..agent import AgentConfig, RobotAgent
-from ..comm import Bus, MessageRegistry
-from .interfaces import GameStatus, TeamServerOptions, load_simulator, load_teamserver
-from .msglog import MessageLog
+from rll_bt import msgs
+from rll_bt.agent import AgentConfig, RobotAgent
+from rll_bt.comm import Bus, MessageRegistry
+from rll_bt.comm.msglog import MessageLog
+from rll_bt.contracts import GameStatus, TeamServerOptions, load_simulator, load_teamserver
+
 from .options import GameOptions
 from .recorder import Recorder, Recording
 

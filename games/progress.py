@@ -9,7 +9,7 @@ from __future__ import annotations
 import sys
 from typing import IO
 
-from ..clock import Clock, WallClock
+from rll_bt.clock import Clock, WallClock
 
 
 class ProgressBar:

@@ -1,14 +1,15 @@
-"""The game's message log: every frame on the bus, decoded, as JSON lines
-(with ``--processes`` the refbox's and the team server's sides of their
-links, merged in time order at the end, see :mod:`.teamlog`).
+"""A message log: frames or messages a transport carried, decoded, as JSON lines.
 
-One line per frame carried::
+A game taps its bus with :meth:`MessageLog.tap` (every frame); a process
+on real sockets records what one of its transports sent and received with
+:meth:`MessageLog.record` (``rll-bt refbox sim --message-log``, the team
+server of ``rll-bt sim --processes``, whose lines :mod:`games.teamlog`
+merges).  One line per frame carried::
 
     {"t": 312.45, "channel": "cyan", "from": "R2", "type": "BeaconSignal", "msg": {...}}
 
-``t`` is the simulation clock (s; with ``--processes`` seconds since the
-game started, negative while the processes came up); ``channel`` the bus channel or stream
-address; ``msg`` the protobuf JSON mapping (original field names, enums by
+``t`` is the log's clock (s; a game's simulation clock); ``channel`` the
+bus channel or stream address; ``msg`` the protobuf JSON mapping (original field names, enums by
 name).  Frames of the team channels and the team-server link are decrypted
 with the team key; a frame that cannot be decoded is logged with ``type``
 null and the ``error`` cause.
@@ -19,8 +20,10 @@ import json
 from pathlib import Path
 from typing import IO
 
-from ..comm import DropStats, FrameCodec, MessageRegistry
 from ..msgs import to_dict
+from .codec import FrameCodec
+from .registry import MessageRegistry
+from .stats import DropStats
 
 
 class _Counted(DropStats):

@@ -3,7 +3,7 @@
 :func:`read` walks the MCAP file with the ``mcap`` reader (protobuf
 messages decoded by ``mcap-protobuf-support``, JSON ones by
 :class:`JsonDecoderFactory`) and rebuilds the game's
-:class:`~rll_bt.game.recorder.Recording` from the ``/game/sample``,
+:class:`~games.recorder.Recording` from the ``/game/sample``,
 ``/game/task`` and ``/game/event`` topics, the stations from
 ``/game/stations`` and the end of the game from ``/game/result``, so the
 report's table and pictures are drawn again exactly as the game drew them.
@@ -18,8 +18,9 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
-from ..backend import Pose2D
-from .interfaces import Award, Delivery, GameStatus, StationTruth
+from rll_bt.backend import Pose2D
+from rll_bt.contracts import Award, Delivery, GameStatus, StationTruth
+
 from .recorder import Recording
 
 
@@ -53,7 +54,7 @@ class Replay:
         return float(self.result["sim_time"]) if self.result else self.end
 
     def options(self):
-        """The :class:`~rll_bt.game.options.GameOptions` the game was played with (as recorded)."""
+        """The :class:`~games.options.GameOptions` the game was played with (as recorded)."""
         from .options import GameOptions
         m = self.meta
 
@@ -66,7 +67,7 @@ class Replay:
                            production=num("production"))
 
     def game_result(self):
-        """A :class:`~rll_bt.game.lockstep.GameResult` as far as the recording tells it."""
+        """A :class:`~games.lockstep.GameResult` as far as the recording tells it."""
         from .lockstep import GameResult
         r = self.result or {}
         last = self.recording.samples[-1] if self.recording.samples else {"phase": "?", "game_time": 0.0}

@@ -1,6 +1,6 @@
 """The team server as its own process of a ``rll-bt sim --processes`` game.
 
-    python -m rll_bt.game.child CONFIG.json
+    python -m games.child CONFIG.json
 
 ``CONFIG.json`` names the rules profile, team and key, the refbox's UDP
 ports (robot's view: ``public``/``cyan`` as [send, recv]) and broadcast
@@ -30,11 +30,12 @@ def write_snapshot(path: Path, snap: dict) -> None:
 
 
 def run(cfg: dict) -> int:
-    from .. import msgs
-    from ..clock import WallClock
-    from ..comm import MessageRegistry, StreamServer, UdpPeer
-    from .interfaces import TeamServerOptions, load_teamserver
-    from .msglog import MessageLog
+    from rll_bt import msgs
+    from rll_bt.clock import WallClock
+    from rll_bt.comm import MessageRegistry, StreamServer, UdpPeer
+    from rll_bt.comm.msglog import MessageLog
+    from rll_bt.contracts import TeamServerOptions, load_teamserver
+
     from .teamlog import LoggedStreamServer
 
     clock = WallClock()
@@ -97,7 +98,7 @@ def run(cfg: dict) -> int:
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
-        print("usage: python -m rll_bt.game.child CONFIG.json", file=sys.stderr)
+        print("usage: python -m games.child CONFIG.json", file=sys.stderr)
         return 2
     return run(json.loads(Path(argv[0]).read_text()))
 

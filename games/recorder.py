@@ -34,7 +34,7 @@ class Recording:
 
 
 class Recorder:
-    """Samples a :class:`~rll_bt.game.interfaces.Simulation` and a team server."""
+    """Samples a :class:`~games.interfaces.Simulation` and a team server."""
 
     def __init__(self, sim, team: str, robots: list[int], period: float = 1.0, snapshot=None):
         self.sim = sim

@@ -29,9 +29,9 @@ from __future__ import annotations
 import re
 from dataclasses import asdict
 
-from ..watch.robot import RobotWatch
-from ..watch.sink import Watch
-from .msglog import FrameDecoder
+from rll_bt.comm.msglog import FrameDecoder
+from rll_bt.watch.robot import RobotWatch
+from rll_bt.watch.sink import Watch
 
 TEAM_RGB = {"CYAN": (0.09, 0.72, 0.82), "MAGENTA": (0.82, 0.09, 0.6)}
 SAMPLE_SCHEMA = {"title": "rllbt.GameSample", "type": "object"}
@@ -52,7 +52,7 @@ def topic_for(channel: str, source, msg) -> str:
 
 
 class GameWatch:
-    """Everything of a :class:`~rll_bt.game.lockstep.LockstepGame` on a :class:`Watch`."""
+    """Everything of a :class:`~games.lockstep.LockstepGame` on a :class:`Watch`."""
 
     def __init__(self, game, options):
         o = options
@@ -89,7 +89,7 @@ class GameWatch:
         self.watch.proto(topic_for(channel, source, msg), msg)
 
     def recorded(self, kind: str, data: dict) -> None:
-        """A :class:`~rll_bt.game.recorder.Recorder` listener."""
+        """A :class:`~games.recorder.Recorder` listener."""
         self.watch.json(f"/game/{kind}", data, schema=SAMPLE_SCHEMA)
         if kind == "sample" and data.get("stations"):
             self.stations()
@@ -144,7 +144,7 @@ def field_scene(profile, stations: dict) -> list:
         Vector3,
     )
 
-    from ..watch.sink import quaternion
+    from rll_bt.watch.sink import quaternion
     f = profile.field
 
     def pose(x, y, z=0.0, theta=0.0):

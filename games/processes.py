@@ -5,13 +5,14 @@
     game.close()
 
 This process holds the world: PyBullet, the robots and the stations'
-physical state.  It serves each robot's backend over TCP (:mod:`.remote`)
-and the stations to the refbox over the simulator's station link (TCP
-too).  The simulated refbox is its own process (the command line the
-simulator gives, for PyBullet ``rll-bt refbox sim --world remote:...``):
+physical state.  It serves each robot's backend over TCP (the serving end
+of the ``remote`` backend, found through its entry point) and the stations
+to the refbox over the simulator's station link (TCP too).  The simulated
+refbox is its own process (the command line the simulator gives, for
+PyBullet ``rll-bt refbox sim --world remote:...``):
 it talks UDP (broadcast to ``127.255.255.255`` on free local ports, the
 ``sim`` style of split send/receive ports) and sees the stations only
-through the link.  The team server runs as ``python -m rll_bt.game.child``
+through the link.  The team server runs as ``python -m games.child``
 (TCP for the agents, UDP to the refbox) and each robot as a real ``rll-bt
 agent --backend remote`` process.  Everything runs on the wall clock: the
 world advances by the wall time that passed (at most 0.1 s a step, so it
@@ -42,12 +43,14 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-from ..comm import Layout, PeerPorts
-from .interfaces import load_simulator
+from rll_bt import plugins
+from rll_bt.backend import ENTRY_POINT_GROUP as BACKENDS
+from rll_bt.comm import Layout, PeerPorts, free_ports
+from rll_bt.contracts import load_simulator
+
 from .lockstep import TEAM, GameResult
 from .options import GameOptions
 from .recorder import Recorder
-from .remote import BackendServer, free_ports
 from .teamlog import WallToSim, merge_into, read_lines, task_runs
 
 BROADCAST = "127.255.255.255"
@@ -95,7 +98,7 @@ class ProcessGame:
     stamped with it in another process."""
 
     def __init__(self, options: GameOptions, *, progress=None, clock=None, connect_timeout: float = 60.0):
-        from ..clock import WallClock
+        from rll_bt.clock import WallClock
         self.options = o = options
         self.wall = clock or WallClock()
         self.progress = progress
@@ -114,8 +117,9 @@ class ProcessGame:
                              magenta=PeerPorts(send=p[4], recv=p[5]), stream=-1)
         self.robots = list(range(1, o.robots + 1))
         self.backends = {n: self.sim.backend(TEAM, n) for n in self.robots}
-        self.server = BackendServer(lambda team, n: self.backends[int(n)] if team == TEAM else None,
-                                    self.clock.now)
+        # the remote backend's serving end, found through its entry point like the agents' end
+        self.server = plugins.load(BACKENDS, "remote").serve(
+            lambda team, n: self.backends[int(n)] if team == TEAM else None, self.clock.now)
         self.snapshot_file = self.dir / "teamserver.json"
         self.refbox_file = self.dir / "refbox.json"
         self._refbox_log = self.dir / "refbox-messages.jsonl" if o.out is not None else None
@@ -184,7 +188,7 @@ class ProcessGame:
         self._team_logs.append(log)
         cfg_file = self.dir / "teamserver-config.json"
         cfg_file.write_text(json.dumps({**self._ts_cfg, "message_log": str(log)}))
-        self._spawn("teamserver", [sys.executable, "-m", "rll_bt.game.child", str(cfg_file)])
+        self._spawn("teamserver", [sys.executable, "-m", "games.child", str(cfg_file)])
 
     def _spawn_agent(self, n: int, first_start: bool) -> None:
         o = self.options

@@ -31,7 +31,8 @@ STOPS: dict[str, Callable | None] = {"explored": explored, None: None}
 
 def play_one(args: tuple[GameOptions, str | None]) -> dict:
     options, stop = args
-    from ..clock import WallClock
+    from rll_bt.clock import WallClock
+
     from . import finish
     from .lockstep import LockstepGame
     wall = WallClock()

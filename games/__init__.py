@@ -1,6 +1,6 @@
 """Whole simulated games: refbox, world, team server and agents together.
 
-    from rll_bt.game import GameOptions, LockstepGame, play
+    from games import GameOptions, LockstepGame, play
     summary = play(GameOptions(seed=3, out=Path("game")))   # what ``rll-bt sim`` does
     summary["points"]["total"], summary["table"]
 
@@ -10,53 +10,40 @@
         game.restart_teamserver(); game.station_down("C-CS1", 60.0)
         result = game.run()
 
-The simulator and the team server are plug-ins (:mod:`.interfaces`, entry
-point groups ``rll_bt.simulators`` and ``rll_bt.teamservers``).
-:mod:`.lockstep` runs one process on one simulated clock; :mod:`.processes`
-runs each part as its own process on loopback sockets.  :mod:`.report`,
-:mod:`.plots` and :mod:`.msglog` make what ``--out`` holds.
+An application above the kernel (``rll_bt``), registered like any other
+through the ``rll_bt.commands`` entry point ``games`` (``rll-bt sim``).  It
+never imports a plug-in by name: the simulator (world and simulated
+refbox), the team server and the robots' backends are found through their
+entry points (groups ``rll_bt.simulators``, ``rll_bt.teamservers``,
+``rll_bt.backends``; contracts in :mod:`rll_bt.contracts` and
+:mod:`rll_bt.backend`).
+
+- :mod:`.options`: what one game is (:class:`GameOptions`);
+- :mod:`.lockstep`: one process on one simulated clock (:class:`LockstepGame`);
+- :mod:`.processes`: every part its own process on loopback sockets
+  (:class:`~.processes.ProcessGame`; :mod:`.child` runs its team server,
+  :mod:`.teamlog` merges what the processes logged);
+- :mod:`.recorder`, :mod:`.report`, :mod:`.plots`: what a game did, as
+  ``report.json``, a table and PNGs (``messages.jsonl`` is
+  :mod:`rll_bt.comm.msglog`'s);
+- :mod:`.progress`: the progress line; :mod:`.batch`: many games in worker
+  processes (the benchmarks); :mod:`.cli`: ``rll-bt sim``.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from .interfaces import (
-    Award,
-    Delivery,
-    GameStatus,
-    Simulation,
-    StationTruth,
-    TeamServerHandle,
-    TeamServerOptions,
-    load_simulator,
-    load_teamserver,
-)
 from .lockstep import GameResult, LockstepGame
 from .options import GameOptions, max_exploration_points
 
-__all__ = [
-    "Award",
-    "Delivery",
-    "GameOptions",
-    "GameResult",
-    "GameStatus",
-    "LockstepGame",
-    "Simulation",
-    "StationTruth",
-    "TeamServerHandle",
-    "TeamServerOptions",
-    "finish",
-    "load_simulator",
-    "load_teamserver",
-    "max_exploration_points",
-    "play",
-]
+__all__ = ["GameResult", "LockstepGame", "GameOptions", "max_exploration_points", "play", "finish"]
 
 
 def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
     """Play one game as ``rll-bt sim`` does; returns the report summary with
     ``table`` (text) and ``files`` (names written to ``options.out``)."""
-    from ..clock import WallClock
+    from rll_bt.clock import WallClock
+
     from .progress import ProgressBar
     clock = clock or WallClock()
     t0 = clock.now()

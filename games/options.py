@@ -6,19 +6,25 @@ Speed knobs (what ``make sim`` is tuned with): ``dt`` is the lockstep step
 scans per second; ``localisation`` the localiser preset ("cheap" for whole
 games, "standard" for accuracy); ``world_step`` the world's longest physics
 sub-step (s).  Phase lengths are game seconds; ``None`` keeps the rules'.
+
+The values of the options the plug-ins interpret are theirs to publish
+(:func:`rll_bt.plugins.offers`): ``perception`` the simulator's,
+``strategy`` the team server's, ``localisation`` the tree-node plug-ins'
+(the skills build the localiser); :func:`published` reads them.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .. import rules
+from rll_bt import plugins, rules
+from rll_bt.contracts import SIMULATORS, TEAMSERVERS
 
-STRATEGIES = ("algorithm1", "algorithm1-paper", "random", "nearest", "oracle")
-PERCEPTION = ("oracle", "rendered")
 UNTIL = ("exploration", "end")
-#: presets of the localiser the skills build (the agent's ``services["localisation"]``)
-LOCALISATION = ("cheap", "standard")
+#: option -> (entry point group publishing its values, the GameOptions field naming
+#: the entry point, or None: every entry point of the group)
+PUBLISHED = {"perception": (SIMULATORS, "simulator"), "strategy": (TEAMSERVERS, "teamserver"),
+             "localisation": ("rll_bt.nodes", None)}
 TEAM_NAME = "GRIPS"
 TEAM_KEY = "rll-bt-sim-key"
 
@@ -53,7 +59,7 @@ class GameOptions:
     key: str = TEAM_KEY
     state: Path | None = None          # team server database (default: in ``out`` or a temp dir)
     sample_period: float = 1.0         # s between recorder samples
-    record: Path | None = None         # an MCAP recording of the game (rll_bt.game.watch)
+    record: Path | None = None         # an MCAP recording of the game (games.watch)
     live: int | None = None            # Foxglove WebSocket port for a live view (0: any free)
     record_camera: float = 0.0         # camera frames taken for the recording itself, per robot and second
     extra: dict = field(default_factory=dict)
@@ -64,8 +70,14 @@ class GameOptions:
         if not 1 <= int(self.robots) <= 3:
             raise ValueError(f"robots must be 1, 2 or 3, not {self.robots}")
         self.robots = int(self.robots)
-        for name, allowed in (("perception", PERCEPTION), ("strategy", STRATEGIES), ("until", UNTIL),
-                              ("localisation", LOCALISATION)):
+        if self.until not in UNTIL:
+            raise ValueError(f"until must be one of {', '.join(UNTIL)}, not {self.until!r}")
+        for name, (group, field_name) in PUBLISHED.items():
+            plugin = getattr(self, field_name) if field_name else None
+            try:
+                allowed = plugins.choices(group, name, plugin)
+            except KeyError as exc:
+                raise ValueError(exc.args[0]) from None
             if getattr(self, name) not in allowed:
                 raise ValueError(f"{name} must be one of {', '.join(allowed)}, not {getattr(self, name)!r}")
         for name in ("dt", "hz", "laser_rate", "world_step", "sample_period"):
@@ -122,6 +134,14 @@ class GameOptions:
                 return lengths["SETUP"] + self.exploration_window()
             return lengths["SETUP"] + lengths["EXPLORATION"]
         return sum(lengths.values())
+
+
+def published(option: str, plugin: str | None = None) -> tuple[str, ...]:
+    """The values of ``option`` ("perception", "strategy", "localisation") the
+    plug-ins publish: of entry point ``plugin`` (a simulator or team server
+    name; None: all of the group)."""
+    group, _field = PUBLISHED[option]
+    return plugins.choices(group, option, plugin)
 
 
 def max_exploration_points(profile) -> int:

@@ -1,6 +1,6 @@
 """The result of a game as data (``report.json``) and as a table.
 
-:func:`summarise` turns a :class:`~rll_bt.game.lockstep.GameResult` into a
+:func:`summarise` turns a :class:`~games.lockstep.GameResult` into a
 plain dict: points by phase, exploration (points, the maximum, game seconds
 until every exploration point was scored, i.e. every own station correctly
 reported, and until the team server was sure of every station), orders

@@ -24,7 +24,7 @@ import os
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from ..comm import StreamServer
+from rll_bt.comm import StreamServer
 
 CHANNEL = "teamserver"
 SERVER = "teamserver"
@@ -34,7 +34,7 @@ FINAL = ("SUCCEEDED", "FAILED", "CANCELLED")
 class LoggedStreamServer(StreamServer):
     """A :class:`~rll_bt.comm.StreamServer` that records every message it
     sends (one line per client it reaches, as the bus carries them) and
-    receives into ``log`` (a :class:`~rll_bt.game.msglog.MessageLog`).
+    receives into ``log`` (a :class:`~games.msglog.MessageLog`).
     A client is named ``R<robot_id>`` after the first message naming its robot."""
 
     def __init__(self, *args, log, **kwargs):
@@ -161,7 +161,7 @@ def _iter_file(path: Path) -> Iterator[dict]:
 
 def _kinds() -> frozenset[str]:
     """The task kinds: the fields of the team protocol's ``Task.kind`` oneof."""
-    from .. import msgs
+    from rll_bt import msgs
     task = msgs.message_set("team").get("Task")
     return frozenset(f.name for f in task.DESCRIPTOR.oneofs_by_name["kind"].fields)
 

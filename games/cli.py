@@ -14,6 +14,11 @@ the agents' backends and the refbox's stations (the station link) over TCP.  The
 
 Exit codes: 0 the game finished, 1 it did not, 2 bad arguments, 3 no display
 for ``--gui``.  ``rll-bt sim world`` (the world's own command) draws layouts.
+
+Registered through the ``rll_bt.commands`` entry point ``games``.  The
+values of ``--perception``, ``--strategy`` and ``--localisation`` are the
+ones the simulator, the team server and the skills publish
+(:mod:`games.options`).
 """
 from __future__ import annotations
 
@@ -21,7 +26,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..errors import Unavailable, UserError
+from rll_bt.errors import Unavailable, UserError
 
 
 def _seconds(text: str) -> float:
@@ -42,8 +47,14 @@ def _positive(text: str) -> float:
 
 
 def register(cli) -> None:
-    from .. import rules
-    from ..game.options import LOCALISATION, PERCEPTION, STRATEGIES, UNTIL
+    from rll_bt import rules
+    from rll_bt.plugins import Choices
+
+    from .options import PUBLISHED, UNTIL
+
+    def published(option: str):       # loaded only when a value is checked or --help shown
+        group, _field = PUBLISHED[option]
+        return Choices(group, option)
     cli.group("sim")
     gp = cli.group_parser("sim")
     gp.description = __doc__.split("\n\n")[2].replace("\n", " ")
@@ -53,10 +64,11 @@ def register(cli) -> None:
                    help="rules profile (default %(default)s)")
     g.add_argument("--robots", type=int, default=3, choices=(1, 2, 3), help="robots in our team (default 3)")
     g.add_argument("--seed", type=int, default=1, help="seed of layout, lights, orders and noise (default 1)")
-    g.add_argument("--perception", default="oracle", choices=PERCEPTION,
-                   help="oracle: the simulator reports tags and lights; rendered: detectors on camera images")
-    g.add_argument("--strategy", default="algorithm1", choices=STRATEGIES,
-                   help="exploration strategy of the team server (default %(default)s)")
+    g.add_argument("--perception", default="oracle", choices=published("perception"), metavar="MODE",
+                   help="the simulator's perception (%(choices)s; default %(default)s): oracle: the "
+                        "simulator reports tags and lights; rendered: detectors on camera images")
+    g.add_argument("--strategy", default="algorithm1", choices=published("strategy"), metavar="NAME",
+                   help="exploration strategy of the team server (%(choices)s; default %(default)s)")
     g.add_argument("--baseline", action="store_true",
                    help="greedy one-order-at-a-time production instead of the HTN planner")
     g.add_argument("--until", default="end", choices=UNTIL, help="stop after exploration or play to the end")
@@ -90,9 +102,9 @@ def register(cli) -> None:
     g.add_argument("--hz", type=_positive, default=10.0, help="tree tick rate of the agents (default 10)")
     g.add_argument("--laser-rate", type=_positive, default=10.0, metavar="HZ",
                    help="simulated laser scans per second (default 10)")
-    g.add_argument("--localisation", default="cheap", choices=LOCALISATION,
-                   help="localiser preset of the agents (default cheap; with --processes passed to "
-                        "every rll-bt agent)")
+    g.add_argument("--localisation", default="cheap", choices=published("localisation"), metavar="PRESET",
+                   help="localiser preset of the agents (%(choices)s; default %(default)s; with --processes "
+                        "passed to every rll-bt agent)")
     gp.set_defaults(func=run)
 
     p = cli.command("replay", "print what a game recording holds and draw its report again")
@@ -107,7 +119,7 @@ def register(cli) -> None:
 
 
 def options_from(args):
-    from ..game.options import GameOptions
+    from .options import GameOptions
     if args.out is not None:
         try:
             args.out.mkdir(parents=True, exist_ok=True)
@@ -126,9 +138,10 @@ def options_from(args):
 
 
 def run(args) -> int:
-    from ..backend import BackendUnavailable
-    from ..clock import WallClock
-    from ..game import play
+    from rll_bt.backend import BackendUnavailable
+    from rll_bt.clock import WallClock
+
+    from . import play
     options = options_from(args)
     if options.processes and (options.record is not None or options.live is not None):
         raise UserError("--record and --live watch a lockstep game; with --processes record each part "
@@ -149,8 +162,8 @@ def run(args) -> int:
 
 
 def replay(args) -> int:
-    from ..game import report
-    from ..game.replay import RecordingError, read, redraw, summary_lines
+    from . import report
+    from .replay import RecordingError, read, redraw, summary_lines
     if not args.file.is_file():
         raise UserError("file not found", where=str(args.file))
     try:
