@@ -23,7 +23,7 @@ from .report import exploration_points
 
 def explored(game) -> bool:
     """Every exploration point scored: every own station reported right."""
-    return exploration_points(game.sim.awards(), "CYAN") >= max_exploration_points(game.options.rules)
+    return exploration_points(game.refbox.awards(), "CYAN") >= max_exploration_points(game.options.rules)
 
 
 STOPS: dict[str, Callable | None] = {"explored": explored, None: None}

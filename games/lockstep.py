@@ -11,7 +11,10 @@ channel and the team-server link encrypted with the team key), so the same
 bytes as in a real game; a seeded game is deterministic.
 
 The simulator and the team server come from the ``rll_bt.simulators`` and
-``rll_bt.teamservers`` entry points (:mod:`rll_bt.contracts`).  Faults for tests
+``rll_bt.teamservers`` entry points (:mod:`rll_bt.contracts`): ``game.world``
+is the simulator's :class:`~rll_bt.contracts.World`, ``game.refbox`` its
+refbox (an :class:`~rll_bt.contracts.InProcessRefbox`, whose
+:class:`~rll_bt.contracts.RefboxView` tells the game's state).  Faults for tests
 and demonstrations: :meth:`kill_agent`, :meth:`start_agent`,
 :meth:`restart_teamserver`, :meth:`station_down`.
 """
@@ -62,7 +65,9 @@ class LockstepGame:
         ts_factory = load_teamserver(o.teamserver)
         self.sim = sim_factory(profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key,
                                perception=o.perception, gui=o.gui, phases=o.phases(),
-                               world_step=o.world_step, robot_options={"laser_rate": o.laser_rate})
+                               world_step=o.world_step, robot_options={"laser_rate": o.laser_rate},
+                               refbox="here")
+        self.world, self.refbox = self.sim.world, self.sim.refbox
         try:
             self._wire(o, ts_factory)
         except BaseException:
@@ -75,9 +80,9 @@ class LockstepGame:
 
     def _wire(self, o: GameOptions, ts_factory) -> None:
         """Bus, message log, team server, agents and recorder around the simulation."""
-        self.clock = self.sim.clock
+        self.clock = self.world.clock
         self.bus = Bus(self.clock)
-        self.ref_reg = self.sim.refbox_registry()
+        self.ref_reg = MessageRegistry.from_message_set(msgs.message_set(self.world.profile.name))
         self.team_reg = MessageRegistry.from_message_set(msgs.message_set("team"))
         self.log: MessageLog | None = None
         if o.out is not None:
@@ -89,7 +94,7 @@ class LockstepGame:
         if o.record is not None or o.live is not None:
             from .watch import GameWatch
             self.watch = GameWatch(self, o)
-        self.sim.attach_bus(self.bus)
+        self.refbox.attach_bus(self.bus)
         self._tmp = None
         state = o.state
         if state is None:
@@ -100,7 +105,7 @@ class LockstepGame:
             else:
                 self._tmp = tempfile.TemporaryDirectory(prefix="rll-bt-sim-")
                 state = Path(self._tmp.name) / "teamserver.sqlite"
-        truth = ({n: s.zone for n, s in self.sim.stations().items()}
+        truth = ({n: s.zone for n, s in self.refbox.stations().items()}
                  if o.strategy == "oracle" else None)
         bus, reg, key = self.bus, self.ref_reg, o.key
         self.teamserver = ts_factory(
@@ -114,7 +119,7 @@ class LockstepGame:
         self.robot_numbers = list(range(1, o.robots + 1))
         for n in self.robot_numbers:
             self.start_agent(n, restarted=False)
-        self.recorder = Recorder(self.sim, TEAM, self.robot_numbers, o.sample_period,
+        self.recorder = Recorder(self.world, self.refbox, TEAM, self.robot_numbers, o.sample_period,
                                  snapshot=self.teamserver.snapshot)
         if self.watch is not None:
             self.recorder.listeners.append(self.watch.recorded)
@@ -126,7 +131,7 @@ class LockstepGame:
         o, bus, reg = self.options, self.bus, self.ref_reg
         name = f"R{number}"
         cfg = AgentConfig(robot_id=number, team_name=o.team_name, profile=o.profile, hz=o.hz)
-        backend = self.sim.backend(TEAM, number)
+        backend = self.world.backend(TEAM, number)
         rw = self.watch.robot(number) if self.watch is not None else None
         agent = RobotAgent(
             cfg, clock=self.clock, backend=backend if rw is None else rw.tap(backend),
@@ -134,7 +139,7 @@ class LockstepGame:
             public=bus.peer("public", registry=reg, name=name),
             team=lambda color: bus.peer(color.lower(), registry=reg, key=o.key, name=name),
             services={"localisation": o.localisation},
-            start_pose=self.sim.robot_pose(TEAM, number), restarted=restarted)
+            start_pose=self.world.robot_pose(TEAM, number), restarted=restarted)
         self.agents[number] = agent
         if rw is not None:
             rw.attach(agent)
@@ -156,7 +161,7 @@ class LockstepGame:
         self._note("team server restarted")
 
     def station_down(self, machine: str, seconds: float) -> None:
-        self.sim.station_down(machine, seconds)
+        self.refbox.station_down(machine, seconds)
         self._note("station down", machine=machine, seconds=seconds)
 
     def _note(self, what: str, **data) -> None:
@@ -167,7 +172,7 @@ class LockstepGame:
     def start(self) -> None:
         if not self._started:
             self._started = True
-            self.sim.start()
+            self.refbox.start()
             if self.watch is not None:
                 self.watch.stations()
             self.recorder.sample(force=True)
@@ -184,8 +189,8 @@ class LockstepGame:
                 self.recorder.task(n, run.kind, run.task_id, outcome=ended)
             else:
                 self.recorder.task(n, None, outcome=ended)
-        self.sim.step(self.options.dt)
-        self.sim.refbox_step()
+        self.world.step(self.options.dt)
+        self.refbox.step()
         self.teamserver.tick()
         self.rounds += 1
         if self.watch is not None:
@@ -195,7 +200,7 @@ class LockstepGame:
         before = len(self.recorder.rec.samples)
         self.recorder.sample()
         if self.progress is not None and len(self.recorder.rec.samples) != before:
-            self.progress(self.clock.now(), self.sim.status())
+            self.progress(self.clock.now(), self.refbox.status())
         for hook in list(self.hooks):
             hook(self)
 
@@ -208,10 +213,10 @@ class LockstepGame:
             self.pace.sleep(ahead)
 
     def finished(self) -> bool:
-        return self.options.game_over(self.sim.status())
+        return self.options.game_over(self.refbox.status())
 
     def exploration_over(self, st: GameStatus | None = None) -> bool:
-        return self.options.exploration_over(st or self.sim.status())
+        return self.options.exploration_over(st or self.refbox.status())
 
     def run_for(self, seconds: float) -> None:
         self.start()
@@ -251,12 +256,13 @@ class LockstepGame:
         return result
 
     def result(self, finished: bool) -> GameResult:
-        return GameResult(finished=finished, status=self.sim.status(), recording=self.recorder.rec,
-                          awards=self.sim.awards(), deliveries=self.sim.deliveries(),
-                          snapshot=self.teamserver.snapshot(), stations=self.sim.stations(),
-                          orders=self.sim.orders(), collisions=self.sim.collisions(),
+        collisions = self.world.collision_log()
+        return GameResult(finished=finished, status=self.refbox.status(), recording=self.recorder.rec,
+                          awards=self.refbox.awards(), deliveries=self.refbox.deliveries(),
+                          snapshot=self.teamserver.snapshot(), stations=self.refbox.stations(),
+                          orders=self.refbox.orders(), collisions=len(collisions),
                           sim_time=self.clock.now(), messages=self.bus.frames,
-                          collision_log=self.sim.collision_log())
+                          collision_log=collisions)
 
     def close(self) -> None:
         for agent in self.agents.values():

@@ -110,13 +110,14 @@ class ProcessGame:
             profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key, perception=o.perception,
             gui=o.gui, phases=o.phases(), world_step=o.world_step, robot_options={"laser_rate": o.laser_rate},
             refbox="process")
-        self.clock = self.sim.clock
+        self.world, self.refbox = self.sim.world, self.sim.refbox
+        self.clock = self.world.clock
         self.time_map = WallToSim()
         p = free_ports(6)
         self.layout = Layout("game", public=PeerPorts(send=p[0], recv=p[1]), cyan=PeerPorts(send=p[2], recv=p[3]),
                              magenta=PeerPorts(send=p[4], recv=p[5]), stream=-1)
         self.robots = list(range(1, o.robots + 1))
-        self.backends = {n: self.sim.backend(TEAM, n) for n in self.robots}
+        self.backends = {n: self.world.backend(TEAM, n) for n in self.robots}
         # the remote backend's serving end, found through its entry point like the agents' end
         self.server = plugins.load(BACKENDS, "remote").serve(
             lambda team, n: self.backends[int(n)] if team == TEAM else None, self.clock.now)
@@ -158,17 +159,18 @@ class ProcessGame:
             old.unlink(missing_ok=True)
         for name in ("refbox", "teamserver", *(f"agent{n}" for n in self.robots)):
             (self.dir / f"{name}.log").unlink(missing_ok=True)
-        self._spawn("refbox", [sys.executable, "-c", CLI_MAIN, *self.sim.refbox_command(
+        self._spawn("refbox", [sys.executable, "-c", CLI_MAIN, *self.refbox.command(
             host=BROADCAST, layout=self.layout, snapshot=self.refbox_file, message_log=self._refbox_log)])
-        self._wait_for(self.sim.refbox_ready, "the refbox")
-        self.recorder = Recorder(self.sim, TEAM, self.robots, o.sample_period, snapshot=self.snapshot)
+        self._wait_for(self.refbox.ready, "the refbox")
+        self.recorder = Recorder(self.world, self.refbox, TEAM, self.robots, o.sample_period,
+                                 snapshot=self.snapshot)
         robot = {ch: (self.layout.robot(ch).send, self.layout.robot(ch).recv) for ch in ("public", "cyan", "magenta")}
         self._ts_cfg = {
             "profile": o.profile, "team": o.team_name, "key": o.key, "refbox_host": BROADCAST,
             "ports": {ch: [robot[ch][0], robot[ch][1]] for ch in robot}, "listen": self._ts_port,
             "state": str(state), "strategy": o.strategy, "seed": o.seed, "baseline": o.baseline,
             "map_period": o.map_period, "snapshot": str(self.snapshot_file), "teamserver": o.teamserver,
-            "oracle": ({n: s.zone for n, s in self.sim.stations().items()} if o.strategy == "oracle" else None)}
+            "oracle": ({n: s.zone for n, s in self.refbox.stations().items()} if o.strategy == "oracle" else None)}
         self._spawn_teamserver()
         for n in self.robots:
             self._spawn_agent(n, first_start=True)
@@ -193,7 +195,7 @@ class ProcessGame:
     def _spawn_agent(self, n: int, first_start: bool) -> None:
         o = self.options
         pub, team = self.layout.robot("public"), self.layout.robot("cyan")
-        pose = self.sim.robot_pose(TEAM, n)
+        pose = self.world.robot_pose(TEAM, n)
         self._spawn(f"agent{n}", [
             sys.executable, "-c", CLI_MAIN, "agent", "--robot", str(n), "--team", o.team_name,
             "--key", o.key, "--profile", o.profile, "--backend", "remote",
@@ -207,7 +209,7 @@ class ProcessGame:
     def _serve(self, timeout: float) -> None:
         """Answer the agents' backend calls (up to ``timeout`` s) and the refbox's station calls."""
         self.server.poll(timeout)
-        self.sim.refbox_step()
+        self.refbox.step()
 
     def _kill(self, name: str) -> None:
         p = self.procs.pop(name, None)
@@ -241,7 +243,7 @@ class ProcessGame:
         self.recorder.note("team server restarted")
 
     def station_down(self, machine: str, seconds: float) -> None:
-        self.sim.station_down(machine, seconds)
+        self.refbox.station_down(machine, seconds)
         self.recorder.note("station down", machine=machine, seconds=seconds)
 
     def snapshot(self) -> dict:
@@ -262,16 +264,16 @@ class ProcessGame:
         now = self.wall.now()
         dt = min(now - last, 0.1)
         if dt >= self.options.world_step * 0.5:
-            self.sim.step(dt)
+            self.world.step(dt)
             self.time_map.add(now, self.clock.now())
-            self.sim.refbox_step()
+            self.refbox.step()
             if self._started:
                 before = len(self.recorder.rec.samples)
                 self.recorder.sample()
                 if self.progress is not None and len(self.recorder.rec.samples) != before:
-                    self.progress(self.clock.now() - self._t0, self.sim.status())
+                    self.progress(self.clock.now() - self._t0, self.refbox.status())
             elif self.progress is not None:       # the processes are coming up (the bar throttles itself)
-                self.progress(0.0, self.sim.status())
+                self.progress(0.0, self.refbox.status())
             return now
         return last
 
@@ -294,7 +296,7 @@ class ProcessGame:
             self.recorder.note("not every process came up", alive=self._alive())
             return False
         self._started = True
-        self.sim.start()
+        self.refbox.start()
         self._t0 = self.clock.now()
         self._last = self._wall0 = self.wall.now()
         self.recorder.sample(force=True)
@@ -323,7 +325,7 @@ class ProcessGame:
         self.run_until(lambda g: False, seconds)
 
     def finished(self) -> bool:
-        return self.options.game_over(self.sim.status())
+        return self.options.game_over(self.refbox.status())
 
     def run(self, limit: float | None = None) -> GameResult:
         """Play until the game is over, at most ``limit`` simulated seconds
@@ -373,11 +375,12 @@ class ProcessGame:
             messages = merge_into(self.dir / "messages.jsonl", refbox, team, shift=t0)
             for path in [self._refbox_log, *self._team_logs]:
                 path.unlink(missing_ok=True)
-        return GameResult(finished=finished, status=self.sim.status(), recording=rec, awards=self.sim.awards(),
-                          deliveries=self.sim.deliveries(), snapshot=snap, stations=self.sim.stations(),
-                          orders=self.sim.orders(), collisions=self.sim.collisions(),
+        collisions = self.world.collision_log()
+        return GameResult(finished=finished, status=self.refbox.status(), recording=rec,
+                          awards=self.refbox.awards(), deliveries=self.refbox.deliveries(), snapshot=snap,
+                          stations=self.refbox.stations(), orders=self.refbox.orders(), collisions=len(collisions),
                           sim_time=end - t0, messages=messages,
-                          collision_log=[(round(t - t0, 3), *rest) for t, *rest in self.sim.collision_log()])
+                          collision_log=[(round(t - t0, 3), *rest) for t, *rest in collisions])
 
     def _stop_children(self, timeout: float = 10.0) -> None:
         """SIGTERM to every child; keep serving the backends while they stop their robots."""

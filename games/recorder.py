@@ -34,10 +34,12 @@ class Recording:
 
 
 class Recorder:
-    """Samples a :class:`~games.interfaces.Simulation` and a team server."""
+    """Samples a :class:`~rll_bt.contracts.World` (robot poses, on its clock),
+    a :class:`~rll_bt.contracts.RefboxView` (the game) and a team server's
+    ``snapshot()``."""
 
-    def __init__(self, sim, team: str, robots: list[int], period: float = 1.0, snapshot=None):
-        self.sim = sim
+    def __init__(self, world, refbox, team: str, robots: list[int], period: float = 1.0, snapshot=None):
+        self.world, self.refbox = world, refbox
         self.team = team
         self.robots = robots
         self.period = period
@@ -45,14 +47,14 @@ class Recorder:
         self.rec = Recording(team=team)
         #: ``fn(kind, data)`` for every "sample", "task" interval change and "event" (recordings, live views)
         self.listeners: list = []
-        props = ("zone", "light") if sim.profile.exploration_reports == "type+zone" else ("zone", "orientation")
-        self.truth = {n: s.reported(props) for n, s in sim.stations().items() if s.team == team}
+        props = ("zone", "light") if world.profile.exploration_reports == "type+zone" else ("zone", "orientation")
+        self.truth = {n: s.reported(props) for n, s in refbox.stations().items() if s.team == team}
         self._next = -1e9
 
     def task(self, robot: int, kind: str | None, task_id: int | None = None,
              outcome: str | None = None) -> None:
         """What ``robot`` is doing now (``kind`` None: nothing); records an interval per task."""
-        now = round(self.sim.clock.now(), 3)
+        now = round(self.world.clock.now(), 3)
         runs = self.rec.tasks.setdefault(robot, [])
         cur = runs[-1] if runs and runs[-1]["end"] is None else None
         if cur is not None and (cur["id"], cur["kind"]) == (task_id, kind):
@@ -77,15 +79,15 @@ class Recorder:
             self.task(robot, None, outcome="running at the end")
 
     def note(self, what: str, **data) -> None:
-        self.rec.events.append({"t": round(self.sim.clock.now(), 3), "what": what, **data})
+        self.rec.events.append({"t": round(self.world.clock.now(), 3), "what": what, **data})
         self._emit("event", self.rec.events[-1])
 
     def sample(self, force: bool = False) -> None:
-        now = self.sim.clock.now()
+        now = self.world.clock.now()
         if not force and now < self._next:
             return
         self._next = now + self.period
-        st = self.sim.status()
+        st = self.refbox.status()
         rec = self.rec
         if not rec.phases or rec.phases[-1][1] != st.phase:
             rec.phases.append((now, st.phase))
@@ -95,10 +97,10 @@ class Recorder:
                             "points": st.points.get(self.team, 0)})
         out = {**rec.samples[-1], "now": now, "paths": {}, "stations": {}}
         for n in self.robots:
-            p = self.sim.robot_pose(self.team, n)
+            p = self.world.robot_pose(self.team, n)
             rec.paths.setdefault(n, []).append((round(now, 2), round(p.x, 3), round(p.y, 3)))
             out["paths"][n] = rec.paths[n][-1]
-        for name, s in self.sim.stations().items():
+        for name, s in self.refbox.stations().items():
             hist = rec.stations.setdefault(name, [])
             if not hist or hist[-1][1] != s.state:
                 hist.append((round(now, 3), s.state))

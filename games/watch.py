@@ -101,10 +101,10 @@ class GameWatch:
         nxt = self._next_truth + self.truth_period
         self._next_truth = nxt if nxt > now else now + self.truth_period
         for n in self.game.robot_numbers:
-            self.watch.pose(f"/robot{n}/true_pose", self.game.sim.robot_pose("CYAN", n))
+            self.watch.pose(f"/robot{n}/true_pose", self.game.world.robot_pose("CYAN", n))
 
     def stations(self) -> None:
-        stations = self.game.sim.stations()
+        stations = self.game.refbox.stations()
         self.watch.json("/game/stations", {"stations": [_station(s) for s in stations.values()]},
                         schema=SAMPLE_SCHEMA)
         self.watch.scene("/field", field_scene(self.game.options.rules, stations))

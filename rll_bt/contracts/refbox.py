@@ -1,12 +1,21 @@
-"""What a game reads of the referee box: its state, its ledger, the stations.
+"""The refbox-view contract: what a game reads of the referee box.
 
-Times are seconds of the simulation clock unless named *game time* (the
+:class:`RefboxView` is the game as the refbox keeps it: state and points
+(:class:`GameStatus`), the ledger (:class:`Award`, :class:`Delivery`),
+the stations as they really are (:class:`StationTruth`) and the orders.
+A simulator's refbox answers it (:class:`SimulatedRefbox` adds what the
+host of a simulated game does with its refbox); so can a view built from
+what a real refbox broadcasts.
+
+Times are seconds of the game's clock unless named *game time* (the
 refbox's seconds into the current phase).  Poses are field-frame metres and
 radians of the rules profile.
 """
 from __future__ import annotations
 
+import abc
 from dataclasses import dataclass
+from pathlib import Path
 
 from ..backend.types import Pose2D
 
@@ -69,3 +78,72 @@ class Delivery:
     order: int | None
     how: str
 
+
+class RefboxView(abc.ABC):
+    """The referee box's game, read-only (see the module doc)."""
+
+    @abc.abstractmethod
+    def status(self) -> GameStatus:
+        """Phase, state, game time and points now."""
+
+    @abc.abstractmethod
+    def awards(self) -> list[Award]:
+        """Every points entry so far, in order."""
+
+    @abc.abstractmethod
+    def deliveries(self) -> list[Delivery]:
+        """Every delivery so far, in order."""
+
+    @abc.abstractmethod
+    def stations(self) -> dict[str, StationTruth]:
+        """Every station of the game by name, as it really is."""
+
+    def orders(self) -> list[dict]:
+        """The game's orders as plain dicts (id, complexity, quantity, window)."""
+        return []
+
+
+class SimulatedRefbox(RefboxView):
+    """A refbox a simulated game hosts: the view, and what its operator does."""
+
+    @abc.abstractmethod
+    def start(self) -> None:
+        """Start the game (the operator's RUNNING)."""
+
+    @abc.abstractmethod
+    def step(self) -> None:
+        """The refbox's turn: it receives, ticks its game and sends what is due
+        (:class:`RefboxProcess`: the refbox process's calls on the world are served)."""
+
+    def station_down(self, machine: str, seconds: float) -> None:
+        """Take a station DOWN now for ``seconds`` of game time (a fault)."""
+        raise NotImplementedError(f"{type(self).__name__} cannot take a station down")
+
+    def close(self) -> None:
+        pass
+
+
+class InProcessRefbox(SimulatedRefbox):
+    """The refbox in the game's own process, on the world's clock."""
+
+    @abc.abstractmethod
+    def attach_bus(self, bus) -> None:
+        """Put the refbox on an in-process :class:`rll_bt.comm.Bus`: channels
+        "public", "cyan", "magenta" and the control stream at "refbox"."""
+
+
+class RefboxProcess(SimulatedRefbox):
+    """A refbox that runs as a process of its own (``rll-bt sim --processes``),
+    driving the world's stations over a link the world serves."""
+
+    @abc.abstractmethod
+    def command(self, *, host: str, layout, snapshot: Path, message_log: Path | None = None) -> list[str]:
+        """The ``rll-bt`` arguments of the refbox process: on UDP sending to
+        ``host`` on ``layout`` (a :class:`rll_bt.comm.Layout`, the refbox's
+        view), rewriting the ``snapshot`` file this view is read from, and
+        logging every message it sends and receives to ``message_log``
+        (JSON lines of :mod:`rll_bt.comm.msglog`, on the monotonic wall clock)."""
+
+    def ready(self) -> bool:
+        """Whether the process is up (it wrote its first snapshot)."""
+        return True

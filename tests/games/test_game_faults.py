@@ -18,15 +18,15 @@ def test_a_killed_agent_loses_its_task_another_robot_does_it_the_game_goes_on_an
             if not in_production(g):
                 return None
             for n, (kind, tid) in running(g).items():
-                if kind in ("get_workpiece", "retrieve_cap") and g.sim.backend("CYAN", n).holding() is False:
-                    st, pose = g.sim.stations()[tasks(g)[tid]["machine"]].pose, g.sim.robot_pose("CYAN", n)
+                if kind in ("get_workpiece", "retrieve_cap") and g.world.backend("CYAN", n).holding() is False:
+                    st, pose = g.refbox.stations()[tasks(g)[tid]["machine"]].pose, g.world.robot_pose("CYAN", n)
                     if math.hypot(st.x - pose.x, st.y - pose.y) > 2.0:
                         return n, tid
             return None
         assert game.run_until(fetching, limit=120.0), "no robot went to fetch anything"
         victim, tid = fetching(game)
         step = _step(tasks(game)[tid])
-        points = game.sim.status().points["CYAN"]
+        points = game.refbox.status().points["CYAN"]
         game.kill_agent(victim)
         killed = game.clock.now()
 
@@ -42,7 +42,7 @@ def test_a_killed_agent_loses_its_task_another_robot_does_it_the_game_goes_on_an
         assert game.run_until(done_by_another, limit=150.0), f"nobody did {step} for the dead robot"
         assert all(t["robot"] != victim and t["finished_at"] > killed for t in done_by_another(game))
         # ... and the game goes on: nothing for the dead robot, more work done by the others
-        st = game.sim.status()
+        st = game.refbox.status()
         assert st.phase == "PRODUCTION" and st.state == "RUNNING" and st.points["CYAN"] >= points
         assert all(t["robot"] != victim for t in tasks(game).values() if (t["assigned_at"] or 0) > killed + 3.0)
         done = [t for t in tasks(game).values() if t["state"] == "DONE" and t["finished_at"] > killed]
@@ -52,7 +52,7 @@ def test_a_killed_agent_loses_its_task_another_robot_does_it_the_game_goes_on_an
         assert game.run_until(lambda g: g.teamserver.snapshot()["robots"][victim]["status"] == "ACTIVE"
                               and agent.map_updates > 0, limit=10.0)
         known = game.teamserver.snapshot()["known"]
-        truth = {n: s.zone for n, s in game.sim.stations().items()}
+        truth = {n: s.zone for n, s in game.refbox.stations().items()}
         mm = agent.services["machine_map"]
         assert known and all(mm[name].zone == truth[name] for name in known)
 
@@ -81,7 +81,7 @@ def test_a_restarted_team_server_resumes_from_its_database_and_goes_on_playing()
             return (any((t["finished_at"] or 0) > restarted for t in ts)
                     and any((t["assigned_at"] or 0) > restarted for t in ts))
         assert game.run_until(resumed, limit=60.0), "the new server neither heard results nor gave tasks"
-        assert game.sim.status().phase == "PRODUCTION"
+        assert game.refbox.status().phase == "PRODUCTION"
 
 
 def test_a_station_going_down_gets_no_work_until_it_is_back(tmp_path):
@@ -121,7 +121,7 @@ def test_a_cap_station_going_down_holds_its_work_while_the_rest_goes_on_and_it_r
         prepares = _prepares(game, tmp_path)
 
         def needed(g):      # the plan needs the station, past the first round of assignments
-            return (in_production(g) and g.sim.status().game_time >= 10.0
+            return (in_production(g) and g.refbox.status().game_time >= 10.0
                     and any(t["state"] == "PENDING" and t["machine"] == machine for t in tasks(g).values()))
         assert game.run_until(needed, limit=150.0)
         down_at = game.clock.now()

@@ -170,10 +170,10 @@ def test_production_across_the_station_link(tmp_path):
     game = ProcessGame(opts)
 
     def state(machine):
-        return game.sim.stations()[machine].state
+        return game.refbox.stations()[machine].state
 
     def retrieving(g):
-        return next((e["machine"] for e in reversed(g.sim.station_log()) if e["machine"].startswith("C-CS")
+        return next((e["machine"] for e in reversed(g.refbox.station_log()) if e["machine"].startswith("C-CS")
                      and e["to"] == "PREPARED" and "RETRIEVE_CAP" in e["reason"]), None)
     try:
         assert game.run_until(retrieving, limit=60.0), "the team server prepared no cap station"
@@ -183,7 +183,7 @@ def test_production_across_the_station_link(tmp_path):
         if state("C-BS") == "IDLE":
             _prepare(game, "C-BS", instruction_bs={"side": "OUTPUT", "color": "BASE_RED"})
         assert game.run_until(lambda g: state("C-BS") == "READY-AT-OUTPUT", limit=15.0)
-        world = game.sim.world
+        world = game.world.pybullet
         robot = world.robot("CYAN", 1)
         base = world.workpiece_at("C-BS", "output")
         assert base is not None and base.base.startswith("BASE_")     # dispensed by the refbox process
@@ -196,13 +196,13 @@ def test_production_across_the_station_link(tmp_path):
         gripper("close", "C-BS", "output")
         assert world.held_workpiece("CYAN", 1).base == base.base
         assert game.run_until(lambda g: state("C-BS") != "READY-AT-OUTPUT", limit=5.0)
-        assert any(e["machine"] == "C-BS" and e["reason"] == "product taken" for e in game.sim.station_log())
+        assert any(e["machine"] == "C-BS" and e["reason"] == "product taken" for e in game.refbox.station_log())
         gripper("open", "C-BS", "input")                  # back on the BS input, out of the way
         gripper("close", cs, "shelf1")
         carrier = world.held_workpiece("CYAN", 1)
         assert carrier is not None and carrier.cap is not None
         gripper("open", cs, "input")
-        assert any(e["machine"] == cs and e["to"] == "PROCESSING" for e in game.sim.station_log())
+        assert any(e["machine"] == cs and e["to"] == "PROCESSING" for e in game.refbox.station_log())
         assert game.run_until(lambda g: state(cs) == "READY-AT-OUTPUT", limit=20.0)
         out = world.workpiece_at(cs, "output")
         assert out is not None and out.cap is None         # the cap retrieved, the carrier put out by the refbox

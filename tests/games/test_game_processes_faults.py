@@ -43,7 +43,7 @@ def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
             return (g.snapshot()["robots"][str(victim)]["status"] == "LOST"
                     and _tasks(g)[tid]["robot"] != victim)
         assert game.run_until(taken_back, limit=30.0), "the dead robot kept its task"
-        st = game.sim.status()
+        st = game.refbox.status()
         assert st.phase == "PRODUCTION" and st.state == "RUNNING"
 
         # a new agent process for that robot rejoins

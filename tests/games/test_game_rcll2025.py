@@ -18,8 +18,8 @@ def test_a_short_2025_game_scores_zone_and_rotation_and_delivers_by_order_id(tmp
     # 200 s in: order windows scale with the phase, 600 s leave room for a slower game)
     with short_game(seed=3, profile="rcll2025", production=600.0, out=tmp_path) as game:
         prof = game.options.rules
-        result = game.run(stop=lambda g: any(d.team == "CYAN" for d in g.sim.deliveries()))
-        truth = {n: s for n, s in game.sim.stations().items() if s.team == "CYAN"}
+        result = game.run(stop=lambda g: any(d.team == "CYAN" for d in g.refbox.deliveries()))
+        truth = {n: s for n, s in game.refbox.stations().items() if s.team == "CYAN"}
         snap = game.teamserver.snapshot()
     assert result.finished and result.status.phase == "PRODUCTION"
 

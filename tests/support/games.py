@@ -18,7 +18,7 @@ def short_game(seed: int = 3, **kw) -> LockstepGame:
 
 
 def in_production(game) -> bool:
-    st = game.sim.status()
+    st = game.refbox.status()
     return st.phase == "PRODUCTION" and st.state == "RUNNING"
 
 

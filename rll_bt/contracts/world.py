@@ -1,0 +1,47 @@
+"""The world contract: the field, its robots and its stations on one clock.
+
+What a game steps and its robots drive: a simulated world (PyBullet), and
+tomorrow a world feeding device emulators or a recorded one.  It knows
+nothing of the referee box's game (that is :mod:`.refbox`).
+
+Times are seconds of :attr:`World.clock`; poses are field-frame metres and
+radians of the rules profile.
+"""
+from __future__ import annotations
+
+import abc
+from typing import Any
+
+from ..backend import Backend, Pose2D
+
+
+class World(abc.ABC):
+    """``profile``: the rules profile (:class:`rll_bt.rules.Profile`);
+    ``clock``: the clock only :meth:`step` advances (a
+    :class:`~rll_bt.clock.SimClock` for a simulated world); ``seed``: what
+    fixed the layout and the noise."""
+
+    profile: Any
+    clock: Any
+    seed: int
+
+    @abc.abstractmethod
+    def step(self, dt: float) -> None:
+        """Advance the world ``dt`` seconds (this moves the clock)."""
+
+    @abc.abstractmethod
+    def backend(self, team: str, number: int, **options) -> Backend:
+        """The backend of robot ``number`` of ``team`` (added to the world on
+        first use, with ``options``; later calls give the same robot)."""
+
+    @abc.abstractmethod
+    def robot_pose(self, team: str, number: int) -> Pose2D:
+        """Where the robot really is (ground truth)."""
+
+    def collision_log(self) -> list[tuple[float, str, str]]:
+        """Every collision so far: (time, robot "TEAM/N", what it ran into: a
+        station's name, "wall" or "robot TEAM/N")."""
+        return []
+
+    def close(self) -> None:
+        pass
