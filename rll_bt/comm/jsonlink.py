@@ -6,54 +6,37 @@ Wire: each frame is a 4-byte big-endian length and a UTF-8 JSON object.
 A request carries an ``id`` the reply repeats; frames without an ``id`` are
 pushed by the server.
 
-:class:`FramedServer` serves requests from its owner's loop (:meth:`FramedServer.poll`)
-and may push frames of its own to its clients, never blocking on a slow
-reader (what a client does not take yet waits in that client's buffer);
-:class:`FramedClient` calls and waits for the reply of its request's ``id``,
-keeping pushed frames in order for :meth:`FramedClient.pushed`.
+:class:`FramedServer` serves requests from its owner's loop
+(:meth:`FramedServer.poll`) and may push frames of its own to its clients,
+never blocking on a slow reader (what a client does not take yet waits in
+that client's buffer); :class:`FramedClient` calls and waits for the reply
+of its request's ``id``, keeping pushed frames in order for
+:meth:`FramedClient.pushed`.  Both are built on the socket code of
+:mod:`.sockets`, which the team-server link (:mod:`.tcp`) uses too.
 """
 from __future__ import annotations
 
 import json
-import selectors
 import socket
-import struct
 from collections import deque
 
-_LEN = struct.Struct(">I")
-MAX_MESSAGE = 16 << 20
+from .sockets import Connection, LengthPrefixed, Listener, wait
+
+MAX_MESSAGE = 16 << 20           # the largest frame accepted, bytes
 MAX_BUFFERED = 64 << 20          # bytes waiting for a client that reads nothing: then it is dropped
 
 
 def frame(obj) -> bytes:
     """``obj`` as one frame: 4-byte big-endian length, UTF-8 JSON."""
-    body = json.dumps(obj, separators=(",", ":"), allow_nan=True).encode("utf-8")
-    return _LEN.pack(len(body)) + body
+    return LengthPrefixed.frame(json.dumps(obj, separators=(",", ":"), allow_nan=True).encode("utf-8"))
+
+
+def _connection(sock: socket.socket, peer) -> Connection:
+    return Connection(sock, peer, LengthPrefixed(MAX_MESSAGE), MAX_BUFFERED)
 
 
 class LinkClosed(ConnectionError):
     """The other end closed the link (its process ended) or it broke."""
-
-
-class FrameReader:
-    """Bytes in, whole frame bodies out (ValueError on a frame over :data:`MAX_MESSAGE`)."""
-
-    def __init__(self) -> None:
-        self._buf = bytearray()
-
-    def feed(self, data: bytes) -> list[bytes]:
-        buf = self._buf
-        buf += data
-        out = []
-        while len(buf) >= _LEN.size:
-            (size,) = _LEN.unpack_from(buf)
-            if size > MAX_MESSAGE:
-                raise ValueError(f"a frame of {size} bytes (at most {MAX_MESSAGE})")
-            if len(buf) < _LEN.size + size:
-                break
-            out.append(bytes(buf[_LEN.size:_LEN.size + size]))
-            del buf[:_LEN.size + size]
-        return out
 
 
 def parse_address(address: str, what: str = "address") -> tuple[str, int]:
@@ -70,33 +53,30 @@ def parse_address(address: str, what: str = "address") -> tuple[str, int]:
 
 class FramedClient:
     """The calling end of a framed link to ``host:port``.  :meth:`call`
-    sends a request with a fresh ``id`` and waits (``timeout`` s at most,
-    then :class:`TimeoutError`) for the reply with that ``id``; frames
-    without an ``id`` that arrive meanwhile (pushed by the server) are kept
-    in order for :meth:`pushed`.  A closed link raises :class:`LinkClosed`;
-    connecting may raise any :class:`OSError`."""
+    sends a request with a fresh ``id`` and waits for the reply with that
+    ``id`` (:class:`TimeoutError` when nothing arrives for ``timeout``
+    seconds); frames without an ``id`` that arrive meanwhile (pushed by the
+    server) are kept in order for :meth:`pushed`.  A closed link raises
+    :class:`LinkClosed`; connecting may raise any :class:`OSError`."""
 
     def __init__(self, host: str, port: int, timeout: float = 5.0):
         self.timeout = timeout
-        self._sock = socket.create_connection((host, port), timeout=timeout)
-        self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self._sock.settimeout(timeout)
-        self._reader = FrameReader()
+        self._conn = _connection(socket.create_connection((host, port), timeout=timeout), (host, port))
         self._frames: deque[dict] = deque()
         self._pushed: list[dict] = []
         self._ids = 0
         self.closed = False
+        self._why = ""
 
     def call(self, request: dict) -> dict:
         self._ids += 1
         rid = self._ids
         self._check()
-        try:
-            self._sock.sendall(frame({**request, "id": rid}))
-        except OSError as exc:
-            raise self._lost(exc) from None
+        if not self._conn.queue(frame({**request, "id": rid})):
+            raise self._lost("the link broke: the request could not be sent")
         while True:
             while not self._frames:
+                self._check()
                 self._read(block=True)
             msg = self._frames.popleft()
             if "id" not in msg:
@@ -106,8 +86,9 @@ class FramedClient:
 
     def pushed(self) -> list[dict]:
         """What the server pushed, in order, taking whatever has arrived (never waits)."""
-        self._check()
-        self._read(block=False)
+        if not self._frames:
+            self._check()
+            self._read(block=False)
         while self._frames:
             msg = self._frames.popleft()
             if "id" not in msg:
@@ -116,44 +97,35 @@ class FramedClient:
         return out
 
     def _read(self, block: bool) -> None:
-        while True:
-            try:
-                if block:
-                    data = self._sock.recv(1 << 16)
-                else:
-                    self._sock.setblocking(False)
-                    try:
-                        data = self._sock.recv(1 << 16)
-                    finally:
-                        self._sock.settimeout(self.timeout)
-            except (BlockingIOError, InterruptedError):
+        """Take what arrived (with ``block``: wait for something, sending what waits meanwhile)."""
+        conn = self._conn
+        if block:
+            readable, writable = wait([conn.sock], [conn.sock] if conn.tx else [], self.timeout)
+            if not readable and not writable:
+                raise TimeoutError(f"nothing arrived for {self.timeout:g} s")
+            if writable and not conn.flush():
+                raise self._lost("the link broke while sending")
+            if not readable:
                 return
-            except TimeoutError:
-                raise
-            except OSError as exc:
-                raise self._lost(exc) from None
-            if not data:
-                raise self._lost(None)
-            for body in self._reader.feed(data):
-                self._frames.append(json.loads(body))
-            if block:
-                return
+        frames, up = conn.read()
+        self._frames.extend(json.loads(body) for body in frames)
+        if not up:
+            why = f"the link broke: {conn.broken}" if conn.broken else "the other end closed the link"
+            self._lost(why)          # what arrived before is still delivered
 
-    def _lost(self, exc) -> LinkClosed:
+    def _lost(self, why: str) -> LinkClosed:
+        self._why = why
         self.close()
-        return LinkClosed("the other end closed the link" if exc is None else f"the link broke: {exc}")
+        return LinkClosed(why)
 
     def _check(self) -> None:
         if self.closed:
-            raise LinkClosed("the link is closed")
+            raise LinkClosed(self._why or "the link is closed")
 
     def close(self) -> None:
         if not self.closed:
             self.closed = True
-            try:
-                self._sock.close()
-            except OSError:
-                pass
+            self._conn.close()
 
 
 class FramedServer:
@@ -162,59 +134,56 @@ class FramedServer:
     answers every whole request that arrived (:meth:`answer`, in order per
     client) and sends what waits.  Nothing here blocks on a client: what a
     slow client has not taken waits in its buffer (a client that lets more
-    than :data:`MAX_BUFFERED` bytes pile up is dropped)."""
+    than :data:`MAX_BUFFERED` bytes pile up is dropped).  A client is a
+    :class:`~.sockets.Connection` (``conn``)."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0):
-        self._sel = selectors.DefaultSelector()
-        self._listen = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-        self._listen.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        self._listen.bind((host, port))
-        self._listen.listen(16)
-        self._listen.setblocking(False)
-        self.port = self._listen.getsockname()[1]
-        self._sel.register(self._listen, selectors.EVENT_READ, None)
-        self._readers: dict[socket.socket, FrameReader] = {}
-        self._out: dict[socket.socket, bytearray] = {}
+        self._listener = Listener(host, port)
+        self.port = self._listener.port
+        self._conns: dict[socket.socket, Connection] = {}
 
     # -- what a subclass provides ----------------------------------------------------------------
-    def answer(self, conn: socket.socket, body: bytes) -> dict | None:
+    def answer(self, conn: Connection, body: bytes) -> dict | None:
         """The reply to one request (None: no reply)."""
         raise NotImplementedError
 
-    def connected(self, conn: socket.socket) -> None:
+    def connected(self, conn: Connection) -> None:
         """A client connected."""
 
     # -- serving ----------------------------------------------------------------------------------
     @property
-    def clients(self) -> list[socket.socket]:
-        return list(self._readers)
+    def clients(self) -> list[Connection]:
+        return list(self._conns.values())
 
     @property
     def unsent(self) -> int:
         """Bytes waiting for clients that have not taken them yet."""
-        return sum(len(out) for out in self._out.values())
+        return sum(len(conn.tx) for conn in self._conns.values())
 
     def poll(self, timeout: float) -> int:
         """Serve whatever arrives within ``timeout`` seconds; returns the requests answered."""
+        conns = self._conns
+        readable, writable = wait([self._listener.sock, *conns], [s for s, c in conns.items() if c.tx], timeout)
         served = 0
-        for key, events in self._sel.select(max(timeout, 0.0)):
-            sock = key.fileobj
-            if sock is self._listen:
-                self._accept()
-                continue
-            if events & selectors.EVENT_WRITE and sock in self._out:
-                self._flush(sock)
-            if events & selectors.EVENT_READ and sock in self._readers:
-                served += self._read(sock)
+        for sock in writable:
+            conn = conns.get(sock)
+            if conn is not None and not conn.flush():
+                self._drop(conn)
+        for sock in readable:
+            if sock is self._listener.sock:
+                for new, addr in self._listener.accept():
+                    conn = conns[new] = _connection(new, addr)
+                    self.connected(conn)
+            elif sock in conns:
+                served += self._read(conns[sock])
         return served
 
-    def send(self, conn: socket.socket, obj) -> None:
+    def send(self, conn: Connection, obj) -> None:
         """Queue ``obj`` for ``conn`` and send what the socket takes now."""
-        out = self._out.get(conn)
-        if out is None:
+        if conn.sock not in self._conns:
             return
-        out += frame(obj)
-        self._flush(conn)
+        if not conn.queue(frame(obj)):
+            self._drop(conn)
 
     def push(self, obj) -> int:
         """Send ``obj`` to every client; returns how many."""
@@ -223,81 +192,25 @@ class FramedServer:
             self.send(conn, obj)
         return len(clients)
 
-    def _accept(self) -> None:
-        try:
-            conn, _addr = self._listen.accept()
-        except OSError:
-            return
-        conn.setblocking(False)
-        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self._readers[conn] = FrameReader()
-        self._out[conn] = bytearray()
-        self._sel.register(conn, selectors.EVENT_READ, None)
-        self.connected(conn)
-
-    def _read(self, conn: socket.socket) -> int:
-        try:
-            data = conn.recv(1 << 16)
-        except (BlockingIOError, InterruptedError):
-            return 0
-        except OSError:
-            data = b""
-        if not data:
-            self._drop(conn)
-            return 0
-        try:
-            bodies = self._readers[conn].feed(data)
-        except ValueError:
-            self._drop(conn)
-            return 0
+    def _read(self, conn: Connection) -> int:
+        frames, up = conn.read()
         served = 0
-        for body in bodies:
+        for body in frames:
+            if conn.sock not in self._conns:
+                break
             reply = self.answer(conn, body)
             served += 1
             if reply is not None:
                 self.send(conn, reply)
-            if conn not in self._readers:
-                break
+        if not up:
+            self._drop(conn)
         return served
 
-    def _flush(self, conn: socket.socket) -> None:
-        out = self._out[conn]
-        while out:
-            try:
-                n = conn.send(out)
-            except (BlockingIOError, InterruptedError):
-                break
-            except OSError:
-                self._drop(conn)
-                return
-            del out[:n]
-        if len(out) > MAX_BUFFERED:
-            self._drop(conn)
-            return
-        want = selectors.EVENT_READ | (selectors.EVENT_WRITE if out else 0)
-        if self._sel.get_key(conn).events != want:
-            self._sel.modify(conn, want)
-
-    def _drop(self, conn: socket.socket) -> None:
-        try:
-            self._sel.unregister(conn)
-        except (KeyError, ValueError):
-            pass
-        self._readers.pop(conn, None)
-        self._out.pop(conn, None)
-        try:
+    def _drop(self, conn: Connection) -> None:
+        if self._conns.pop(conn.sock, None) is not None:
             conn.close()
-        except OSError:
-            pass
 
     def close(self) -> None:
-        for conn in list(self._readers):
+        for conn in list(self._conns.values()):
             self._drop(conn)
-        try:
-            self._sel.unregister(self._listen)
-        except (KeyError, ValueError):
-            pass
-        self._listen.close()
-        self._sel.close()
-
-
+        self._listener.close()

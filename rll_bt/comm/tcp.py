@@ -6,7 +6,8 @@ With a key (the team-server link) every frame is encrypted like the team
 channel; a peer without the key can neither read (its frames fail to
 decrypt and are dropped) nor task (the server drops its frames and, by
 default, disconnects it).  Sockets are non-blocking; outgoing bytes are
-buffered and flushed as the socket accepts them.
+buffered and flushed as the socket accepts them (:mod:`.sockets`, the
+socket code shared with :mod:`.jsonlink`).
 """
 from __future__ import annotations
 
@@ -26,70 +27,13 @@ from .crypto import TEAM_CIPHER
 from .framing import FRAME_V2, MAX_STREAM_PAYLOAD, StreamReassembler
 from .ports import TEAM_SERVER_PORT
 from .registry import MessageRegistry
+from .sockets import MAX_TX_BUFFER, Connection, Listener, wait
 from .transport import CONNECTED, DISCONNECTED, PumpedTransport, Received
 
 log = logging.getLogger("rll_bt.comm")
 
-#: a peer whose unsent bytes exceed this is considered dead, bytes
-MAX_TX_BUFFER = 8 << 20
-_RECV_CHUNK = 65536
 
-
-class _Conn:
-    """One framed, non-blocking TCP connection."""
-
-    def __init__(self, sock: socket.socket, peer: Any, frame_version: int, max_payload: int):
-        sock.setblocking(False)
-        try:
-            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        except OSError:
-            pass
-        self.sock, self.peer = sock, peer
-        self.rx = StreamReassembler(frame_version, max_payload)
-        self.tx = bytearray()
-
-    def queue(self, frame: bytes) -> bool:
-        """Buffer and try to send ``frame``; False if the connection is dead."""
-        if len(self.tx) + len(frame) > MAX_TX_BUFFER:
-            return False
-        self.tx += frame
-        return self.flush()
-
-    def flush(self) -> bool:
-        while self.tx:
-            try:
-                n = self.sock.send(self.tx)
-            except (BlockingIOError, InterruptedError):
-                return True
-            except OSError:
-                return False
-            del self.tx[:n]
-        return True
-
-    def read(self) -> tuple[list[bytes], bool]:
-        """Whole frames received so far and whether the connection is still up."""
-        frames: list[bytes] = []
-        while True:
-            try:
-                data = self.sock.recv(_RECV_CHUNK)
-            except (BlockingIOError, InterruptedError):
-                return frames, True
-            except OSError:
-                return frames, False
-            if not data:
-                return frames, False
-            frames += self.rx.feed(data)
-            if self.rx.broken:
-                return frames, False
-
-    def close(self) -> None:
-        try:
-            self.sock.close()
-        except OSError:
-            pass
-
-
-def _decode_frames(owner, conn: _Conn, frames: list[bytes], source: Any) -> str | None:
+def _decode_frames(owner, conn: Connection, frames: list[bytes], source: Any) -> str | None:
     """Decode and deliver ``frames``; the first crypto-related drop cause, if any."""
     crypto_cause = None
     for frame in frames:
@@ -98,12 +42,22 @@ def _decode_frames(owner, conn: _Conn, frames: list[bytes], source: Any) -> str 
             owner._deliver(Received.of(decoded, owner.channel, source, owner.clock.now()))
         elif cause in S.CRYPTO_CAUSES and crypto_cause is None:
             crypto_cause = cause
-    if conn.rx.broken:
-        owner.stats.add(conn.rx.broken.cause, conn.rx.broken.detail)
+    if conn.broken:
+        owner.stats.add(conn.broken.cause, conn.broken.detail)
     return crypto_cause
 
 
-class StreamClient(PumpedTransport):
+class _Framed:
+    """What both ends share: their connections cut refbox frames."""
+
+    _frame_version: int
+    _max_payload: int
+
+    def _connection(self, sock: socket.socket, peer: Any) -> Connection:
+        return Connection(sock, peer, StreamReassembler(self._frame_version, self._max_payload), MAX_TX_BUFFER)
+
+
+class StreamClient(_Framed, PumpedTransport):
     """Connects to ``host:port`` and keeps reconnecting with exponential backoff.
 
     ``backoff_initial``/``backoff_max``: seconds of ``clock`` between attempts
@@ -127,7 +81,7 @@ class StreamClient(PumpedTransport):
         self.backoff_initial, self.backoff_max = backoff_initial, backoff_max
         self.connect_timeout = connect_timeout
         self._frame_version, self._max_payload = frame_version, max_payload
-        self._conn: _Conn | None = None
+        self._conn: Connection | None = None
         self._connecting: tuple[socket.socket, float] | None = None
         self._backoff = backoff_initial
         self._next_attempt = self.clock.now()
@@ -177,7 +131,7 @@ class StreamClient(PumpedTransport):
         try:
             _, writable, _ = select.select([], [s], [], 0)
         except (OSError, ValueError):
-            writable = [s]
+            writable = [s]            # let SO_ERROR tell
         if writable:
             err = s.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR)
             self._connecting = None
@@ -192,7 +146,7 @@ class StreamClient(PumpedTransport):
             self._failed(errno.ETIMEDOUT)
 
     def _established(self, s: socket.socket) -> None:
-        self._conn = _Conn(s, self.address, self._frame_version, self._max_payload)
+        self._conn = self._connection(s, self.address)
         self._backoff = self.backoff_initial
         self._warned_connect = False
         self.connections += 1
@@ -262,10 +216,7 @@ class StreamClient(PumpedTransport):
             wr.append(self._connecting[0])
         else:
             timeout = min(timeout, max(0.0, self._next_attempt - self.clock.now()))
-        try:
-            select.select(rd, wr, [], timeout)
-        except (OSError, ValueError):
-            pass
+        wait(rd, wr, timeout)
 
     def wait_connected(self, timeout: float) -> bool:
         """Block up to ``timeout`` wall seconds until connected; True if connected."""
@@ -291,7 +242,7 @@ class StreamClient(PumpedTransport):
             self._connecting = None
 
 
-class StreamServer(PumpedTransport):
+class StreamServer(_Framed, PumpedTransport):
     """Accepts framed TCP clients on ``host:port`` (0 = an ephemeral port, see :attr:`port`).
 
     Each client gets an int id (:attr:`Received.source`, :class:`LinkEvent`
@@ -312,20 +263,11 @@ class StreamServer(PumpedTransport):
                                 stats=self.stats, iv_source=iv_source)
         self.drop_unauthenticated = drop_unauthenticated
         self._frame_version, self._max_payload = frame_version, max_payload
-        lsock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-        try:
-            lsock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-            lsock.bind((host, int(port)))
-            lsock.listen(backlog)
-            lsock.setblocking(False)
-        except OSError:
-            lsock.close()
-            raise
-        self._lsock = lsock
+        self._listener = Listener(host, int(port), backlog)
         self.host = host
-        self.port = lsock.getsockname()[1]
+        self.port = self._listener.port
         self.stats.name = f"{channel} tcp server :{self.port}"
-        self._conns: dict[int, _Conn] = {}
+        self._conns: dict[int, Connection] = {}
         self._next_id = 1
 
     def clients(self) -> list[int]:
@@ -362,16 +304,9 @@ class StreamServer(PumpedTransport):
             self._event(DISCONNECTED, cid)
 
     def _pump(self) -> None:
-        while True:
-            try:
-                s, addr = self._lsock.accept()
-            except (BlockingIOError, InterruptedError):
-                break
-            except OSError as exc:
-                log.debug("%s: accept: %s", self.channel, exc)
-                break
+        for s, addr in self._listener.accept():
             cid, self._next_id = self._next_id, self._next_id + 1
-            self._conns[cid] = _Conn(s, addr, self._frame_version, self._max_payload)
+            self._conns[cid] = self._connection(s, addr)
             self._event(CONNECTED, cid)
         for cid, conn in list(self._conns.items()):
             alive = conn.flush()
@@ -384,16 +319,13 @@ class StreamServer(PumpedTransport):
                 self._drop(cid)
 
     def _wait_io(self, timeout: float) -> None:
-        rd = [self._lsock] + [c.sock for c in self._conns.values()]
+        rd = [self._listener.sock] + [c.sock for c in self._conns.values()]
         wr = [c.sock for c in self._conns.values() if c.tx]
-        try:
-            select.select(rd, wr, [], max(0.0, timeout))
-        except (OSError, ValueError):
-            pass
+        wait(rd, wr, timeout)
 
     def _close_io(self) -> None:
         for cid in list(self._conns):
             conn = self._conns.pop(cid)
             conn.flush()
             conn.close()
-        self._lsock.close()
+        self._listener.close()
