@@ -153,7 +153,17 @@ class RobotinoBase:
             raise
         self._thread = threading.Thread(target=self._run, name="robotino-base", daemon=True)
         self._thread.start()
+        self._wait_for_readings()
         return self
+
+    def _wait_for_readings(self) -> None:
+        """Until the first poll is answered (odometry stamped, power read), at most
+        ``handshake_timeout``: readings are real from the moment :meth:`open` returns."""
+        for _ in range(int(self.handshake_timeout / self.cycle_time) + 1):
+            with self._lock:
+                if not math.isnan(self._odo_stamp) and self._readings.power is not None:
+                    return
+            self._stop.wait(self.cycle_time)
 
     def close(self) -> None:
         """Stop the wheels (best effort), end the thread, release the port."""

@@ -4,7 +4,8 @@ A script (a YAML file or a dict) gives, per reading, a timeline of values
 keyed by the clock time in seconds since the backend was opened; a reading
 returns the last entry at or before now::
 
-    capabilities: [drive, odometry, gripper, bumper, battery]   # default: all but laser, camera, detections
+    capabilities: [drive, odometry, gripper, bumper, battery]   # the default; laser, camera and
+                                                                # detections it cannot script
     readings:
       holding:  [{t: 0, value: false}, {t: 2.5, value: true}]
       bumper:   [{t: 0, value: false}]
@@ -41,6 +42,8 @@ from rll_bt.clock import Clock, WallClock
 
 _DEFAULT_CAPS = (Capability.DRIVE | Capability.ODOMETRY | Capability.GRIPPER | Capability.BUMPER
                  | Capability.BATTERY)
+#: what a script can give readings for (a capability advertised must work: rll_bt.backend.check_backend)
+_SCRIPTABLE = _DEFAULT_CAPS
 
 
 def load_script(script: str | Path | dict | None) -> dict:
@@ -74,6 +77,11 @@ def _caps(names) -> Capability:
             raise BackendError(f"scripted backend: unknown capability {n!r} "
                                f"(known: {', '.join(c.name.lower() for c in Capability if c.name != 'NONE')})"
                                ) from None
+    names = [c for c in Capability if c.name != "NONE"]
+    extra = [c.name.lower() for c in names if c in caps and c not in _SCRIPTABLE]
+    if extra:
+        scriptable = ", ".join(c.name.lower() for c in names if c in _SCRIPTABLE)
+        raise BackendError(f"scripted backend: cannot script {' or '.join(extra)} readings (it scripts {scriptable})")
     return caps
 
 

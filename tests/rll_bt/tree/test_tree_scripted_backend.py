@@ -37,3 +37,9 @@ def test_bad_scripts_are_reported(tmp_path):
         open_backend("scripted", script=str(tmp_path / "none.yaml"))
     with pytest.raises(BackendError, match="unknown capability"):
         open_backend("scripted", capabilities=["teleport"])
+
+
+def test_a_capability_it_cannot_script_is_refused():
+    """Advertising a laser it has no scans for would break the backend contract."""
+    with pytest.raises(BackendError, match="cannot script laser or camera readings"):
+        open_backend("scripted", capabilities=["drive", "laser", "camera"])
