@@ -175,28 +175,10 @@ def test_the_kernels_inner_layers_import_no_agent_games_or_cli():
     assert bad == []
 
 
-#: circles being removed elsewhere (issue 16, item 5: one module per rule set, a stations package);
-#: any other circle fails, and so does one of these once it is gone (then delete it here)
-BEING_REMOVED = [
-    ["backends.sim.refbox.ruleset", "backends.sim.refbox.ruleset2025"],
-    ["backends.sim.refbox.stations", "backends.sim.refbox.storage"],
-]
-
-
 def test_no_import_circles_anywhere():
     graph = import_graph()
-    found = [g for g in circles(graph) if g not in BEING_REMOVED]
-    assert not found, "import circles:\n" + "\n".join(describe(g, graph) for g in found)
-
-
-def test_the_circles_being_removed_are_still_there():
-    """Each entry of BEING_REMOVED, reported precisely; delete the entry once its circle is gone."""
-    graph = import_graph()
     found = circles(graph)
-    gone = [g for g in BEING_REMOVED if g not in found]
-    assert not gone, f"no longer a circle, delete it from BEING_REMOVED: {gone}"
-    for g in BEING_REMOVED:
-        print(describe(g, graph))
+    assert not found, "import circles:\n" + "\n".join(describe(g, graph) for g in found)
 
 
 # -- the checker itself --------------------------------------------------------------------------
