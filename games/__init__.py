@@ -48,7 +48,10 @@ def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
     clock = clock or WallClock()
     t0 = clock.now()
     bar = ProgressBar(options.expected_duration(), clock=clock) if progress else None
-    if options.processes:
+    if options.hardware == "emulated":
+        from .hardware import HardwareGame
+        game = HardwareGame(options, progress=bar, clock=clock)
+    elif options.processes:
         from .processes import ProcessGame
         game = ProcessGame(options, progress=bar, clock=clock)
     else:

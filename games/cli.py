@@ -86,6 +86,13 @@ def register(cli) -> None:
                         "UDP/TCP on the wall clock, this process keeping the world (serving the "
                         "agents' backends and the refbox's stations over TCP); a whole game takes "
                         "the game's real length, --out keeps each process's log")
+    g.add_argument("--hardware", default="none", choices=("none", "emulated"),
+                   help="emulated: every agent runs the robotino backend (the code a real robot runs) on "
+                        "device emulators fed by the world: base firmware and gripper on ptys, the laser "
+                        "(--laser) and an MJPEG camera; implies --processes, detectors on camera frames")
+    g.add_argument("--laser", default="urg", choices=("urg", "tim"),
+                   help="the emulated laser with --hardware emulated: urg (Hokuyo, SCIP 2.0 on a pty, "
+                        "the default) or tim (SICK TiM571, CoLa on TCP)")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     g = gp.add_argument_group("watching (Foxglove, see README)")
     g.add_argument("--record", type=Path, metavar="FILE.mcap",
@@ -128,7 +135,8 @@ def options_from(args):
     try:
         return GameOptions(profile=args.profile, robots=args.robots, seed=args.seed,
                            perception=args.perception, strategy=args.strategy, until=args.until,
-                           gui=args.gui, out=args.out, processes=args.processes, setup=args.setup,
+                           gui=args.gui, out=args.out, processes=args.processes or args.hardware == "emulated",
+                           hardware=args.hardware, laser=args.laser, setup=args.setup,
                            exploration=args.exploration, production=args.production, dt=args.dt,
                            hz=args.hz, laser_rate=args.laser_rate, localisation=args.localisation,
                            baseline=args.baseline, record=args.record, live=args.live,

@@ -125,9 +125,10 @@ class LockstepGame:
             self.recorder.listeners.append(self.watch.recorded)
 
     # -- parts -------------------------------------------------------------------------
-    def start_agent(self, number: int, restarted: bool = True) -> RobotAgent:
+    def start_agent(self, number: int, restarted: bool = True, known_pose: bool = True) -> RobotAgent:
         """A new agent for robot ``number`` (its robot stays where it is; the
-        agent starts from the robot's true pose, as an operator would set it)."""
+        agent starts from the robot's true pose, as an operator would set it,
+        or with ``known_pose=False`` finds it by global localisation)."""
         o, bus, reg = self.options, self.bus, self.ref_reg
         name = f"R{number}"
         cfg = AgentConfig(robot_id=number, team_name=o.team_name, profile=o.profile, hz=o.hz)
@@ -139,7 +140,7 @@ class LockstepGame:
             public=bus.peer("public", registry=reg, name=name),
             team=lambda color: bus.peer(color.lower(), registry=reg, key=o.key, name=name),
             services={"localisation": o.localisation},
-            start_pose=self.world.robot_pose(TEAM, number), restarted=restarted)
+            start_pose=self.world.robot_pose(TEAM, number) if known_pose else None, restarted=restarted)
         self.agents[number] = agent
         if rw is not None:
             rw.attach(agent)

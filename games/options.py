@@ -25,6 +25,8 @@ UNTIL = ("exploration", "end")
 #: the entry point, or None: every entry point of the group)
 PUBLISHED = {"perception": (SIMULATORS, "simulator"), "strategy": (TEAMSERVERS, "teamserver"),
              "localisation": ("rll_bt.nodes", None)}
+HARDWARE = ("none", "emulated")
+LASERS = ("urg", "tim")
 TEAM_NAME = "GRIPS"
 TEAM_KEY = "rll-bt-sim-key"
 
@@ -40,6 +42,9 @@ class GameOptions:
     gui: bool = False
     out: Path | None = None
     processes: bool = False
+    hardware: str = "none"               # "emulated": agents on the robotino backend over device emulators
+    laser: str = "urg"                   # the emulated laser: "urg" (SCIP 2.0, pty) or "tim" (CoLa, TCP)
+    camera_fps: float = 5.0              # frames per second the emulated cameras serve
     # phase lengths (game seconds); None: the rules' own
     setup: float | None = 10.0
     exploration: float | None = None
@@ -72,6 +77,9 @@ class GameOptions:
         self.robots = int(self.robots)
         if self.until not in UNTIL:
             raise ValueError(f"until must be one of {', '.join(UNTIL)}, not {self.until!r}")
+        for name, allowed in (("hardware", HARDWARE), ("laser", LASERS)):
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"{name} must be one of {', '.join(allowed)}, not {getattr(self, name)!r}")
         for name, (group, field_name) in PUBLISHED.items():
             plugin = getattr(self, field_name) if field_name else None
             try:

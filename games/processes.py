@@ -192,18 +192,22 @@ class ProcessGame:
         cfg_file.write_text(json.dumps({**self._ts_cfg, "message_log": str(log)}))
         self._spawn("teamserver", [sys.executable, "-m", "games.child", str(cfg_file)])
 
-    def _spawn_agent(self, n: int, first_start: bool) -> None:
+    def _agent_backend_args(self, n: int) -> list[str]:
+        """The ``rll-bt agent`` arguments naming robot ``n``'s backend."""
+        return ["--backend", "remote", "--backend-opt", f"address=127.0.0.1:{self.server.port}",
+                "--backend-opt", f"robot={n}"]
+
+    def _spawn_agent(self, n: int, first_start: bool, known_pose: bool = True) -> None:
         o = self.options
         pub, team = self.layout.robot("public"), self.layout.robot("cyan")
         pose = self.world.robot_pose(TEAM, n)
+        start = ["--start-pose", f"{pose.x},{pose.y},{pose.theta}"] if known_pose else []
         self._spawn(f"agent{n}", [
             sys.executable, "-c", CLI_MAIN, "agent", "--robot", str(n), "--team", o.team_name,
-            "--key", o.key, "--profile", o.profile, "--backend", "remote",
-            "--backend-opt", f"address=127.0.0.1:{self.server.port}", "--backend-opt", f"robot={n}",
+            "--key", o.key, "--profile", o.profile, *self._agent_backend_args(n),
             "--teamserver", f"127.0.0.1:{self._ts_port}", "--refbox-host", BROADCAST, "--layout", "sim",
             "--public-recv", str(pub.recv), "--public-send", str(pub.send),
-            "--team-recv", str(team.recv), "--team-send", str(team.send),
-            "--start-pose", f"{pose.x},{pose.y},{pose.theta}", "--hz", str(o.hz),
+            "--team-recv", str(team.recv), "--team-send", str(team.send), *start, "--hz", str(o.hz),
             "--localisation", o.localisation, "-q"] + (["--first-start"] if first_start else []))
 
     def _serve(self, timeout: float) -> None:
@@ -226,12 +230,13 @@ class ProcessGame:
         self._kills.append((self.wall.now(), number))
         self.recorder.note("agent killed", robot=number)
 
-    def start_agent(self, number: int) -> None:
+    def start_agent(self, number: int, known_pose: bool = True) -> None:
         """A new agent process for robot ``number`` (no memory of earlier tasks),
-        starting from the robot's true pose, as an operator would set it."""
+        starting from the robot's true pose, as an operator would set it, or
+        with ``known_pose=False`` finding it by global localisation."""
         if f"agent{number}" in self._alive():
             raise RuntimeError(f"the agent of robot {number} is running")
-        self._spawn_agent(number, first_start=False)
+        self._spawn_agent(number, first_start=False, known_pose=known_pose)
         self.recorder.note("agent started", robot=number)
 
     def restart_teamserver(self) -> None:

@@ -81,7 +81,8 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
     rules_setup = prof.phases.setup
     return {
         "profile": options.profile, "seed": options.seed, "strategy": options.strategy,
-        "perception": options.perception, "robots": options.robots, "team": team,
+        "perception": "camera (emulated hardware)" if options.hardware == "emulated" else options.perception,
+        "hardware": options.hardware, "robots": options.robots, "team": team,
         "baseline": options.baseline,
         "finished": bool(result.finished), "phase": result.status.phase,
         "sim_time": round(result.sim_time, 2),
@@ -101,6 +102,7 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
         "collisions_by_kind": _collision_kinds(result.collision_log),
         "messages": result.messages,
         "team_server_restarts": result.snapshot.get("restarts", 0),
+        "hardware_stats": result.snapshot.get("hardware", {}),
         "awards": [asdict(a) for a in result.awards if a.team == team],
         "events": rec.events,
     }
@@ -132,6 +134,12 @@ def table(summary: dict) -> str:
     for n, r in s["robot_stats"].items():
         lines.append(f"R{n:<5} {r['busy_time']:8.0f} {100 * r['busy_share']:6.0f}% {r['tasks']:6d} "
                      f"{r['failed']:7d} {r['distance']:9.1f}")
+    hw = s.get("hardware_stats") or {}
+    if hw:
+        lines += ["", f"{'device':8} {'serial polls/s':>14} {'scans/s':>8} {'frames/s':>9} {'watchdog stops':>15}"]
+        for name, h in sorted(hw.items()):
+            lines.append(f"{name:8} {h['serial_polls_per_s']:14.1f} {h['scans_per_s']:8.2f} {h['frames_per_s']:9.2f} "
+                         f"{h['watchdog_motion_stops']:15d}")
     return "\n".join(lines)
 
 

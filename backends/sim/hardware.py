@@ -140,8 +140,13 @@ class WorldRig:
             return self._image
 
     def config(self, **faults) -> dict:
-        cfg = self.rig.config(**faults)
+        """The robot configuration.  Fault timing is looser than a real
+        robot's (laser 1 s, camera 3 s): the world that feeds the devices
+        shares the machine with the agents, and may fall behind a moment."""
+        cfg = self.rig.config(**{"stale": 1.0, "camera_stale": 3.0, **faults})
         cfg["gripper"]["origin"] = list(GRIPPER_ORIGIN)
+        if "camera" in cfg:
+            cfg["camera"]["timeout"] = 3.0
         return cfg
 
     # -- the world's side -----------------------------------------------------------------

@@ -18,6 +18,7 @@ from typing import Any
 
 from py_trees.common import Status
 
+from ..backend import SensorLost
 from ..clock import Clock
 from ..tree import Blackboard, LoadedTree, RunContext, TreeLoadError, load_tree
 from ..tree.recovery import Recovery
@@ -121,6 +122,11 @@ class TaskRun:
         self.ticks += 1
         try:
             status = self.tree.tick()
+        except SensorLost as exc:  # the laser or camera went away (the backend stopped the robot)
+            log.warning("task %d (%s): %s", self.task_id, self.kind, exc)
+            self.halt()
+            self.outcome = Outcome("FAILED", "SENSOR_LOST", str(exc))
+            return self.outcome
         except Exception as exc:   # a bug in a node: report it, never crash the agent
             log.exception("task %d (%s): the tree raised", self.task_id, self.kind)
             self.halt()

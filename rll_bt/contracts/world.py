@@ -38,6 +38,14 @@ class World(abc.ABC):
     def robot_pose(self, team: str, number: int) -> Pose2D:
         """Where the robot really is (ground truth)."""
 
+    def emulated_hardware(self, *, laser: str = "urg", camera_fps: float = 5.0):
+        """The robots as device emulators fed by this world (``rll-bt sim
+        --hardware emulated``): an object with ``add((team, number))`` -> a
+        rig with ``config()`` (a robot configuration for the ``robotino``
+        backend), ``sync()`` (after every step, on the thread that steps),
+        ``stats()`` and ``stop()``."""
+        raise NotImplementedError(f"{type(self).__name__} emulates no hardware")
+
     def collision_log(self) -> list[tuple[float, str, str]]:
         """Every collision so far: (time, robot "TEAM/N", what it ran into: a
         station's name, "wall" or "robot TEAM/N")."""

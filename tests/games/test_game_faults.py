@@ -157,3 +157,24 @@ def _prepares(game, tmp_path) -> list[tuple[float, str]]:
             out.append((game.clock.now(), msg.machine))
     game.bus.tap(tap)
     return out
+
+
+def test_a_restarted_agent_finds_its_pose_by_global_localisation():
+    """Not handed the true pose: the new agent's skills start from a global
+    particle cloud and the trees' relocalise (laser, and tags where seen)."""
+    with short_game(seed=5) as game:
+        assert game.run_until(lambda g: in_production(g) and len(running(g)) >= 2, limit=120.0)
+        victim = sorted(running(game))[0]
+        game.kill_agent(victim)
+        game.run_for(3.0)
+        agent = game.start_agent(victim, known_pose=False)
+
+        def found(g):
+            pose, conf = agent.pose.read()
+            truth = g.sim.robot_pose("CYAN", victim)
+            return (pose is not None and conf >= 0.5 and math.hypot(pose.x - truth.x, pose.y - truth.y) < 0.15
+                    and abs(math.remainder(pose.theta - truth.theta, math.tau)) < 0.1)
+        assert game.run_until(found, limit=120.0), f"robot {victim} did not find its pose: {agent.pose.read()}"
+        assert agent.services.get("start_pose") is None
+        # ... and it works again
+        assert game.run_until(lambda g: victim in running(g), limit=60.0)

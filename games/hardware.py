@@ -1,0 +1,79 @@
+"""A whole game through emulated hardware (``rll-bt sim --hardware emulated``).
+
+Everything :mod:`.processes` does (the refbox, the team server and every
+agent as processes of their own, on the wall clock), but each agent runs
+the ``robotino`` backend, the code a real robot runs, on a robot
+configuration whose devices are emulators fed by the world
+(:meth:`~.interfaces.Simulation.emulated_hardware`): the base firmware and
+the gripper Arduino on ptys, the laser (URG on a pty or TiM on a TCP port)
+and the camera (MJPEG over HTTP).  Serial frames, laser telegrams and
+camera frames cross real file descriptors; the agents see no simulator.
+Perception is the camera's (tags and lights detected on the frames).
+
+This process steps the world and, after each step, lets the devices take
+what it computed (:meth:`_tick`).  A restarted agent (:meth:`start_agent`)
+is not handed its pose: it localises globally.  :attr:`hardware_stats`
+holds each robot's serial, laser and camera counts at the end.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .lockstep import TEAM
+from .processes import ProcessGame
+
+
+class HardwareGame(ProcessGame):
+    def __init__(self, options, **kw):
+        self.hw = None
+        self.hardware_stats: dict = {}
+        self._configs: dict[int, Path] = {}
+        self._hw_t0: float | None = None
+        super().__init__(options, **kw)
+
+    def _start_children(self) -> None:
+        import yaml
+        o = self.options
+        self.hw = self.world.emulated_hardware(laser=o.laser, camera_fps=o.camera_fps)
+        for n in self.robots:
+            rig = self.hw.add((TEAM, n))
+            path = self.dir / f"robot{n}.yaml"
+            path.write_text(f"# the emulated devices of robot {n} (rll-bt sim --hardware emulated)\n"
+                            + yaml.safe_dump(rig.config(), sort_keys=False))
+            self._configs[n] = path
+        self._hw_t0 = self.wall.now()
+        super()._start_children()
+
+    def _agent_backend_args(self, n: int) -> list[str]:
+        return ["--backend", "robotino", "--robot-config", str(self._configs[n])]
+
+    def _tick(self, last: float) -> float:
+        last = super()._tick(last)
+        if self.hw is not None:
+            self.hw.sync()
+        return last
+
+    def start_agent(self, number: int, known_pose: bool = False) -> None:
+        """A new agent process on the same devices; it localises globally."""
+        super().start_agent(number, known_pose=known_pose)
+
+    def result(self, finished: bool):
+        if self.hw is not None:
+            span = max(self.wall.now() - (self._hw_t0 or self.wall.now()), 1e-9)
+            stats = self.hw.stats()
+            for s in stats.values():
+                s["serial_polls_per_s"] = round(s["base_frames"] / span, 1)
+                s["scans_per_s"] = round(s["scans_sent"] / span, 2)
+                s["frames_per_s"] = round(s["frames_sent"] / span, 2)
+            self.hardware_stats = stats
+        res = super().result(finished)
+        res.snapshot["hardware"] = self.hardware_stats
+        return res
+
+    def close(self) -> None:
+        try:
+            super().close()
+        finally:
+            if self.hw is not None:
+                self.hw.stop()
+                self.hw = None
