@@ -171,7 +171,7 @@ def test_a_restarted_agent_finds_its_pose_by_global_localisation():
 
         def found(g):
             pose, conf = agent.pose.read()
-            truth = g.sim.robot_pose("CYAN", victim)
+            truth = g.world.robot_pose("CYAN", victim)
             return (pose is not None and conf >= 0.5 and math.hypot(pose.x - truth.x, pose.y - truth.y) < 0.15
                     and abs(math.remainder(pose.theta - truth.theta, math.tau)) < 0.1)
         assert game.run_until(found, limit=120.0), f"robot {victim} did not find its pose: {agent.pose.read()}"
