@@ -105,3 +105,17 @@ def test_the_device_answers_any_input_without_crashing(binary):
     for payload in (b"", b"s", b"sEN LMDscandata", b"sEN LMDscandata 7", b"sMN SetAccessMode", b"sWN LMDscandatacfg"):
         s.receive(frame(payload), 0.0)
     assert len(cola.TelegramReader().feed(s.take_output())) == 6
+
+
+def test_answers_parse_as_the_ros_sick_tim_driver_reads_them():
+    """sick_tim reads DeviceIdent with ``sRA 0 6 %6s E V%d.%d`` and checks
+    fields 15 ("0") and 20 ("DIST1") and at least 26 + n + 1 + 5 fields."""
+    import re
+    s = TimDevice(TIM571).session()
+    s.receive(cola.frame_a(b"sRI0") + cola.frame_a(b"sRN LMDscandata") + cola.frame_a(b"sRN SCdevicestate"), 0.5)
+    ident, scan, state = (t.payload.decode() for t in cola.TelegramReader().feed(s.take_output()))
+    assert re.match(r"sRA 0 6 (\S{6}) E V(\d+)\.(\d+)", ident).group(1) == "TiM571"
+    fields = scan.split(" ")
+    n = int(fields[25], 16)
+    assert fields[15] == "0" and fields[20] == "DIST1" and n == 811 and len(fields) >= 26 + n + 1 + 5
+    assert state == "sRA SCdevicestate 1"

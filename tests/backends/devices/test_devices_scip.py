@@ -116,3 +116,20 @@ def test_the_device_answers_any_input_without_crashing(data):
     dev.advance(1.0)
     for block in scip.BlockReader().feed(dev.take_output()):
         assert block.lines, "every reply has a status"
+
+
+def test_replies_have_the_line_counts_the_vendors_library_checks():
+    """urg_library counts the lines of VV (7), PP (10) and II (9) replies,
+    echo and status included, the empty line not; and a switched URG-04LX
+    answers its first QT with status 00."""
+    dev = UrgDevice(URG_04LX)
+    assert _blocks(dev, b"QT\n")[0].lines == [b"E"]
+    dev.receive(b"SCIP2.0\n", 0.0)
+    dev.take_output()
+    for cmd, lines in ((b"VV\n", 7), (b"PP\n", 10), (b"II\n", 9)):
+        (block,) = _blocks(dev, cmd)
+        assert 1 + len(block.lines) == lines, cmd
+        assert block.status == "00"
+        block.info()                      # every line's checksum right
+    (ss,) = _blocks(dev, b"SS115200\n")
+    assert ss.status == "03"              # already at that bit rate: one of the statuses the library accepts
