@@ -2,12 +2,17 @@
 
 In the manner of Nav2's RecoveryNode with a RoundRobin of recoveries: when
 the action fails, recovery level 1 runs and the action is tried again; if it
-fails again (``retries`` rounds per level), level 2 runs, and so on.  A
-recovery that itself fails escalates at once to the next level.  When the
-last level is used up the node fails and, with ``error_code``, writes the
-code and a message to the blackboard (``/error/code``, ``/error/message``)
-for the agent to report.  At most one child is ticked per tick, so a chain
-of instant failures cannot spin inside one tick.
+fails again (``retries`` rounds per level), level 2 runs, and so on.  What a
+recovery that itself fails does is the node's ``on_recovery_failure``:
+``escalate`` (the default) goes on at once to the next level without trying
+the action again; ``retry`` counts the round as done and tries the action
+again anyway (BT.CPP's ForceSuccess around the recovery: the code reported
+at the end is the action's own); ``fail`` fails the node at once (Nav2's
+RecoveryNode).  When the last level is used up the node fails and, with
+``error_code``, writes the code and a message to the blackboard
+(``/error/code``, ``/error/message``) for the agent to report.  At most one
+child is ticked per tick, so a chain of instant failures cannot spin inside
+one tick.
 """
 from __future__ import annotations
 
@@ -22,6 +27,9 @@ from .registry import DEFAULT, Slot, structural
 
 _R, _S, _F, _I = Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
 
+#: what a failed recovery does (``on_recovery_failure``)
+POLICIES = ("escalate", "retry", "fail")
+
 
 class Recovery(py_trees.composites.Composite):
     """children[0] is the action, children[1:] the recovery levels in order."""
@@ -29,10 +37,13 @@ class Recovery(py_trees.composites.Composite):
     def __init__(self, name: str, action: py_trees.behaviour.Behaviour,
                  recoveries: list[py_trees.behaviour.Behaviour], retries: int = 1,
                  blackboard=None, error_code: str | None = None, error_message: str | None = None,
-                 level_key: str | None = None):
+                 level_key: str | None = None, on_recovery_failure: str = "escalate"):
         super().__init__(name, [action, *recoveries])
         if retries < 1:
             raise ValueError("retries must be at least 1")
+        if on_recovery_failure not in POLICIES:
+            raise ValueError(f"on_recovery_failure must be one of {', '.join(POLICIES)}")
+        self.on_recovery_failure = on_recovery_failure
         self.action = action
         self.recoveries = list(recoveries)
         self.retries = retries
@@ -65,9 +76,9 @@ class Recovery(py_trees.composites.Composite):
         self._phase = "recover"
         return True
 
-    def _fail(self) -> None:
-        self.feedback_message = (f"{self.action.name} still failing after {len(self.recoveries)} recovery "
-                                 f"level(s) x {self.retries}")
+    def _fail(self, why: str | None = None) -> None:
+        self.feedback_message = why or (f"{self.action.name} still failing after {len(self.recoveries)} recovery "
+                                        f"level(s) x {self.retries}")
         if self.error_code and self.bb is not None:
             write_error(self.bb, self.error_code, self.error_message or self.feedback_message, self.name)
         self.stop(_F)
@@ -96,11 +107,13 @@ class Recovery(py_trees.composites.Composite):
                 self.history.append(f"recovery{self.level}.{self.round}")
             yield from rec.tick()
             st = rec.status
-            if st is _S:
-                self._phase = "action"
+            if st is _S or (st is _F and self.on_recovery_failure == "retry"):
+                self._phase = "action"          # the round is done: try the action again
                 self.status = _R
+            elif st is _F and self.on_recovery_failure == "fail":
+                self._fail(f"recovery level {self.level} ({rec.name}) failed")
             elif st is _F:
-                self.round = self.retries      # a failed recovery escalates at once
+                self.round = self.retries      # escalate: on to the next level at once
                 self._after_failure()
             else:
                 self.status = _R
@@ -122,7 +135,8 @@ class Recovery(py_trees.composites.Composite):
 def _build(spec, slots, ctx):
     lk = spec.ports.get("level")
     return Recovery(spec.name, slots["action"][0], slots["recoveries"], spec.const("retries"), ctx.blackboard,
-                    spec.const("error_code"), spec.const("error_message"), lk.key if lk is not None else None)
+                    spec.const("error_code"), spec.const("error_message"), lk.key if lk is not None else None,
+                    spec.const("on_recovery_failure"))
 
 
 def _check(spec, opts):
@@ -141,6 +155,9 @@ DEFAULT.register(structural(
      Input(str, "error code written when every level is used up", required=False, constant=True,
            name="error_code"),
      Input(str, "message written with the error code", required=False, constant=True, name="error_message"),
+     Input(str, "what a recovery that fails does: escalate (next level at once), retry (try the action "
+           "again anyway) or fail (the node fails)", default="escalate", choices=POLICIES, constant=True,
+           name="on_recovery_failure"),
      Output(int, "the recovery level in use (0 before any recovery)", name="level")),
     (Slot("action", doc="the node to make succeed"),
      Slot("recoveries", many=True, doc="recovery nodes, mildest first")),

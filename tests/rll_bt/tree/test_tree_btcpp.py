@@ -102,7 +102,8 @@ def test_what_groot_sees(tmp_path):
     assert sub.tag == "SubTree" and sub.get("ID") == "Approach"
     assert sub.attrib == {"ID": "Approach", "machine": "{machine}", "side": "{side}", "shelf_slot": "{shelf_slot}"}
     rec = seq[1]
-    assert rec.tag == "recovery" and [c.tag for c in rec] == ["Sequence", "ForceSuccess", "ForceSuccess"]
+    assert rec.tag == "recovery" and [c.tag for c in rec] == ["Sequence", "Sequence", "Sequence"]
+    assert rec.get("on_recovery_failure") == "retry"              # the policy is a port of the Control
     model = doc.find("TreeNodesModel")
     kinds = {el.get("ID"): el.tag for el in model}
     assert kinds["recovery"] == "Control" and kinds["grab"] == "Action"
@@ -319,8 +320,8 @@ def test_bad_xml_is_reported_with_a_line(xml, message):
     (lambda x: x.replace('distance="0.2"', 'distanse="0.2"'), "a port with name [distanse]"),
     (lambda x: x.replace('<Action ID="back_off">', '<Action ID="back_of">'), "node not recognized: back_off"),
     (lambda x: x.replace('main_tree_to_execute="GrabAt"', 'main_tree_to_execute="Nope"'), "names no"),
-    (lambda x: x.replace('<ForceSuccess name="re-align and retry">',
-                         '<ForceSuccess name="re-align and retry"><AlwaysSuccess/>'), "exactly 1 child"),
+    (lambda x: x.replace("<holding_workpiece />", "<Inverter><holding_workpiece /><AlwaysSuccess/></Inverter>", 1),
+     "exactly 1 child"),
     (lambda x: x.replace("<holding_workpiece />", "<holding_workpiece><AlwaysSuccess/></holding_workpiece>", 1),
      "must not have any child"),
 ])

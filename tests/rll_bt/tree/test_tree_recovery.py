@@ -65,3 +65,75 @@ def test_recovery_needs_action_and_recoveries(check):
     assert "recovery needs `recoveries:`" in errs[0]
     errs = check("root:\n  recovery: {retries: 0, action: success, recoveries: [success]}\n")
     assert "`retries` must be at least 1" in errs[0]
+
+
+POLICY = """
+    root:
+      recovery:
+        name: grab
+        on_recovery_failure: {policy}
+        error_code: GRASP_FAILED
+        action: {{probe: {{tag: act, script: F}}}}
+        recoveries:
+          - probe: {{tag: realign, script: F}}
+          - probe: {{tag: relocalise, script: F}}
+    """
+
+
+def test_policy_retry_tries_the_action_again_after_a_failed_recovery(make):
+    """What a `force_success` around each recovery did: every level gets its
+    round and the action is tried after each, failed recovery or not."""
+    tree, _ = make(POLICY.format(policy="retry"))
+    status, starts = _run(tree)
+    assert status is Status.FAILURE
+    assert starts == ["act:start", "realign:start", "act:start", "relocalise:start", "act:start"]
+    assert tree.error().code == "GRASP_FAILED"
+
+
+def test_policy_retry_is_tick_for_tick_what_force_success_wrappers_did(make):
+    wrapped = """
+        root:
+          recovery:
+            action: {probe: {tag: act, script: RF}}
+            recoveries:
+              - force_success: {child: {probe: {tag: r1, script: RRF}}}
+              - force_success: {child: {probe: {tag: r2, script: RS}}}
+        """
+    policy = """
+        root:
+          recovery:
+            on_recovery_failure: retry
+            action: {probe: {tag: act, script: RF}}
+            recoveries:
+              - probe: {tag: r1, script: RRF}
+              - probe: {tag: r2, script: RS}
+        """
+    traces = []
+    for text in (wrapped, policy):
+        tree, events = make(text)
+        statuses = [tree.tick() for _ in range(20)]
+        traces.append((statuses, list(events), tree.root.history))
+    assert traces[0] == traces[1]
+
+
+def test_policy_escalate_is_the_default(make):
+    tree, _ = make(POLICY.format(policy="escalate"))
+    _status, starts = _run(tree)
+    default = "\n".join(line for line in POLICY.splitlines() if "on_recovery_failure" not in line)
+    tree2, _ = make(default.format(policy="-"))
+    _status2, starts2 = _run(tree2)
+    assert starts == starts2 == ["act:start", "realign:start", "relocalise:start"]
+
+
+def test_policy_fail_fails_the_node_at_the_first_failed_recovery(make):
+    tree, _ = make(POLICY.format(policy="fail"))
+    status, starts = _run(tree)
+    assert status is Status.FAILURE
+    assert starts == ["act:start", "realign:start"]
+    assert tree.error().code == "GRASP_FAILED"
+    assert "recovery level 1 (probe) failed" in tree.root.feedback_message
+
+
+def test_unknown_policy_is_reported_with_its_place(check):
+    errs = check("root:\n  recovery: {on_recovery_failure: ignore, action: success, recoveries: [success]}\n")
+    assert ":2:35:" in errs[0] and "expected one of escalate, retry, fail" in errs[0]
