@@ -55,6 +55,8 @@ def _node_type(nt: NodeType) -> tuple[dict, bool]:
     if nt.kind == "subtree":
         props["params"] = {"type": "object", "description": nt.ports["params"].doc}
         props["remap"] = {"type": "object", "additionalProperties": _REF_BB, "description": nt.ports["remap"].doc}
+        props["pass"] = {"anyOf": [{"const": "all"}, {"type": "array", "items": {"type": "string"}}],
+                         "description": nt.ports["pass"].doc}
     options: dict = {"type": "object", "properties": props, "additionalProperties": False}
     if required:
         options["required"] = required

@@ -3,7 +3,9 @@ blackboard remapping.
 
 Each instance gets its own blackboard scope (``/<instance name>/``, nested
 for subtrees of subtrees), so two instances of one file never share keys.
-``params:`` fill the file's declared ``params`` ($param.NAME); ``remap:``
+``params:`` fill the file's declared ``params`` ($param.NAME); ``pass:``
+fills them from the caller's parameters or task fields of the same name (a
+list of names, or ``all``: every one the caller has); ``remap:``
 maps keys of the subtree to keys of the caller (``target: $bb.goal``);
 ``autoremap: true`` maps every key of the subtree to the caller's key of the
 same name.  Keys written with a leading ``/`` are absolute and shared.
@@ -26,6 +28,8 @@ DEFAULT.register(structural(
     "subtree", "subtree", __doc__.split("\n\n", 1)[1],
     (Input(str, "the tree file, relative to this file (or on the search path)", constant=True, name="file"),
      Input(dict, "values for the subtree's declared params", required=False, name="params"),
+     Input(object, "params passed on by name from the caller's own $param or $task: a list of names, or all",
+           required=False, constant=True, name="pass"),
      Input(dict, "subtree key -> $bb.KEY of the caller", required=False, name="remap"),
      Input(bool, "map every key of the subtree to the caller's key of the same name", default=False,
            constant=True, name="autoremap")),

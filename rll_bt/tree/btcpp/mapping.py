@@ -18,6 +18,14 @@ entry ``{@task.NAME}`` (the dot keeps it apart from every rll-bt key).
 Literals are text: strings as they are, numbers and booleans as YAML writes
 them, lists and mappings (and strings that would read back as another type)
 as ``json:`` followed by JSON, the prefix BT.CPP 4 uses for JSON values.
+
+A subtree's ``pass:`` (parameters passed on by name) is written as the
+values it stands for (``machine="{machine}"`` for a parameter of the
+caller, ``machine="{@task.machine}"`` for a task field), so BT.CPP reads
+what rll-bt means, plus ``_pass="machine side"`` (or ``_pass="all"``),
+which BT.CPP skips (a name that is not a port name) and ``rll-bt tree
+import`` turns back into the short form.  BT.CPP 4.10's own short form
+``machine="{=}"`` (the caller's entry of the same name) is read too.
 """
 from __future__ import annotations
 
@@ -75,6 +83,8 @@ BUILTIN_PORTS = {"Timeout": {"msec"}, "Sleep": {"msec"}, "Repeat": {"num_cycles"
 RESERVED = {"name", "ID", "_autoremap", "_failureIf", "_successIf", "_skipIf", "_while", "_onSuccess",
             "_onFailure", "_onHalted", "_post", "_uid", "_fullpath"}
 _FORBIDDEN = set(" \t\n\r<>&\"'/\\:*?|.")
+#: the attribute of a <SubTree> that keeps the YAML ``pass:`` short form
+PASS_ATTR = "_pass"
 
 
 def valid_model_name(name: str) -> bool:

@@ -29,7 +29,7 @@ import yaml
 
 from ..errors import Diagnostic, Loc, TreeLoadError, did_you_mean
 from ..registry import NodeRegistry, NodeType, Slot, default_registry
-from .mapping import BUILTINS, CONVERTED, FROM_BUILTIN, ValueError_, snake, text_to_value
+from .mapping import BUILTINS, CONVERTED, FROM_BUILTIN, PASS_ATTR, ValueError_, snake, text_to_value
 
 EXPLICIT = ("Action", "Condition", "Control", "Decorator")
 _CPP_TYPES = {"std::string": "str", "string": "str", "double": "float", "float": "float", "int": "int",
@@ -254,17 +254,25 @@ class Reader:
             self._err(el, "<SubTree> must not have children", "")
         opts: dict[str, Any] = {"file": posixpath.relpath(target.file, posixpath.dirname(t.file) or ".")}
         params, remap = {}, {}
+        short = (el.get(PASS_ATTR) or "").split()
+        passed: list[str] = []
         for k, v in el.attrib.items():
-            if k == "ID":
+            if k in ("ID", PASS_ATTR):
                 continue
+            if v.strip() == "{=}":          # BT.CPP 4.10: the caller's entry of the same name
+                v = "{" + k + "}"
             if k == "name":
                 opts["name"] = v
             elif k == "_autoremap":
                 opts["autoremap"] = v.strip().lower() == "true"
             elif k in target.params:
-                params[k] = self._value(el, v, str(target.params[k].get("type", "any")), set(t.params))
+                value = self._value(el, v, str(target.params[k].get("type", "any")), set(t.params))
+                if (short == ["all"] or k in short) and value == _same_name(k, t):
+                    passed.append(k)
+                else:
+                    params[k] = value
             elif k.startswith("_"):
-                self._err(el, f"{k}: not supported on <SubTree>", "")
+                self._err(el, f"{k}: not supported on <SubTree>", f"rll-bt reads _autoremap and {PASS_ATTR} there")
             else:
                 ref = self._value(el, v, "any", set(t.params))
                 if not (isinstance(ref, str) and ref.startswith("$bb.")):
@@ -272,11 +280,20 @@ class Reader:
                               "must name a blackboard entry {KEY}",
                               f"declare it in <TreeNodesModel><SubTree ID=\"{tid}\">")
                 remap[k] = ref
+        if short == ["all"]:
+            opts["pass"] = "all"
+        elif passed:
+            opts["pass"] = [k for k in short if k in passed]
         if params:
             opts["params"] = params
         if remap:
             opts["remap"] = remap
         return {"subtree": opts}
+
+
+def _same_name(name: str, caller: _Tree) -> str:
+    """What ``pass: [name]`` stands for in ``caller``: its parameter, else its task field."""
+    return f"$param.{name}" if name in caller.params else f"$task.{name}"
 
 
 def _assign(slots: list[Slot], kids: list, error) -> dict[str, Any]:

@@ -7,7 +7,8 @@ makes (``VerifyXML`` and tree creation), restated:
   type's) and exactly one child;
 - ``<SubTree>`` has no children and an ``ID`` naming a tree of the document;
   its attributes are the ports of that tree's ``<SubTree>`` model (or
-  remapped keys ``{KEY}``), ``name`` or ``_autoremap``;
+  remapped keys ``{KEY}``), ``name`` or ``_autoremap``; others whose names
+  are not port names (``_pass``) are skipped;
 - every other element is a built-in or a type declared in the model;
   Decorators have exactly one child, Controls at least one, Actions and
   Conditions none; ``Action``/``Condition``/``Control``/``Decorator``
@@ -110,8 +111,8 @@ def _node(el, kinds, ports, subtree_ports, tree_ids, bad, depth: int = 0) -> Non
             bad(el, f"<SubTree> with ID {sid!r} should not have any child")
         declared = subtree_ports.get(sid, set())
         for k, v in el.attrib.items():
-            if k in ("ID", "name", "_autoremap") or k in declared:
-                continue
+            if k in ("ID", "name", "_autoremap") or k in declared or not k[:1].isalpha():
+                continue                # BT.CPP skips a name that is not a port name (IsAllowedPortName)
             if not (v.startswith("{") and v.endswith("}")):
                 bad(el, f"<SubTree ID={sid!r}>: {k}={v!r} is neither a declared port nor a remapped key")
         return

@@ -26,7 +26,19 @@ from ..errors import Diagnostic, Loc, TreeLoadError
 from ..loader import parse_tree
 from ..registry import NodeRegistry, NodeType, default_registry
 from ..source import SourceError, YList, YMap, parse_yaml
-from .mapping import BUILTINS, CONVERTED, FORMAT, SAME, ValueError_, camel, model_kind, snake, value_to_text
+from .mapping import (
+    BUILTINS,
+    CONVERTED,
+    FORMAT,
+    PASS_ATTR,
+    SAME,
+    ValueError_,
+    camel,
+    model_kind,
+    ref_to_text,
+    snake,
+    value_to_text,
+)
 
 _SAME_TO = SAME
 _CONVERT_TO = {v[0]: (k, v[1]) for k, v in CONVERTED.items()}
@@ -230,6 +242,14 @@ class Writer:
         for k, v in params.items():
             ptype = str(child.params.get(k, {}).get("type", "any"))
             el.set(k, self._text(v, ptype, _vloc(params, k), f"parameter {k!r} of subtree {child.name!r}"))
+        passing = opts.get("pass")
+        if passing is not None:     # each passed value as BT.CPP reads it, and the short form for the way back
+            task = t.doc.get("task") or {}
+            names = [k for k in child.params if k not in params and (k in t.params or k in task)] \
+                if passing == "all" else list(passing)
+            for k in names:
+                el.set(k, ref_to_text(f"$param.{k}" if k in t.params else f"$task.{k}"))
+            el.set(PASS_ATTR, "all" if passing == "all" else " ".join(names))
         remap = opts.get("remap") or {}
         for k, v in remap.items():
             if k in params or k in child.params:

@@ -13,6 +13,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
+import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -100,9 +101,12 @@ def test_what_groot_sees(tmp_path):
     assert seq.tag == "Sequence"
     sub = seq[0]
     assert sub.tag == "SubTree" and sub.get("ID") == "Approach"
-    assert sub.attrib == {"ID": "Approach", "machine": "{machine}", "side": "{side}", "shelf_slot": "{shelf_slot}"}
+    # `pass: all`: the values BT.CPP reads, and the short form (an attribute BT.CPP skips) for the way back
+    assert sub.attrib == {"ID": "Approach", "machine": "{machine}", "side": "{side}", "shelf_slot": "{shelf_slot}",
+                          "_pass": "all"}
     rec = seq[1]
-    assert rec.tag == "recovery" and [c.tag for c in rec] == ["Sequence", "Sequence", "Sequence"]
+    assert rec.tag == "recovery" and [c.tag for c in rec] == ["Sequence", "SubTree", "SubTree"]
+    assert [c.get("ID") for c in rec[1:]] == ["Realign", "Reapproach"]     # shared recovery sub-trees
     assert rec.get("on_recovery_failure") == "retry"              # the policy is a port of the Control
     model = doc.find("TreeNodesModel")
     kinds = {el.get("ID"): el.tag for el in model}
@@ -116,7 +120,34 @@ def test_what_groot_sees(tmp_path):
     grab = model.find("Action[@ID='grab']")
     assert {p.get("name"): p.tag for p in grab if p.tag.endswith("_port")}["holding"] == "output_port"
     # the instance named in YAML keeps its name; its scope is the same after the trip
-    assert seq.find(".//SubTree[@name='approach_again']") is not None
+    assert doc.find("BehaviorTree[@ID='Reapproach']//SubTree[@name='approach_again']") is not None
+
+
+def test_pass_goes_to_xml_and_back_as_the_short_form(tmp_path):
+    xml = export_xml([TREES / "retrieve_cap.yaml"], search_path=[TREES])
+    doc = ET.fromstring(xml)
+    grab = doc.find(".//SubTree[@ID='GrabAt']")
+    assert grab.attrib == {"ID": "GrabAt", "side": "SHELF", "machine": "{@task.machine}",
+                           "shelf_slot": "{@task.shelf_slot}", "_pass": "machine shelf_slot"}
+    files = import_xml(xml)
+    assert "subtree: {file: common/grab_at.yaml" not in files["retrieve_cap.yaml"]     # block style, but:
+    back = yaml.safe_load(files["retrieve_cap.yaml"])
+    seq = back["root"]["selector_with_memory"]["children"][1]["sequence_with_memory"]["children"]
+    sub = seq[1]["selector_with_memory"]["children"][1]["subtree"]
+    assert sub == {"file": "common/grab_at.yaml", "pass": ["machine", "shelf_slot"], "params": {"side": "SHELF"}}
+    # edited in Groot: a passed value changed by hand becomes an explicit parameter
+    edited = xml.replace('shelf_slot="{@task.shelf_slot}"', 'shelf_slot="2"', 1)
+    back = yaml.safe_load(import_xml(edited)["retrieve_cap.yaml"])
+    seq = back["root"]["selector_with_memory"]["children"][1]["sequence_with_memory"]["children"]
+    sub = seq[1]["selector_with_memory"]["children"][1]["subtree"]
+    assert sub["pass"] == ["machine"] and sub["params"] == {"side": "SHELF", "shelf_slot": 2}
+    # BT.CPP 4.10's short form {=}: the caller's entry of the same name
+    hand = xml.replace('<SubTree ID="Approach" machine="{machine}" side="{side}" shelf_slot="{shelf_slot}" '
+                       '_pass="all" />', '<SubTree ID="Approach" machine="{=}" side="{side}" shelf_slot="{=}" />')
+    assert hand != xml
+    back = yaml.safe_load(import_xml(hand)["common/grab_at.yaml"])
+    assert back["root"]["sequence_with_memory"]["children"][0]["subtree"]["params"] == \
+        {"machine": "$param.machine", "side": "$param.side", "shelf_slot": "$param.shelf_slot"}
 
 
 SAMPLE = textwrap.dedent("""\

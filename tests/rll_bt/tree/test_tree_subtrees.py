@@ -87,3 +87,78 @@ def test_errors_inside_subtree_name_the_subtree_file(check):
     errs = check("root:\n  subtree: {file: bad.yaml}\n", files={"bad.yaml": "root:\n  wiat: {seconds: 1}\n"})
     assert len(errs) == 1 and "bad.yaml:2:3: unknown node type 'wiat'" in errs[0]
     assert "did you mean 'wait'" in errs[0]
+
+
+LEAF = """
+    params:
+      machine: {type: str}
+      side: {type: str, default: INPUT, choices: [INPUT, OUTPUT]}
+      slot: {type: int, default: 0}
+    root:
+      reactive_sequence:
+        - set_blackboard: {key: $bb./got/machine, value: $param.machine}
+        - set_blackboard: {key: $bb./got/side, value: $param.side}
+        - set_blackboard: {key: $bb./got/slot, value: $param.slot}
+    """
+
+
+def _got(tree):
+    assert tree.tick() is Status.SUCCESS
+    return {k: tree.blackboard.get(f"/got/{k}") for k in ("machine", "side", "slot")}
+
+
+def test_pass_names_parameters_and_task_fields_through(make):
+    """`pass: [...]` is short for `params: {x: $param.x}` (or `$task.x` when
+    the caller has no parameter x): both load to the same bindings."""
+    short = """
+        task:
+          machine: {type: str}
+        params:
+          side: {type: str, default: OUTPUT}
+        root:
+          subtree: {file: leaf.yaml, pass: [machine, side]}
+        """
+    long = """
+        task:
+          machine: {type: str}
+        params:
+          side: {type: str, default: OUTPUT}
+        root:
+          subtree: {file: leaf.yaml, params: {machine: $task.machine, side: $param.side}}
+        """
+    a, _ = make(short, task={"machine": "C-BS"}, files={"leaf.yaml": LEAF})
+    b, _ = make(long, task={"machine": "C-BS"}, files={"leaf.yaml": LEAF}, name="long.yaml")
+    assert _got(a) == _got(b) == {"machine": "C-BS", "side": "OUTPUT", "slot": 0}
+    sub_a, sub_b = a.spec.root, b.spec.root
+    assert {k: v.source for k, v in sub_a.slots["root"][0].slots["children"][0].ports.items()} == \
+        {k: v.source for k, v in sub_b.slots["root"][0].slots["children"][0].ports.items()}
+
+
+def test_pass_all_passes_what_the_caller_has_and_params_stay(make):
+    tree, _ = make("""
+        task:
+          machine: {type: str}
+          slot: {type: int, default: 2}
+        root:
+          subtree: {file: leaf.yaml, pass: all, params: {machine: C-RS1}}
+        """, task={"machine": "C-BS"}, files={"leaf.yaml": LEAF})
+    # machine given explicitly wins, slot passed from the task, side (the caller has none) its default
+    assert _got(tree) == {"machine": "C-RS1", "side": "INPUT", "slot": 2}
+
+
+def test_pass_errors_name_the_place(check):
+    files = {"leaf.yaml": LEAF}
+    errs = check("task: {machine: str}\nroot:\n  subtree: {file: leaf.yaml, pass: [machine, sidee]}\n", files=files)
+    assert any("tree.yaml:3:46: cannot pass 'sidee'" in e for e in errs), errs
+    errs = check("params: {machine: str, colour: str}\nroot:\n  subtree: {file: leaf.yaml, pass: [machine, colour]}\n",
+                 files=files)
+    assert any("tree.yaml:3:46:" in e and "has no parameter 'colour'" in e for e in errs), errs
+    errs = check("params: {machine: str}\nroot:\n  subtree: {file: leaf.yaml, pass: [machine], "
+                 "params: {machine: x}}\n", files=files)
+    assert any("tree.yaml:3:37: parameter 'machine' is both passed and given" in e for e in errs), errs
+    errs = check("root:\n  subtree: {file: leaf.yaml, pass: yes}\n", files=files)
+    assert "tree.yaml:2:36: `pass` takes a list of parameter names or `all`" in errs[0]
+    errs = check("params: {side: str}\nroot:\n  subtree: {file: leaf.yaml, pass: all}\n", files=files)
+    assert "requires parameter 'machine'" in errs[0] and "pass: [machine]" in errs[0]
+    errs = check("params: {machine: int}\nroot:\n  subtree: {file: leaf.yaml, pass: [machine]}\n", files=files)
+    assert "expects str but $param.machine is int" in errs[0]
