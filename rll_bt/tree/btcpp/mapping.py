@@ -195,7 +195,8 @@ def value_to_text(value: Any, ptype: str) -> str:
         if _reads_back(text) == value and type(_reads_back(text)) is type(value):
             return text
         return "json:" + json.dumps(value)
-    if isinstance(value, str) and not value.startswith("json:") and _reads_back(value) == value:
+    if isinstance(value, str) and not value.startswith("json:") and _reads_back(value) == value \
+            and not (ptype.startswith("list") and ";" in value):       # BT.CPP's a;b;c would split it
         return value
     return "json:" + json.dumps(value)
 
