@@ -34,14 +34,16 @@ CYAN_STATIONS = ("C-BS", "C-CS1", "C-CS2", "C-RS1", "C-RS2", "C-DS", "C-SS")
 TYPES = {"BS": "BS", "CS1": "CS", "CS2": "CS", "RS1": "RS", "RS2": "RS", "DS": "DS", "SS": "SS"}
 
 
-def custom_cfg(broker_port: int, exploration_time: int, port_offset: int = 0) -> str:
+def custom_cfg(broker_port: int, exploration_time: int, port_offset: int = 0,
+               opcua_ports: dict[str, int] | None = None) -> str:
     lines = ["%YAML 1.2", "%TAG ! tag:fawkesrobotics.org,cfg/", "---", "# rll-bt check", "---",
              "llsfrb:", "  game:", f"    teams: [{TEAM}]", "    crypto-keys:", f"      {TEAM}: {KEY}",
              "    random-machine-down-times: false", f"    exploration-time: {exploration_time}",
              "  mps:", "    stations:"]
     for name in CYAN_STATIONS:
         lines += [f"      {name}:", "        active: true", f"        type: {TYPES[name[2:]]}",
-                  "        connection: mqtt", "        host: 127.0.0.1", f"        port: !tcp-port {broker_port}"]
+                  f"        connection: {'plc' if opcua_ports else 'mqtt'}", "        host: 127.0.0.1",
+                  f"        port: !tcp-port {opcua_ports[name] if opcua_ports else broker_port}"]
     return "\n".join(lines) + "\n" + comm_cfg(port_offset)
 
 
@@ -181,6 +183,9 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--refbox", required=True, help="path of the refbox binary (bin/refbox)")
     ap.add_argument("--seed", type=int, default=1, help="world seed (default 1)")
+    ap.add_argument("--wire", choices=("mqtt", "opcua"), default="mqtt",
+                    help="the refbox's machine back-end: mqtt (through a broker) or opcua (connection: plc, "
+                         "needs a refbox built with freeopcua); default mqtt")
     ap.add_argument("--speed", type=float, default=1.0, help="station durations times this (default 1)")
     ap.add_argument("--port-offset", type=int, default=0,
                     help="move every refbox port by N (TCP 4444+N ...), to run beside another refbox")
@@ -194,10 +199,22 @@ def main(argv=None) -> int:
         return 3
     run_dir = tempfile.mkdtemp(prefix="rll-bt-refbox-check-")
     broker = Broker("amqtt")
-    world = hall = served = wt = None        # built once the refbox has told its field
+    world = hall = served = wt = None        # built once the refbox has told its field (MQTT)
+    opcua_ports = None
+    if args.wire == "opcua":
+        # the refbox connects to every PLC at start and waits for it: the servers come first,
+        # on a world of its own seed (the refbox's field is not known yet)
+        from backends.sim.mps import OpcuaMachines
+        from backends.sim.mps.opcua import default_ports
+        opcua_ports = {m: p + args.port_offset for m, p in default_ports(CYAN_STATIONS).items()}
+        world = World("rcll2025", seed=args.seed)
+        hall = MachineHall(world, CYAN_STATIONS, durations=Durations().scaled(args.speed))
+        served = OpcuaMachines(hall, ports=opcua_ports,
+                               progress=lambda line: print(line, file=sys.stderr)).start()
+        wt = WorldThread(world, hall)
     cfg = os.path.join(run_dir, "check.yaml")
     with open(cfg, "w") as f:
-        f.write(custom_cfg(broker.port, exploration_time=5, port_offset=args.port_offset))
+        f.write(custom_cfg(broker.port, exploration_time=5, port_offset=args.port_offset, opcua_ports=opcua_ports))
     out = open(os.path.join(run_dir, "refbox.out"), "w")  # noqa: SIM115 (closed below)
     command = [args.refbox, *main_cfg_args(args.refbox, run_dir, args.port_offset), "--cfg-custom", cfg]
     refbox = subprocess.Popen(command, cwd=run_dir, stdout=out,
@@ -224,16 +241,18 @@ def main(argv=None) -> int:
                    for m, (z, r) in field.items() if m.startswith("C-")]
         # the world takes the refbox's field: its stations where the refbox placed its machines
         # (only the broker had to be up when the refbox started; the stations connect now)
-        game = StoredGame.from_machine_info(team.last_info)
-        world = World("rcll2025", seed=args.seed, layout=game.layout())
-        hall = MachineHall(world, CYAN_STATIONS, durations=Durations().scaled(args.speed),
-                           feeders=dict(game.ring_colors))
-        served = MqttMachines(hall, broker.host, broker.port).start()
-        wt = WorldThread(world, hall)
+        if world is None:
+            game = StoredGame.from_machine_info(team.last_info)
+            world = World("rcll2025", seed=args.seed, layout=game.layout())
+            hall = MachineHall(world, CYAN_STATIONS, durations=Durations().scaled(args.speed),
+                               feeders=dict(game.ring_colors))
+            served = MqttMachines(hall, broker.host, broker.port).start()
+            wt = WorldThread(world, hall)
         placed = {m: (world.profile.zone_name(world.station(m).zone), world.station(m).rotation)
                   for m in CYAN_STATIONS}
-        results.append(("world field = refbox field", placed == {m: field[m] for m in CYAN_STATIONS}, 0.0,
-                        ", ".join(f"{m} {z}/{r}" for m, (z, r) in sorted(placed.items()))))
+        if args.wire == "mqtt":
+            results.append(("world field = refbox field", placed == {m: field[m] for m in CYAN_STATIONS}, 0.0,
+                            ", ".join(f"{m} {z}/{r}" for m, (z, r) in sorted(placed.items()))))
         for _ in range(3):
             team.send("MachineReport", team_color="CYAN", machines=entries)
             time.sleep(1)
@@ -257,7 +276,8 @@ def main(argv=None) -> int:
     print(f"\n{'step':34} {'ok':3} {'s':>6}  refbox states / world")
     for step, ok, secs, text in results:
         print(f"{step:34} {'yes' if ok else 'NO':3} {secs:6.1f}  {text}")
-    print(f"cyan points: {team.points if team else '?'}; MQTT refusals: {len(served.errors) if served else '?'}")
+    print(f"cyan points: {team.points if team else '?'}; {args.wire} refusals: "
+          f"{len(served.errors) if served else '?'}")
     return 0 if results and all(ok for _, ok, _, _ in results) else 1
 
 
