@@ -64,10 +64,19 @@ class TestCrash(Node):
         raise RuntimeError("node bug")
 
 
+class TestSensorLost(Node):
+    """The laser goes away under the running task (the backend raises SensorLost)."""
+
+    def update(self):
+        from rll_bt.backend import SensorLost
+        raise SensorLost("laser", "laser lost: no scan for more than 0.5 s")
+
+
 REGISTRY = default_registry().child()
 REGISTRY.register(TestDrive, "test_drive")
 REGISTRY.register(TestSighting, "test_sighting")
 REGISTRY.register(TestCrash, "test_crash")
+REGISTRY.register(TestSensorLost, "test_sensor_lost")
 
 
 # -- the scripted team server -----------------------------------------------------------------

@@ -168,3 +168,10 @@ def test_go_to_parameters_from_a_zone_or_a_pose():
     assert p["has_target"] is True and p["zone"] == 0 and p["target"] == {"x": 1.0, "y": 2.0, "theta": 0.5}
     with pytest.raises(InvalidTask):
         task_params(make_task("go_to", zone=99), prof)
+
+
+def test_a_lost_sensor_fails_the_task_with_its_own_code_and_the_agent_goes_on(rig):
+    res = run_task(rig, 40, "go_to", zone=5)
+    assert code(res) == "SENSOR_LOST" and "laser lost" in res.text
+    assert rig.drives()[-1][1] == "stop"
+    assert run_task(rig, 41, "get_workpiece", machine="C-BS").status == TM.TaskResult.SUCCEEDED
