@@ -129,7 +129,7 @@ def test_scans_and_frames_arrive_through_the_backend(rig):
 
 
 def test_the_laser_pulled_mid_action_stops_the_robot_and_fails_it_then_the_robot_goes_on(rig, wait_for):
-    backend = open_backend("robotino", robot_config=dict(rig.config(), faults={"stale": 0.4}))
+    backend = open_backend("robotino", robot_config=dict(rig.config(), faults={"stale": 1.0}))
     clock = WallClock()
     try:
         ctx = SkillContext.create(backend, clock, rules.profile("rcll2016"), Pose2D(1.0, 1.0, 0.0),
@@ -140,7 +140,7 @@ def test_the_laser_pulled_mid_action_stops_the_robot_and_fails_it_then_the_robot
             assert move.poll().name == "RUNNING"
             time.sleep(0.05)
         assert any(rig.base.setpoints()[:3])                     # driving
-        rig.unplug("laser", 1.5)
+        rig.unplug("laser", 2.5)
         deadline = time.monotonic() + 5.0
         while move.poll().name == "RUNNING" and time.monotonic() < deadline:
             time.sleep(0.05)
