@@ -57,6 +57,15 @@ def _hostport(text: str, default_port: int) -> tuple[str, int]:
         raise UserError(f"not HOST:PORT: {text!r}", where="--mqtt") from None
 
 
+def _stop_on_sigterm() -> None:
+    """SIGTERM ends the command like Ctrl-C, so the broker it started is stopped too."""
+    import signal
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+    signal.signal(signal.SIGTERM, interrupt)
+
+
 def run_stations(args) -> int:
     from rll_bt import rules
 
@@ -88,6 +97,7 @@ def run_stations(args) -> int:
         world.close()
         raise UserError(str(exc.args[0]), where="--machines") from None
     opened: list = []
+    _stop_on_sigterm()
     try:
         if args.broker:
             host, port = _hostport(args.mqtt or "127.0.0.1:1883", 1883)

@@ -30,3 +30,31 @@ def test_serves_a_stored_games_field_through_its_own_broker(tmp_path, capsys):
     bad = tmp_path / "bad.json"
     bad.write_text("[]")
     assert main(["sim", "stations", "--game", str(bad), "--opcua", "--duration", "0.1"]) == 2
+
+
+def test_sigterm_stops_the_command_and_its_broker():
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from backends.sim.mps.broker import reachable
+    port = free_port()
+    script = [sys.executable, "-c", "import sys; from rll_bt.cli import main; sys.exit(main())"]
+    proc = subprocess.Popen([*script, "sim", "stations", "--broker", "amqtt",
+                             "--mqtt", f"127.0.0.1:{port}", "--machines", "C-BS"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not reachable("127.0.0.1", port) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert reachable("127.0.0.1", port), "the broker did not come up"
+        time.sleep(1.0)
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(30) == 130
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)
+    time.sleep(0.5)
+    assert not reachable("127.0.0.1", port)                     # no broker left behind
