@@ -153,10 +153,10 @@ class WorldRig:
     def sync(self, world_time: float) -> None:
         r = self.robot
         emu = self.rig.base
-        now = self.clock.now()
         with emu.lock:
             fw = emu.firmware
-            fw.advance(now)
+            # the wheels as the emulator's own thread last advanced them (advancing the firmware
+            # here, before that thread has read what the host sent, would trip its watchdog)
             rpm = [m.ss for m in fw.motors[:3]]
             fw.distance[8] = HOLDING_VOLTS if r.holding is not None else EMPTY_VOLTS
             self._sync_gripper(world_time)
