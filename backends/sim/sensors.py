@@ -31,10 +31,14 @@ def ray_mask(robot: SimRobot | None) -> int:
     return ALL_GROUPS if robot is None else ALL_GROUPS & ~robot.ray_group
 
 
-def laser_ranges(cid: int, robot: SimRobot, angles: np.ndarray, noisy: bool = True) -> np.ndarray:
+def laser_ranges(cid: int, robot: SimRobot, angles: np.ndarray, noisy: bool = True, *,
+                 first: float | None = None, step: float = 0.0) -> np.ndarray:
     """Ranges (m) along ``angles`` (rad, laser frame) from the robot's laser
     mount; ``inf`` where nothing is hit within range; the robot's laser noise
-    when ``noisy``."""
+    when ``noisy``.  A regular scan may pass its ``first`` angle and ``step``
+    too: the world angles are then ``(theta + first) + step * i``, summed in
+    the order lockstep games have always used (a different rounding of the
+    beam angles makes a seeded game play differently)."""
     p = pybullet()
     cfg, g = robot.config, robot.config.geometry
     angles = np.asarray(angles, dtype=float)
@@ -44,7 +48,7 @@ def laser_ranges(cid: int, robot: SimRobot, angles: np.ndarray, noisy: bool = Tr
     pose = robot.pose
     c, s = math.cos(pose.theta), math.sin(pose.theta)
     ox, oy = pose.x + c * mx - s * my, pose.y + s * mx + c * my
-    a = pose.theta + angles
+    a = pose.theta + angles if first is None else pose.theta + first + step * np.arange(n)
     start = np.empty((n, 3))
     start[:, 0], start[:, 1], start[:, 2] = ox, oy, mz
     end = start.copy()
@@ -66,7 +70,7 @@ def laser_scan(cid: int, robot: SimRobot, stamp: float) -> LaserScan:
     inc = cfg.laser_fov / (n - 1) if n > 1 else 0.0
     rmin, rmax = cfg.laser_range
     mx, my, _ = g.laser_mount
-    ranges = laser_ranges(cid, robot, angle_min + inc * np.arange(n))
+    ranges = laser_ranges(cid, robot, angle_min + inc * np.arange(n), first=angle_min, step=inc)
     return LaserScan(stamp, angle_min, inc, rmin, rmax, ranges, mount=Pose2D(mx, my, 0.0))
 
 

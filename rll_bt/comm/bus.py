@@ -6,7 +6,10 @@
   frame, exactly as on the network).  The 1024-byte datagram limit applies.
 - :meth:`Bus.stream_server` / :meth:`Bus.stream_client` act like the TCP
   link: a server at an address, clients that connect to it (and reconnect
-  on their next poll once a closed server is back), per-client ids.
+  on their next poll once a closed server is back), per-client ids.  With a
+  key the link is secured like the TCP link (:mod:`.secure`: hellos, then
+  sealed frames); a tap sees each message of a secured link as a plain frame
+  (the sealed bytes are per connection, so only the two ends can open them).
 
 Delivery is polled: frames wait in the receiver's inbox until its
 ``receive()``.  Order is send order, so a seeded run is deterministic.
@@ -25,9 +28,13 @@ from .codec import FrameCodec
 from .crypto import TEAM_CIPHER
 from .framing import FRAME_HEADER_SIZE, MAX_DATAGRAM, MAX_STREAM_PAYLOAD
 from .registry import MessageRegistry
+from .secure import CLIENT, LINK_CIPHER, SERVER, stream_crypto
 from .transport import CONNECTED, DISCONNECTED, CryptoSwitch, LinkEvent, Received
 
 _STREAM_MAX_FRAME = FRAME_HEADER_SIZE + MAX_STREAM_PAYLOAD
+
+#: a bus stream client's name for its one connection
+_SERVER = "server"
 
 #: a tap sees (channel or address, source name, frame bytes)
 Tap = Callable[[str, Any, bytes], None]
@@ -71,7 +78,7 @@ class Bus:
         return p
 
     def stream_server(self, address: str = "teamserver", *, registry: MessageRegistry,
-                      key: str | bytes | None = None, cipher: int | str = TEAM_CIPHER,
+                      key: str | bytes | None = None, cipher: int | str = LINK_CIPHER,
                       channel: str = "stream", drop_unauthenticated: bool = True,
                       iv_source: Callable[[int], bytes] = os.urandom) -> BusStreamServer:
         """Listen at ``address``; raises ValueError if a server is already there."""
@@ -84,7 +91,7 @@ class Bus:
         return srv
 
     def stream_client(self, address: str = "teamserver", *, registry: MessageRegistry,
-                      key: str | bytes | None = None, cipher: int | str = TEAM_CIPHER,
+                      key: str | bytes | None = None, cipher: int | str = LINK_CIPHER,
                       channel: str = "stream", name: str | None = None,
                       iv_source: Callable[[int], bytes] = os.urandom) -> BusStreamClient:
         """A client of the server at ``address`` (connects now, or on a later poll)."""
@@ -97,10 +104,14 @@ class _BusEnd(CryptoSwitch):
     """Inbox, codec and events shared by every bus endpoint."""
 
     def __init__(self, bus: Bus, channel: str, registry: MessageRegistry, key, cipher,
-                 max_frame: int, stats_name: str, iv_source):
+                 max_frame: int, stats_name: str, iv_source, role: int | None = None):
         self.bus = bus
         self.channel = channel
         self.stats = S.DropStats(stats_name)
+        self.secure = None
+        if role is not None:                       # a stream end: secured when given a key
+            key, self.secure = stream_crypto(key, cipher, role, self.stats)
+            cipher = TEAM_CIPHER if key is None else cipher
         self.codec = FrameCodec(registry, key=key, cipher=cipher, max_frame=max_frame,
                                 stats=self.stats, iv_source=iv_source)
         self._inbox: deque[tuple[bytes, Any]] = deque()
@@ -113,11 +124,34 @@ class _BusEnd(CryptoSwitch):
     def _event(self, kind: str, peer: Any) -> None:
         self._events.append(LinkEvent(kind, peer, self.channel, self.bus.now()))
 
+    # -- secured streams ---------------------------------------------------------
+    def _frame(self, conn, msg) -> tuple[bytes | None, bytes]:
+        """``(frame to carry or None while the hello is awaited, what a tap sees)``."""
+        if self.secure is None:
+            frame = self.codec.encode(msg)
+            return frame, frame
+        message = self.codec.message_bytes(msg)
+        return self.secure.seal(conn, message), self.codec.plain_frame(message)
+
+    def _reply(self, conn, frame: bytes) -> None:
+        """Carry ``frame`` to the peer of connection ``conn`` (secured streams)."""
+        raise NotImplementedError
+
+    def _open(self, frame: bytes, conn):
+        if self.secure is None:
+            return self.codec.try_decode(frame)
+        message, replies, cause = self.secure.open(conn, frame)
+        for reply in replies:
+            self._reply(conn, reply)
+        if message is None:
+            return None, cause
+        return self.codec.decode_message(message, 0x81)
+
     def _decode_inbox(self) -> list[tuple[Received | None, str | None, Any]]:
         out = []
         while self._inbox:
             frame, source = self._inbox.popleft()
-            decoded, cause = self.codec.try_decode(frame)
+            decoded, cause = self._open(frame, source)
             rec = None if decoded is None else Received.of(decoded, self.channel, source,
                                                            self.bus.now())
             out.append((rec, cause, source))
@@ -180,17 +214,26 @@ class BusStreamServer(_BusEnd):
     def __init__(self, bus: Bus, address: str, *, registry, key, cipher, channel: str,
                  drop_unauthenticated: bool, iv_source):
         super().__init__(bus, channel, registry, key, cipher, _STREAM_MAX_FRAME,
-                         f"{channel} bus server {address}", iv_source)
+                         f"{channel} bus server {address}", iv_source, role=SERVER)
         self.address = address
         self.drop_unauthenticated = drop_unauthenticated
         self._clients: dict[int, BusStreamClient] = {}
         self._next_id = 1
 
-    def _accept(self, client: BusStreamClient) -> int:
+    def _accept(self, client: BusStreamClient, hello: bytes | None = None) -> int:
         cid, self._next_id = self._next_id, self._next_id + 1
         self._clients[cid] = client
         self._event(CONNECTED, cid)
+        if self.secure is not None:
+            client._inbox.append((self.secure.connect(cid), self.address))
+            if hello is not None:      # the client's hello, taken at once: no round trip on a bus
+                self._open(hello, cid)
         return cid
+
+    def _reply(self, conn, frame: bytes) -> None:
+        client = self._clients.get(conn)
+        if client is not None:
+            client._inbox.append((frame, self.address))
 
     def clients(self) -> list[int]:
         return list(self._clients)
@@ -206,15 +249,18 @@ class BusStreamServer(_BusEnd):
             client = self._clients.get(cid)
             if client is None:
                 continue
-            frame = self.codec.encode(msg)
-            self.bus._carry(self.address, self.address, frame)
-            client._inbox.append((frame, self.address))
+            frame, seen = self._frame(cid, msg)
+            self.bus._carry(self.address, self.address, seen)
+            if frame is not None:
+                client._inbox.append((frame, self.address))
             sent = True
         return sent
 
     def disconnect(self, client: int) -> None:
         c = self._clients.pop(client, None)
         if c is not None:
+            if self.secure is not None:
+                self.secure.forget(client)
             self._event(DISCONNECTED, client)
             c._lost()
 
@@ -242,7 +288,7 @@ class BusStreamClient(_BusEnd):
     def __init__(self, bus: Bus, address: str, *, registry, key, cipher, channel: str,
                  name: str, iv_source):
         super().__init__(bus, channel, registry, key, cipher, _STREAM_MAX_FRAME,
-                         f"{channel} bus client {name}", iv_source)
+                         f"{channel} bus client {name}", iv_source, role=CLIENT)
         self.address = address
         self.name = name
         self._server: BusStreamServer | None = None
@@ -258,13 +304,30 @@ class BusStreamClient(_BusEnd):
         if self._server is None and not self.closed:
             srv = self.bus._servers.get(self.address)
             if srv is not None and not srv.closed:
-                self._server, self._cid = srv, srv._accept(self)
+                hello = self.secure.connect(_SERVER) if self.secure is not None else None
+                self._server, self._cid = srv, srv._accept(self, hello)
                 self.connections += 1
                 self._event(CONNECTED, self.address)
+                if self.secure is not None and srv.secure is None:
+                    srv._inbox.append((hello, self._cid))   # a server without a key drops it
+                elif self.secure is not None:
+                    # the server's hello is in the inbox already: take it now, so this
+                    # client seals at once (a bus link costs no round trip, like before)
+                    frame, _source = self._inbox.pop()
+                    self.secure.open(_SERVER, frame)
+
+    def _reply(self, conn, frame: bytes) -> None:
+        if self._server is not None:
+            self._server._inbox.append((frame, self._cid))
+
+    def _open(self, frame: bytes, conn):
+        return super()._open(frame, _SERVER)
 
     def _lost(self) -> None:
         if self._server is not None:
             self._server = self._cid = None
+            if self.secure is not None:
+                self.secure.forget(_SERVER)
             self._event(DISCONNECTED, self.address)
 
     def reconnect(self) -> None:
@@ -275,12 +338,15 @@ class BusStreamClient(_BusEnd):
         self._poll()
 
     def send(self, msg) -> bool:
-        frame = self.codec.encode(msg)
+        if self.secure is None:
+            self.codec.encode(msg)               # the caller's mistakes raise, connected or not
         self._poll()
         if self._server is None:
             return False
-        self.bus._carry(self.address, self.name, frame)
-        self._server._inbox.append((frame, self._cid))
+        frame, seen = self._frame(_SERVER, msg)
+        self.bus._carry(self.address, self.name, seen)
+        if frame is not None:
+            self._server._inbox.append((frame, self._cid))
         return True
 
     def close(self) -> None:

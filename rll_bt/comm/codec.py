@@ -97,7 +97,27 @@ class FrameCodec:
             raise FrameTooLarge(msg.DESCRIPTOR.name, len(frame), self.max_frame, self.encrypted)
         return frame
 
+    def message_bytes(self, msg) -> bytes:
+        """Message header + protobuf of ``msg``: what a secured link seals."""
+        comp_id, msg_type = require_comp_type(msg)
+        return MessageHeader(comp_id, msg_type).pack() + msg.SerializeToString()
+
+    def plain_frame(self, message: bytes) -> bytes:
+        """A plain v2 frame around :meth:`message_bytes` (what a tap of a secured link sees)."""
+        mh = MessageHeader.unpack(message)
+        return plain_frame(mh.comp_id, mh.msg_type, message[4:])
+
     # -- receive side -------------------------------------------------------
+    def decode_message(self, message: bytes, cipher: int) -> tuple[Decoded | None, str | None]:
+        """The message in ``message`` (message header + protobuf, opened by a
+        secured link) or ``(None, cause)``, counted like :meth:`try_decode`."""
+        try:
+            mh = MessageHeader.unpack(message)
+            return self._parse(mh.comp_id, mh.msg_type, message[4:], cipher), None
+        except Drop as drop:
+            self.stats.add(drop.cause, drop.detail)
+            return None, drop.cause
+
     def decode(self, frame: bytes) -> Decoded | None:
         """The message in ``frame`` or None (the drop is counted).  Never raises."""
         return self.try_decode(frame)[0]

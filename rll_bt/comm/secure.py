@@ -42,6 +42,8 @@ from .framing import FRAME_HEADER_SIZE, FRAME_V2, Drop, FrameHeader
 
 #: frame-header cipher ids of this link (protobuf_comm uses 0..4)
 HELLO, SEALED = 0x80, 0x81
+#: the ``cipher`` a stream transport takes for this link (its default when given a key)
+LINK_CIPHER = "aes-256-gcm-link"
 SERVER, CLIENT = 0x53, 0x43          # "S", "C"
 NONCE_SIZE = 16
 _SEQ = struct.Struct(">Q")
@@ -152,6 +154,71 @@ class SecureSession:
             raise Drop(S.REPLAY, f"sequence {seq} after {self._recv_seq}")
         self._recv_seq = seq
         return message
+
+
+class SecureEnd:
+    """The sessions of one stream end: a server's clients or a client's connection.
+
+    ``conn`` is whatever names a connection (a client id, a socket object).
+    :meth:`connect` gives the hello to send on a new connection; :meth:`seal`
+    gives the frame for a message, or None while the peer's hello is awaited
+    (the message waits and :meth:`open` returns it sealed once the hello
+    comes); :meth:`open` gives ``(message bytes or None, frames to send now,
+    drop cause or None)`` and counts drops in ``stats``.
+    """
+
+    def __init__(self, key: str | bytes, role: int, stats: S.DropStats, *, max_waiting: int = 256):
+        psk_from_key(key)                          # refuse an empty key at once
+        self.key, self.role, self.stats = key, role, stats
+        self.max_waiting = max_waiting
+        self._sessions: dict[object, SecureSession] = {}
+        self._waiting: dict[object, list[bytes]] = {}
+
+    def connect(self, conn) -> bytes:
+        session = self._sessions[conn] = SecureSession(self.key, self.role)
+        self._waiting[conn] = []
+        return session.hello()
+
+    def forget(self, conn) -> None:
+        self._sessions.pop(conn, None)
+        self._waiting.pop(conn, None)
+
+    def seal(self, conn, message: bytes) -> bytes | None:
+        session = self._sessions.get(conn)
+        if session is None:
+            raise KeyError(f"no secured connection {conn!r}")
+        if session.ready:
+            return session.seal(message)
+        waiting = self._waiting[conn]
+        if len(waiting) >= self.max_waiting:     # a peer that never says hello holds no memory
+            waiting.pop(0)
+            self.stats.add(S.HANDSHAKE, "no hello from the peer: oldest waiting message dropped")
+        waiting.append(message)
+        return None
+
+    def open(self, conn, frame: bytes) -> tuple[bytes | None, list[bytes], str | None]:
+        session = self._sessions.get(conn)
+        if session is None:
+            return None, [], None
+        try:
+            message = session.open(frame)
+        except Drop as drop:
+            self.stats.add(drop.cause, drop.detail)
+            return None, [], drop.cause
+        if message is None:                         # the hello: what waited goes out now
+            waiting, self._waiting[conn] = self._waiting[conn], []
+            return None, [session.seal(m) for m in waiting], None
+        return message, [], None
+
+
+def stream_crypto(key, cipher, role: int, stats: S.DropStats) -> tuple[str | bytes | None, SecureEnd | None]:
+    """For a stream transport: ``(key for its FrameCodec, SecureEnd or None)``.
+    With a key and :data:`LINK_CIPHER` the link is secured and the codec plain;
+    with a protobuf_comm cipher (e.g. "aes-128-cbc", for a league peer) the
+    codec encrypts as the refbox does."""
+    if key is not None and cipher == LINK_CIPHER:
+        return None, SecureEnd(key, role, stats)
+    return key, None
 
 
 def is_secure_frame(frame: bytes) -> bool:

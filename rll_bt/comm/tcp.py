@@ -2,10 +2,12 @@
 
 Frames are the same v2 frames as on UDP (8-byte header, then payload_size
 bytes), so a stream is cut by reading 8 bytes and then payload_size bytes.
-With a key (the team-server link) every frame is encrypted like the team
-channel; a peer without the key can neither read (its frames fail to
-decrypt and are dropped) nor task (the server drops its frames and, by
-default, disconnects it).  Sockets are non-blocking; outgoing bytes are
+With a key (the team-server link) the link is secured with authenticated
+encryption and sequence numbers (:mod:`.secure`): a peer without the key
+can neither read nor task (the server drops its frames and, by default,
+disconnects it), and recorded or altered frames are dropped and counted.
+``cipher="aes-128-cbc"`` instead encrypts every frame as the refbox's team
+channel does (for league peers).  Sockets are non-blocking; outgoing bytes are
 buffered and flushed as the socket accepts them (:mod:`.sockets`, the
 socket code shared with :mod:`.jsonlink`).
 """
@@ -27,17 +29,29 @@ from .crypto import TEAM_CIPHER
 from .framing import FRAME_V2, MAX_STREAM_PAYLOAD, StreamReassembler
 from .ports import TEAM_SERVER_PORT
 from .registry import MessageRegistry
+from .secure import CLIENT, LINK_CIPHER, SERVER, SecureEnd, stream_crypto
 from .sockets import MAX_TX_BUFFER, Connection, Listener, wait
 from .transport import CONNECTED, DISCONNECTED, PumpedTransport, Received
 
 log = logging.getLogger("rll_bt.comm")
+
+#: the cipher id a message opened by a secured link reports in :attr:`Received.cipher`
+SEALED_CIPHER = 0x81
 
 
 def _decode_frames(owner, conn: Connection, frames: list[bytes], source: Any) -> str | None:
     """Decode and deliver ``frames``; the first crypto-related drop cause, if any."""
     crypto_cause = None
     for frame in frames:
-        decoded, cause = owner.codec.try_decode(frame)
+        if owner.secure is not None:
+            message, replies, cause = owner.secure.open(conn, frame)
+            for reply in replies:
+                conn.queue(reply)
+            decoded = None
+            if message is not None:
+                decoded, cause = owner.codec.decode_message(message, SEALED_CIPHER)
+        else:
+            decoded, cause = owner.codec.try_decode(frame)
         if decoded is not None:
             owner._deliver(Received.of(decoded, owner.channel, source, owner.clock.now()))
         elif cause in S.CRYPTO_CAUSES and crypto_cause is None:
@@ -48,13 +62,28 @@ def _decode_frames(owner, conn: Connection, frames: list[bytes], source: Any) ->
 
 
 class _Framed:
-    """What both ends share: their connections cut refbox frames."""
+    """What both ends share: their connections cut refbox frames, and on a
+    secured link each connection starts with a hello."""
 
     _frame_version: int
     _max_payload: int
+    secure: SecureEnd | None
 
     def _connection(self, sock: socket.socket, peer: Any) -> Connection:
-        return Connection(sock, peer, StreamReassembler(self._frame_version, self._max_payload), MAX_TX_BUFFER)
+        conn = Connection(sock, peer, StreamReassembler(self._frame_version, self._max_payload), MAX_TX_BUFFER)
+        if self.secure is not None:
+            conn.queue(self.secure.connect(conn))
+        return conn
+
+    def _frame(self, conn: Connection, msg) -> bytes | None:
+        """The frame to queue for ``msg`` on ``conn`` (None: it waits for the peer's hello)."""
+        if self.secure is None:
+            return self.codec.encode(msg)
+        return self.secure.seal(conn, self.codec.message_bytes(msg))
+
+    def _forget(self, conn: Connection) -> None:
+        if self.secure is not None:
+            self.secure.forget(conn)
 
 
 class StreamClient(_Framed, PumpedTransport):
@@ -67,7 +96,7 @@ class StreamClient(_Framed, PumpedTransport):
     """
 
     def __init__(self, host: str, port: int = TEAM_SERVER_PORT, *, registry: MessageRegistry,
-                 key: str | bytes | None = None, cipher: int | str = TEAM_CIPHER,
+                 key: str | bytes | None = None, cipher: int | str = LINK_CIPHER,
                  clock: Clock | None = None, channel: str = "stream",
                  backoff_initial: float = 0.1, backoff_max: float = 5.0,
                  connect_timeout: float = 2.0, frame_version: int = FRAME_V2,
@@ -76,8 +105,9 @@ class StreamClient(_Framed, PumpedTransport):
         super().__init__(channel, clock)
         self.host, self.port = host, int(port)
         self.stats = S.DropStats(f"{channel} tcp client {host}:{port}")
-        self.codec = FrameCodec(registry, key=key, cipher=cipher, frame_version=frame_version,
-                                stats=self.stats, iv_source=iv_source)
+        codec_key, self.secure = stream_crypto(key, cipher, CLIENT, self.stats)
+        self.codec = FrameCodec(registry, key=codec_key, cipher=TEAM_CIPHER if codec_key is None else cipher,
+                                frame_version=frame_version, stats=self.stats, iv_source=iv_source)
         self.backoff_initial, self.backoff_max = backoff_initial, backoff_max
         self.connect_timeout = connect_timeout
         self._frame_version, self._max_payload = frame_version, max_payload
@@ -167,6 +197,7 @@ class StreamClient(_Framed, PumpedTransport):
     def _lost(self) -> None:
         if self._conn is None:
             return
+        self._forget(self._conn)
         self._conn.close()
         self._conn = None
         log.info("%s: connection to %s:%d lost", self.channel, self.host, self.port)
@@ -182,14 +213,18 @@ class StreamClient(_Framed, PumpedTransport):
 
     # -- transport interface ---------------------------------------------------
     def send(self, msg) -> bool:
-        frame = self.codec.encode(msg)
+        if self.secure is None:
+            self.codec.encode(msg)             # the caller's mistakes raise here, connected or not
+        else:
+            self.codec.message_bytes(msg)
         with self._io_lock:
             if self._closed:
                 return False
             self._progress()
             if self._conn is None:
                 return False
-            if not self._conn.queue(frame):
+            frame = self._frame(self._conn, msg)
+            if frame is not None and not self._conn.queue(frame):
                 self._lost()
                 return False
             return True
@@ -253,14 +288,15 @@ class StreamServer(_Framed, PumpedTransport):
 
     def __init__(self, port: int = TEAM_SERVER_PORT, *, registry: MessageRegistry,
                  host: str = "0.0.0.0", key: str | bytes | None = None,
-                 cipher: int | str = TEAM_CIPHER, clock: Clock | None = None,
+                 cipher: int | str = LINK_CIPHER, clock: Clock | None = None,
                  channel: str = "stream", drop_unauthenticated: bool = True,
                  frame_version: int = FRAME_V2, max_payload: int = MAX_STREAM_PAYLOAD,
                  iv_source: Callable[[int], bytes] = os.urandom, backlog: int = 16):
         super().__init__(channel, clock)
         self.stats = S.DropStats(f"{channel} tcp server :{port}")
-        self.codec = FrameCodec(registry, key=key, cipher=cipher, frame_version=frame_version,
-                                stats=self.stats, iv_source=iv_source)
+        codec_key, self.secure = stream_crypto(key, cipher, SERVER, self.stats)
+        self.codec = FrameCodec(registry, key=codec_key, cipher=TEAM_CIPHER if codec_key is None else cipher,
+                                frame_version=frame_version, stats=self.stats, iv_source=iv_source)
         self.drop_unauthenticated = drop_unauthenticated
         self._frame_version, self._max_payload = frame_version, max_payload
         self._listener = Listener(host, int(port), backlog)
@@ -287,7 +323,8 @@ class StreamServer(_Framed, PumpedTransport):
                 conn = self._conns.get(cid)
                 if conn is None:
                     continue
-                if conn.queue(self.codec.encode(msg)):
+                frame = self._frame(conn, msg)
+                if frame is None or conn.queue(frame):
                     sent = True
                 else:
                     self._drop(cid)
@@ -300,6 +337,7 @@ class StreamServer(_Framed, PumpedTransport):
     def _drop(self, cid: int) -> None:
         conn = self._conns.pop(cid, None)
         if conn is not None:
+            self._forget(conn)
             conn.close()
             self._event(DISCONNECTED, cid)
 

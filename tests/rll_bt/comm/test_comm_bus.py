@@ -8,6 +8,7 @@ import pytest
 from rll_bt.clock import SimClock
 from rll_bt.comm import CONNECTED, DISCONNECTED, Bus, FrameCodec, FrameTooLarge
 from rll_bt.comm import stats as S
+from rll_bt.comm.secure import SEALED
 
 KEY = "randomkey"
 
@@ -101,24 +102,39 @@ def test_stream_link_like_tcp(tm):
     assert [r.msg.text for r in srv2.receive()] == ["again"]
 
 
-def test_stream_wrong_key_client_cannot_read_or_task(tm):
-    # fixed IVs: AES-CBC has no authentication, so with random IVs about one frame in 256 decrypts
-    # to valid padding under the wrong key and is dropped later (unknown type), without a disconnect
+@pytest.mark.parametrize("cipher,failure", [(None, S.AUTH_FAILURE), ("aes-128-cbc", S.DECRYPT_FAILURE)])
+def test_stream_wrong_key_client_cannot_read_or_task(tm, cipher, failure):
+    # the secured link by default; AES-CBC (as league peers speak it) with fixed IVs: it has no
+    # authentication, so with random IVs about one frame in 256 decrypts to valid padding under
+    # the wrong key and is dropped later (unknown type), without a disconnect
     bus = Bus()
-    iv = lambda n: bytes(n)  # noqa: E731
-    srv = bus.stream_server("ts", registry=tm.registry(), key=KEY, iv_source=iv)
-    good = bus.stream_client("ts", registry=tm.registry(), key=KEY, iv_source=iv)
-    bad = bus.stream_client("ts", registry=tm.registry(), key="guess", iv_source=iv)
+    kw = {} if cipher is None else {"cipher": cipher, "iv_source": lambda n: bytes(n)}
+    srv = bus.stream_server("ts", registry=tm.registry(), key=KEY, **kw)
+    good = bus.stream_client("ts", registry=tm.registry(), key=KEY, **kw)
+    bad = bus.stream_client("ts", registry=tm.registry(), key="guess", **kw)
     srv.send(tm.TeamCmd(robot=3, text="task"))
     assert [r.msg.text for r in good.receive()] == ["task"]
-    assert bad.receive() == [] and bad.stats.count(S.DECRYPT_FAILURE) == 1
+    assert bad.receive() == [] and bad.stats.count(failure) == 1
     bad.send(tm.TeamCmd(robot=3, text="forged"))
-    assert srv.receive() == [] and srv.stats.count(S.DECRYPT_FAILURE) == 1
+    assert srv.receive() == [] and srv.stats.count(failure) == 1
     assert not bad.connected  # the server dropped it
     assert (DISCONNECTED, 2) in [(e.kind, e.peer) for e in srv.events()]
     assert [(e.kind, e.peer) for e in bad.events()] == [(CONNECTED, "ts"), (DISCONNECTED, "ts"),
                                                         (CONNECTED, "ts")]  # and it retries
     assert bad.connections == 2
+
+
+def test_a_tap_of_a_secured_stream_sees_plain_frames_the_link_carries_sealed_ones(tm):
+    bus = Bus()
+    seen = []
+    bus.tap(lambda where, src, frame: seen.append(frame))
+    srv = bus.stream_server("ts", registry=tm.registry(), key=KEY)
+    c = bus.stream_client("ts", registry=tm.registry(), key=KEY)
+    c.send(tm.TeamCmd(robot=1, text="result"))
+    [rx] = srv.receive()
+    assert rx.msg.text == "result" and rx.cipher == SEALED
+    assert [f[1] for f in seen] == [0]                       # the tap: a plain frame
+    assert FrameCodec(tm.registry()).decode(seen[0]).msg.text == "result"
 
 
 def test_stream_client_reconnect_gets_a_new_client_id(tm):

@@ -8,6 +8,7 @@ import pytest
 from rll_bt import msgs
 from rll_bt.comm import TEAM_CIPHER, Bus, FrameCodec, MessageRegistry
 from rll_bt.comm import stats as S
+from rll_bt.comm.secure import SEALED
 from tests.support.comm import aes, hand_key, pkcs7
 
 
@@ -65,7 +66,7 @@ def test_team_protocol_over_an_encrypted_bus_link():
                                                 "peer_name": "R2"})
     assert robot.send(hello)
     (rec,) = server.receive()
-    assert rec.type_name == "RobotHello" and rec.msg == hello and rec.cipher == TEAM_CIPHER
+    assert rec.type_name == "RobotHello" and rec.msg == hello and rec.cipher == SEALED
     assert msgs.to_dict(rec.msg)["peer_name"] == "R2"
 
 

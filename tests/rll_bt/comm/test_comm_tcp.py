@@ -10,6 +10,8 @@ import pytest
 from rll_bt.clock import SimClock
 from rll_bt.comm import CONNECTED, DISCONNECTED, FrameCodec, StreamClient, StreamServer
 from rll_bt.comm import stats as S
+from rll_bt.comm.framing import StreamReassembler
+from rll_bt.comm.secure import CLIENT, LINK_CIPHER, SEALED, SecureSession
 
 KEY = "teamkey"
 
@@ -135,29 +137,78 @@ def test_client_reconnects_with_backoff_after_server_restart(tm):
         srv.close()
 
 
-def test_encrypted_link_wrong_key_client_can_neither_read_nor_task(tm):
-    srv = StreamServer(0, registry=tm.registry(), host="127.0.0.1", key=KEY)
-    good = StreamClient("127.0.0.1", srv.port, registry=tm.registry(), key=KEY)
-    bad = StreamClient("127.0.0.1", srv.port, registry=tm.registry(), key="guess",
+@pytest.mark.parametrize("cipher,wire,failure", [(LINK_CIPHER, SEALED, S.AUTH_FAILURE),
+                                                  ("aes-128-cbc", 2, S.DECRYPT_FAILURE)])
+def test_encrypted_link_wrong_key_client_can_neither_read_nor_task(tm, cipher, wire, failure):
+    srv = StreamServer(0, registry=tm.registry(), host="127.0.0.1", key=KEY, cipher=cipher)
+    good = StreamClient("127.0.0.1", srv.port, registry=tm.registry(), key=KEY, cipher=cipher)
+    bad = StreamClient("127.0.0.1", srv.port, registry=tm.registry(), key="guess", cipher=cipher,
                        backoff_initial=10.0)
     box = Inbox(srv, good, bad)
     try:
         assert box.wait_for(lambda: len(srv.clients()) == 2 and good.connected and bad.connected)
         srv.send(tm.TeamCmd(robot=7, text="task"))
         assert box.wait_for(lambda: len(box.msgs(good)) == 1)
-        assert box.msgs(good)[0].msg.text == "task" and box.msgs(good)[0].cipher == 2
-        assert box.wait_for(lambda: bad.stats.count(S.DECRYPT_FAILURE) == 1)
+        assert box.msgs(good)[0].msg.text == "task" and box.msgs(good)[0].cipher == wire
+        assert box.wait_for(lambda: bad.stats.count(failure) == 1)
         assert box.msgs(bad) == []
         # the wrong-key client's frames are dropped and it is disconnected
         bad.send(tm.TeamCmd(robot=66, text="fake result"))
         good.send(tm.TeamCmd(robot=7, text="real result"))
         assert box.wait_for(lambda: len(srv.clients()) == 1 and len(box.msgs(srv)) == 1)
         assert [r.msg.text for r in box.msgs(srv)] == ["real result"]
-        assert srv.stats.count(S.DECRYPT_FAILURE) == 1
+        assert srv.stats.count(failure) == 1
         assert box.wait_for(lambda: not bad.connected)
     finally:
         for t in (good, bad, srv):
             t.close()
+
+
+def _raw_secured_client(port, key):
+    """A hand-driven client of the secured link on a raw socket: (socket, session)."""
+    raw = socket.create_connection(("127.0.0.1", port), timeout=3.0)
+    session = SecureSession(key, CLIENT)
+    raw.sendall(session.hello())
+    reader = StreamReassembler()
+    while not session.ready:
+        for frame in reader.feed(raw.recv(4096)):
+            session.open(frame)
+    return raw, session
+
+
+def test_replayed_and_altered_frames_are_dropped_and_counted(tm):
+    srv = StreamServer(0, registry=tm.registry(), host="127.0.0.1", key=KEY)
+    srv.start()                                   # it reads in its own thread: the handshake needs it
+    box = Inbox(srv)
+    raw, session = _raw_secured_client(srv.port, KEY)
+    try:
+        codec = srv.codec
+        first = session.seal(codec.message_bytes(tm.TeamCmd(robot=7, text="done 1")))
+        raw.sendall(first + first)                                  # the same frame again: a replay
+        assert box.wait_for(lambda: srv.stats.count(S.REPLAY) == 1)
+        second = bytearray(session.seal(codec.message_bytes(tm.TeamCmd(robot=7, text="done 2"))))
+        second[-3] ^= 0x20                                          # altered on the way
+        raw.sendall(bytes(second))
+        assert box.wait_for(lambda: srv.stats.count(S.AUTH_FAILURE) == 1)
+        assert [r.msg.text for r in box.msgs(srv)] == ["done 1"]
+        assert box.wait_for(lambda: srv.clients() == [])            # altered: disconnected
+    finally:
+        raw.close()
+        srv.close()
+
+
+def test_a_team_server_without_the_key_cannot_task_a_robot(tm):
+    fake = StreamServer(0, registry=tm.registry(), host="127.0.0.1", key="not the team key")
+    robot = StreamClient("127.0.0.1", fake.port, registry=tm.registry(), key=KEY)
+    box = Inbox(fake, robot)
+    try:
+        assert box.wait_for(lambda: robot.connected and fake.clients())
+        fake.send(tm.TeamCmd(robot=1, text="drive off the field"))
+        assert box.wait_for(lambda: robot.stats.count(S.AUTH_FAILURE) == 1)
+        assert box.msgs(robot) == []
+    finally:
+        robot.close()
+        fake.close()
 
 
 def test_plain_client_on_encrypted_server_is_dropped(tm):
