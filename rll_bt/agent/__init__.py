@@ -43,12 +43,22 @@ from .machinemap import KnownMachine, KnownMachines, changed_names, distribute
 from .network import RefboxAddress, refbox_channels, team_server_link
 from .observations import ObservationFeed
 from .runner import Outcome, TaskRun, default_trees_dir, load_task_tree
-from .tasks import TASK_KINDS, TREE_KINDS, InvalidTask, agent_task, task_kind, task_params
+from .tasks import (
+    TASK_KINDS,
+    TREE_KINDS,
+    TREE_OUTPUTS,
+    InvalidTask,
+    agent_task,
+    output_problems,
+    task_kind,
+    task_params,
+)
 
 __all__ = [
     "AgentConfig", "check_team_key", "normalise_color", "RobotAgent", "error_code", "GameGate", "KnownMachine",
     "KnownMachines", "changed_names", "distribute", "RefboxAddress", "refbox_channels", "team_server_link",
     "ObservationFeed",
-    "Outcome", "TaskRun", "default_trees_dir", "load_task_tree", "TASK_KINDS", "TREE_KINDS", "InvalidTask",
+    "Outcome", "TaskRun", "default_trees_dir", "load_task_tree", "TASK_KINDS", "TREE_KINDS", "TREE_OUTPUTS",
+    "output_problems", "InvalidTask",
     "agent_task", "task_kind", "task_params",
 ]

@@ -320,7 +320,7 @@ class RobotAgent:
                 text = f"{outcome.code}: {text}" if text else str(outcome.code)
         if outcome.status == "SUCCEEDED" and run.kind == "explore_zone" and \
                 int(run.params["zone"]) not in self.feed.searched:
-            found = run.tree.blackboard.get("/found")
+            found = run.tree.outputs().get("found")         # explore_zone.yaml's declared output
             self.feed.zone_searched(int(run.params["zone"]), found if isinstance(found, list) else None)
         result = self._result(run.task_id, outcome.status, code, text)
         self._notify("task_ended", run, outcome)

@@ -45,6 +45,21 @@ TASK_KINDS = ("explore_zone", "get_workpiece", "put_workpiece", "retrieve_cap", 
               "deliver", "discard", "go_to", "report_machines")
 #: kinds that run a tree (report_machines is done by the agent itself)
 TREE_KINDS = TASK_KINDS[:-1]
+#: what the agent reads from a task tree that succeeded: kind -> {output name: type}; the
+#: tree declares these under ``outputs:`` (explore_zone: the stations seen, for ZoneExplored)
+TREE_OUTPUTS: dict[str, dict[str, str]] = {"explore_zone": {"found": "list"}}
+
+
+def output_problems(kind: str, spec) -> list[str]:
+    """What the tree ``spec`` of ``kind`` lacks of the outputs the agent reads."""
+    out = []
+    for name, tname in TREE_OUTPUTS.get(kind, {}).items():
+        decl = spec.outputs.get(name)
+        if decl is None:
+            out.append(f"{kind}.yaml declares no output {name!r} ({tname}), which the agent reads")
+        elif decl.ptype.name != tname:
+            out.append(f"{kind}.yaml declares output {name!r} as {decl.ptype.name}; the agent reads a {tname}")
+    return out
 
 
 class InvalidTask(ValueError):

@@ -111,24 +111,27 @@ def _config(args):
         raise UserError(str(exc)) from None
 
 
-def _check_trees(trees_dir: Path | None) -> list[str]:
-    """Problems of the installed task trees (an invalid tree stops the start)."""
-    from ..agent import TREE_KINDS
+def _check_trees(trees_dir: Path | None) -> tuple[list[str], list[str]]:
+    """The task kinds without a tree, and what the trees lack of the outputs
+    the agent reads (an invalid tree stops the start)."""
+    from ..agent import TREE_KINDS, output_problems
     from ..tree import TreeLoadError, parse_tree
     if trees_dir is None:
         raise UserError("no trees directory found", where="--trees", hint="give --trees DIR")
-    missing = []
+    missing: list[str] = []
+    notes: list[str] = []
     for kind in TREE_KINDS:
         path = trees_dir / f"{kind}.yaml"
         if not path.is_file():
             missing.append(kind)
             continue
         try:
-            parse_tree(path, search_path=[trees_dir])
+            spec = parse_tree(path, search_path=[trees_dir])
         except TreeLoadError as exc:
             raise UserError(f"invalid tree:\n{exc}", where=str(path),
                             hint="fix it (rll-bt tree validate) or point --trees elsewhere") from None
-    return missing
+        notes.extend(output_problems(kind, spec))
+    return missing, notes
 
 
 def _resolve(host: str, what: str) -> None:
@@ -164,9 +167,11 @@ def cmd_agent(args) -> int:
     from .tree import _backend
     config = _config(args)
     trees_dir = config.trees_dir or default_trees_dir()
-    missing = _check_trees(trees_dir)
+    missing, notes = _check_trees(trees_dir)
     if missing:
         _say(args, f"no tree for {', '.join(missing)} in {trees_dir} (such tasks will fail with INVALID_TASK)")
+    for note in notes:
+        _say(args, note)
     host, port = args.teamserver
     _resolve(host, "--teamserver")
     clock = WallClock()

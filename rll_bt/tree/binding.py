@@ -7,6 +7,7 @@ blackboard keys read and written in the :class:`~.keys.KeyBook`.
 """
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -19,6 +20,9 @@ from .ports import Binding, Const, Key, Port, Unknown
 from .porttypes import EXPR, PortTypeError, port_type
 from .source import YList, YMap
 from .spec import Decl
+
+#: a whole value that is one $task/$param reference (for a condition: the text it holds)
+_WHOLE_REF = re.compile(r"^\$(task|param)\.[A-Za-z_][A-Za-z0-9_]*$")
 
 
 class Binder:
@@ -121,6 +125,8 @@ class Binder:
         """``value`` as written for ``port`` of ``owner`` (None after reporting)."""
         label = f"port {port.name!r} of {owner}"
         source = None
+        if port.ptype is EXPR and isinstance(value, str) and not _WHOLE_REF.match(value):
+            return self.expr(value, loc, env, label)     # a condition, even one starting with $task.
         if isinstance(value, str) and value.startswith("$") and not value.startswith("$$"):
             b = self.ref(value, loc, env)
             if b is None:

@@ -66,6 +66,8 @@ def include(ld: Loader, nt: NodeType, opts: YMap, loc: Loc, env: Instance) -> No
         return None
     if params is None or remap is None:
         return None
+    for out in child.outputs:               # outputs go to the caller's key of the same name
+        remap.setdefault(out, env.key(out))
     scope = env.scope + name + "/"
     cenv = Instance(child, scope, params, remap, autoremap, env, env.stack + (path,))
     root = ld.instantiate(child, cenv)

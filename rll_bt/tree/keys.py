@@ -68,7 +68,7 @@ class KeyBook:
             out.setdefault(w.key, w.ptype)
         return out
 
-    def check(self, report: Report, unwritten_reads: bool = True) -> None:
+    def check(self, report: Report) -> None:
         writers: dict[str, Use] = {}
         for use in list(self.outputs.values()) + self.writes:
             if use.ptype.name == "any":
@@ -86,7 +86,7 @@ class KeyBook:
                 report(use.loc, f"{use.what} expects {use.ptype.name} but blackboard key {use.key} holds "
                        f"{w.ptype.name} (written by {w.what} at {w.loc})",
                        "bind a key of the right type, or convert the value")
-            if unwritten_reads and use.key not in written and use.key not in ENGINE_KEYS:
+            if use.key not in written and use.key not in ENGINE_KEYS:
                 near = did_you_mean(use.key, sorted(written | set(ENGINE_KEYS)), "keys")
                 report(use.loc, f"{use.what} reads blackboard key {use.key}, which nothing in the tree writes or "
                        "declares", (near + "; " if near.startswith("did you mean") else "")

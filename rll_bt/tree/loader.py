@@ -91,11 +91,12 @@ class Loader:
                     params[k] = Const(decl.default, f"$param.{k}")
         env = Instance(f, "/", params, {}, False, None, (f.path,))
         root = self.instantiate(f, env)
-        self.keys.check(self.error, unwritten_reads=False)
+        self.keys.check(self.error)
         if self.diags or root is None:
             raise TreeLoadError(self.diags or [Diagnostic(loc0, "the tree has no root", "add `root:`")])
         return TreeSpec(f.display, f.name, (f.doc or {}).get("doc", "") or "", root, f.task, f.params,
-                        dict(self._bb_init), self.keys.types(), list(dict.fromkeys(self._files_used)))
+                        dict(self._bb_init), self.keys.types(), list(dict.fromkeys(self._files_used)),
+                        f.outputs, {name: env.key(name) for name in f.outputs})
 
     # -- files -----------------------------------------------------------------
     def read(self, path: Path, text: str | None = None, shown: str | None = None) -> TreeFile | None:
@@ -138,21 +139,33 @@ class Loader:
             self.error(loc0, "the tree has no `root:`", "add `root:` with the top node of the tree")
         f.task = read_decls(doc, "task", self.error)
         f.params = read_decls(doc, "params", self.error)
+        f.outputs = read_decls(doc, "outputs", self.error)
         f.blackboard = read_decls(doc, "blackboard", self.error, keys=True)
         self._files[path] = f
         self._files_used.append(disp)
         return f
 
     def instantiate(self, f: TreeFile, env: Instance) -> NodeSpec | None:
-        """The root node of ``f`` in the instance ``env``, with its blackboard declarations."""
+        """The root node of ``f`` in the instance ``env``, with its blackboard
+        declarations; each declared output must be written by a node of it."""
         for name, decl in f.blackboard.items():
             key = env.key(name)
             self.keys.write(key, decl.ptype, decl.loc, f"blackboard declaration {name!r}")
             if decl.default is not None:
                 self._bb_init[key] = decl.default
+        for name, decl in f.outputs.items():
+            self.keys.declare_output(env.key(name), decl.ptype, decl.loc, f"output {name!r} of {f.display}")
         if f.doc is None or "root" not in f.doc:
             return None
-        return self._node(f.doc["root"], f.doc.vloc("root"), env)
+        mark = self.keys.mark()
+        root = self._node(f.doc["root"], f.doc.vloc("root"), env)
+        if root is not None:
+            for name, decl in f.outputs.items():
+                if not self.keys.written_since(mark, env.key(name)):
+                    self.error(decl.loc, f"output {name!r} is declared but nothing in {f.display} writes it",
+                               f"bind an output port to $bb.{name} (or write it with set_blackboard), "
+                               "or remove the declaration")
+        return root
 
     # -- nodes -----------------------------------------------------------------
     def _node(self, value: Any, loc: Loc, env: Instance) -> NodeSpec | None:

@@ -148,7 +148,7 @@ def _check(spec, opts):
 
 
 DEFAULT.register(structural(
-    "recovery", "composite", "Make an action succeed with ordered, escalating recoveries.  "
+    "recovery", "composite", "Make an action succeed with ordered, escalating recoveries.\n\n"
     + __doc__.split("\n\n", 1)[1],
     (Input(int, "rounds of (recovery, try the action again) per level", default=1, constant=True,
            name="retries"),

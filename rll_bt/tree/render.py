@@ -38,6 +38,9 @@ def _label(ns: NodeSpec) -> str:
 def ascii_tree(spec: TreeSpec, locations: bool = False) -> str:
     """The tree as indented text with box-drawing branches."""
     lines = [f"{spec.name}  ({spec.file})"]
+    for name, decl in spec.outputs.items():
+        lines.append(f"  output {name}: {decl.ptype.name} -> {spec.output_keys[name]}"
+                     + (f"  ({decl.doc})" if decl.doc else ""))
 
     def walk(ns: NodeSpec, prefix: str, last: bool, slot: str | None):
         branch = "└── " if last else "├── "

@@ -138,6 +138,12 @@ class LoadedTree:
         return TreeFailure(str(code), str(self.blackboard.get(ERROR_MESSAGE_KEY) or ""),
                            str(self.blackboard.get(ERROR_NODE_KEY) or ""))
 
+    def outputs(self) -> dict[str, Any]:
+        """The values of the keys the tree declares under ``outputs:`` (those
+        written so far), by their declared names: what the caller reads."""
+        keys = self.spec.output_keys if self.spec is not None else {}
+        return {name: self.blackboard.get(key) for name, key in keys.items() if key in self.blackboard}
+
     def tip(self) -> py_trees.behaviour.Behaviour | None:
         return self.root.tip()
 

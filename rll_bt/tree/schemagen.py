@@ -100,6 +100,9 @@ def tree_schema(registry: NodeRegistry | None = None, builtin_only: bool = False
                      "description": "task fields this file uses as $task.NAME"},
             "params": {"type": "object", "additionalProperties": {"$ref": "#/$defs/decl"},
                        "description": "parameters ($param.NAME), given by the including subtree node"},
+            "outputs": {"type": "object", "additionalProperties": {"$ref": "#/$defs/decl"},
+                        "description": "keys this file writes for its caller (the caller's keys of the same "
+                                       "name unless its subtree node remaps them); each must be written"},
             "blackboard": {"type": "object", "additionalProperties": {"$ref": "#/$defs/decl"},
                            "description": "blackboard keys of this file with types and initial values"},
             "root": _NODE,

@@ -80,6 +80,9 @@ class TreeSpec:
     blackboard_init: dict[str, Any]
     key_types: dict[str, PortType]
     files: list[str]
+    #: the keys the tree writes for its caller (``outputs:``) and their absolute keys
+    outputs: dict[str, Decl] = field(default_factory=dict)
+    output_keys: dict[str, str] = field(default_factory=dict)
 
     def count(self) -> int:
         return sum(1 for _ in self.root.walk())

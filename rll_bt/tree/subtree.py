@@ -8,7 +8,9 @@ fills them from the caller's parameters or task fields of the same name (a
 list of names, or ``all``: every one the caller has); ``remap:``
 maps keys of the subtree to keys of the caller (``target: $bb.goal``);
 ``autoremap: true`` maps every key of the subtree to the caller's key of the
-same name.  Keys written with a leading ``/`` are absolute and shared.
+same name.  The keys the file declares under ``outputs:`` are written to
+the caller's keys of the same name unless ``remap:`` names others.  Keys
+written with a leading ``/`` are absolute and shared.
 The loader resolves all of this when the tree loads; at run time a subtree
 is a pass-through node named after its instance.
 """
@@ -25,7 +27,8 @@ class Subtree(py_trees.decorators.PassThrough):
 
 
 DEFAULT.register(structural(
-    "subtree", "subtree", __doc__.split("\n\n", 1)[1],
+    "subtree", "subtree", "Include another tree file as one node, with parameters, outputs and remapped keys.\n\n"
+    + __doc__.split("\n\n", 1)[1],
     (Input(str, "the tree file, relative to this file (or on the search path)", constant=True, name="file"),
      Input(dict, "values for the subtree's declared params", required=False, name="params"),
      Input(object, "params passed on by name from the caller's own $param or $task: a list of names, or all",

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from rll_bt import msgs, rules
-from rll_bt.agent import TREE_KINDS, default_trees_dir, task_params
+from rll_bt.agent import TREE_KINDS, TREE_OUTPUTS, default_trees_dir, output_problems, task_params
 from rll_bt.cli import main
 from rll_bt.tree import default_registry, parse_tree
 from tests.support import TREES
@@ -83,3 +83,21 @@ def test_the_trees_use_skill_nodes_and_recoveries():
         assert used[kind] >= {"approach_station", "grab", "holding_workpiece", "back_off", "relocalise"}
     for kind in ("put_workpiece", "mount_ring", "mount_cap", "deliver", "retrieve_cap", "discard"):
         assert used[kind] >= {"approach_station", "put", "holding_workpiece", "back_off", "relocalise"}
+
+
+@pytest.mark.parametrize("kind", TREE_KINDS)
+def test_each_tree_declares_the_outputs_the_agent_reads(kind):
+    """explore_zone.yaml declares `found` (the agent reports it in ZoneExplored)
+    where the skill node writes it; the agent reads it through `tree.outputs()`."""
+    spec = parse_tree(TREES / f"{kind}.yaml")
+    assert output_problems(kind, spec) == []
+    assert set(spec.outputs) == set(TREE_OUTPUTS.get(kind, {}))
+
+
+def test_a_tree_without_the_output_is_named_at_the_agents_start(tmp_path):
+    text = (TREES / "explore_zone.yaml").read_text()
+    start, end = text.index("outputs:"), text.index("root:")
+    (tmp_path / "explore_zone.yaml").write_text(text[:start] + text[end:])
+    spec = parse_tree(tmp_path / "explore_zone.yaml", search_path=[TREES])
+    assert output_problems("explore_zone", spec) == [
+        "explore_zone.yaml declares no output 'found' (list), which the agent reads"]

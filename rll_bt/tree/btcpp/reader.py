@@ -75,6 +75,7 @@ class _Tree:
     file: str
     name: str
     params: dict[str, dict] = field(default_factory=dict)
+    outputs: dict[str, dict] = field(default_factory=dict)
 
 
 class Reader:
@@ -103,10 +104,11 @@ class Reader:
                       "convert the file with BT.CPP's v3-to-v4 converter first")
         for inc in r.findall("include"):
             self._err(inc, "<include> is not supported", "put every tree into one file (Groot2: save as one file)")
-        models = {}
+        models, outputs = {}, {}
         for m in r.findall("TreeNodesModel"):
             for sub in m.findall("SubTree"):
-                models[sub.get("ID")] = self._params(sub)
+                models[sub.get("ID")] = self._params(sub, ("input_port", "inout_port"))
+                outputs[sub.get("ID")] = self._params(sub, ("output_port",))
         files: set[str] = set()
         for i, el in enumerate(r.findall("BehaviorTree")):
             tid = el.get("ID") or f"BehaviorTree_{i}"
@@ -120,7 +122,8 @@ class Reader:
             if f in files:
                 self._err(el, f"two trees would be written to {f}", "give the trees distinct IDs")
             files.add(f)
-            self.trees[tid] = _Tree(tid, el, f, el.get("_name") or snake(tid), models.get(tid, {}))
+            self.trees[tid] = _Tree(tid, el, f, el.get("_name") or snake(tid), models.get(tid, {}),
+                                    outputs.get(tid, {}))
         if not self.trees:
             self._err(r, "no <BehaviorTree> in the document", "")
         main = r.get("main_tree_to_execute") or (next(iter(self.trees)) if self.trees else None)
@@ -137,10 +140,12 @@ class Reader:
             raise TreeLoadError(self.diags)
         return out
 
-    def _params(self, sub: ET.Element) -> dict[str, dict]:
+    def _params(self, sub: ET.Element, tags: tuple[str, ...]) -> dict[str, dict]:
+        """The declarations of a ``<SubTree>`` model's ports of ``tags``
+        (input ports: parameters; output ports: outputs)."""
         out = {}
         for port in list(sub):
-            if port.tag not in ("input_port", "output_port", "inout_port") or not port.get("name"):
+            if port.tag not in tags or not port.get("name"):
                 continue
             t = port.get("type", "any")
             t = _CPP_TYPES.get(t, t)
@@ -182,6 +187,9 @@ class Reader:
                 doc[section] = self._json(t.el, "_" + section)
         if t.params:
             doc["params"] = t.params
+        if t.outputs:
+            doc["outputs"] = {k: {x: v for x, v in d.items() if x not in ("default", "required")}
+                              for k, d in t.outputs.items()}
         if t.el.get("_blackboard"):
             doc["blackboard"] = self._json(t.el, "_blackboard")
         kids = list(t.el)
@@ -271,6 +279,10 @@ class Reader:
                     passed.append(k)
                 else:
                     params[k] = value
+            elif k in target.outputs:
+                ref = self._value(el, v, "any", set(t.params))
+                if ref != f"$bb.{k}":           # else the default: the caller's key of the same name
+                    remap[k] = ref
             elif k.startswith("_"):
                 self._err(el, f"{k}: not supported on <SubTree>", f"rll-bt reads _autoremap and {PASS_ATTR} there")
             else:

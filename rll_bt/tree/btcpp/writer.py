@@ -3,8 +3,9 @@
 Every file a root file includes (``subtree``) becomes a ``<BehaviorTree>``
 of its own, referred to by ``<SubTree ID=...>`` with the subtree's
 parameters and remapped keys as port attributes and ``_autoremap``; the
-parameters of every tree are declared as the ports of its ``<SubTree>``
-model and every rll-bt node type the trees use as an ``Action``,
+parameters of every tree are declared as the input ports of its ``<SubTree>``
+model (its declared outputs as output ports, set on every ``<SubTree>`` to the
+caller's entry of the same name unless remapped) and every rll-bt node type the trees use as an ``Action``,
 ``Condition``, ``Decorator`` or ``Control`` model in ``<TreeNodesModel>``,
 so Groot2 shows and edits them.  What BT.CPP has no place for (the file a
 tree came from, its name, documentation, task fields and blackboard
@@ -52,6 +53,7 @@ class _Tree:
     name: str
     id: str = ""
     params: dict[str, dict] = field(default_factory=dict)
+    outputs: dict[str, dict] = field(default_factory=dict)
 
 
 class ExportError(TreeLoadError):
@@ -87,6 +89,8 @@ class Writer:
         self.order.append(p)
         for name, decl in (doc.get("params") or {}).items():
             self._param_decl(t, name, decl)
+        for name, decl in (doc.get("outputs") or {}).items():
+            t.outputs[name] = {"type": decl} if isinstance(decl, str) else dict(decl or {})
         return t
 
     def _param_decl(self, t: _Tree, name: str, decl: Any) -> None:
@@ -257,6 +261,9 @@ class Writer:
                           "BT.CPP has one port per name: rename the key")
                 continue
             el.set(k, self._text(v, "any", _vloc(remap, k), f"remap of {k!r}"))
+        for k in child.outputs:     # an output not remapped is the caller's key of the same name
+            if k not in remap:
+                el.set(k, "{" + k + "}")
         if opts.get("autoremap"):
             el.set("_autoremap", "true")
         return el
@@ -278,6 +285,10 @@ class Writer:
                     port.set("required", "true" if d["required"] else "false")
                 if d.get("choices"):
                     port.set("choices", json.dumps(_plain(d["choices"])))
+                if d.get("doc"):
+                    port.text = str(d["doc"])
+            for name, d in t.outputs.items():
+                port = ET.SubElement(sub, "output_port", {"name": name, "type": str(d.get("type", "any"))})
                 if d.get("doc"):
                     port.text = str(d["doc"])
         for name in sorted(self.used):

@@ -50,6 +50,8 @@ def meaning(spec, base: Path) -> tuple:
     return (spec.name, spec.doc.strip(), node(spec.root),
             tuple(sorted((k, tuple(sorted(d.describe().items()))) for k, d in spec.task.items())),
             tuple(sorted((k, repr(sorted(d.describe().items()))) for k, d in spec.params.items())),
+            tuple(sorted((k, repr(sorted(d.describe().items())), spec.output_keys[k])
+                         for k, d in spec.outputs.items())),
             tuple(sorted(spec.blackboard_init.items())),
             tuple(sorted((k, t.name) for k, t in spec.key_types.items())),
             tuple(sorted(rel(f) for f in spec.files)))
@@ -198,17 +200,27 @@ SAMPLE = textwrap.dedent("""\
                       - set_blackboard: {key: $bb.pose, value: {x: $param.speed, y: 0.5}}
                       - set_blackboard: {key: $bb.empty, value: ""}
                       - log: {message: $task.zone, value: $bb.count, level: debug}
-          - subtree: {file: sub/leaf.yaml, name: first, params: {gain: $param.speed}, remap: {out: $bb.result}}
-          - subtree: {file: sub/leaf.yaml, autoremap: true}
+          - subtree: {file: sub/leaf.yaml, name: first, params: {gain: $param.speed}, pass: [mode],
+                      remap: {out: $bb.result, done: $bb.first_done}}
+          - subtree: {file: sub/leaf.yaml, autoremap: true, pass: all}
+          - recovery:
+              on_recovery_failure: fail
+              retries: 2
+              action: failure
+              recoveries: [success, {check_blackboard: {condition: "first_done and done"}}]
           - reactive_selector: [failure, {inverter: {child: {force_failure: {child: success}}}}]
     """)
 LEAF = textwrap.dedent("""\
     params:
       gain: {type: float, default: 1.0}
+      mode: {type: str, default: fast}
+    outputs:
+      done: {type: bool, doc: "the leaf ran"}
     root:
       reactive_sequence:
-        - check_blackboard: {condition: "gain > 0.1"}
+        - check_blackboard: {condition: "$param.gain > 0.1"}
         - set_blackboard: {key: $bb.out, value: $param.gain}
+        - set_blackboard: {key: $bb.done, value: true}
     """)
 
 
@@ -250,6 +262,12 @@ def test_every_construct_round_trips(tmp_path, registry):
     assert doc.find(".//set_blackboard[@key='{text}']").get("value") == 'json:"true"'
     assert doc.find(".//SubTree[@name='first']").get("out") == "{result}"
     assert doc.find(".//SubTree[@_autoremap='true']") is not None
+    first = doc.find(".//SubTree[@name='first']")
+    assert first.get("done") == "{first_done}" and first.get("mode") == "{mode}" and first.get("_pass") == "mode"
+    assert doc.find(".//SubTree[@_autoremap='true']").get("done") == "{done}"     # an output: same name
+    leaf_model = {pt.get("name"): pt.tag for pt in doc.find("TreeNodesModel/SubTree[@ID='Leaf']")}
+    assert leaf_model == {"gain": "input_port", "mode": "input_port", "done": "output_port"}
+    assert doc.find(".//recovery").get("on_recovery_failure") == "fail"
     files = import_xml(xml, registry=registry)
     assert set(files) == {"sample.yaml", "sub/leaf.yaml"}
     out = tmp_path / "out"

@@ -3,6 +3,7 @@ import json
 from pathlib import Path
 
 from rll_bt.cli import main
+from tests.support import TREES
 
 DATA = Path(__file__).parent / "data"
 
@@ -29,6 +30,11 @@ def test_show(capsys, tmp_path):
     assert main(["tree", "show", "--png", str(png), str(DATA / "grab.yaml")]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["tree", "show", str(DATA / "bad.yaml")]) == 2
+    assert main(["tree", "show", str(TREES / "explore_zone.yaml")]) == 0
+    assert "output found: list -> /found" in capsys.readouterr().out
+    assert main(["tree", "nodes", "subtree", "recovery"]) == 0
+    out = capsys.readouterr().out
+    assert "pass: any" in out and "on_recovery_failure: str (default \"escalate\"; one of escalate, retry, fail" in out
 
 
 def test_nodes(capsys):

@@ -36,6 +36,8 @@ def test_sequence_with_memory_does_not_recheck(make):
 
 def test_reactive_selector_switches_to_higher_priority(make):
     tree, ev = make("""
+        blackboard:
+          alarm: bool          # written from outside the tree (this test)
         root:
           reactive_selector:
             - reactive_sequence:
@@ -52,6 +54,8 @@ def test_reactive_selector_switches_to_higher_priority(make):
 
 def test_selector_with_memory_keeps_running_child(make):
     tree, ev = make("""
+        blackboard:
+          alarm: bool          # written from outside the tree (this test)
         root:
           selector_with_memory:
             - reactive_sequence:

@@ -123,6 +123,8 @@ def test_guard_every_tick_halts_child(make):
 
 def test_guard_on_start_and_when_false_success(make):
     tree, ev = make("""
+        blackboard:
+          go: bool          # written from outside the tree (this test)
         root:
           guard:
             condition: go
@@ -134,12 +136,14 @@ def test_guard_on_start_and_when_false_success(make):
     tree.tick()
     tree.blackboard.set("/go", False)             # not re-checked while running
     assert tick_n(tree, 2) is Status.SUCCESS
-    tree, ev = make("root:\n  guard: {condition: go, when_false: success, child: failure}\n")
+    tree, ev = make("blackboard: {go: bool}\nroot:\n  guard: {condition: go, when_false: success, child: failure}\n")
     assert tree.tick() is Status.SUCCESS
 
 
 def test_guard_with_condition_node(make):
     tree, ev = make("""
+        blackboard:
+          ready: bool          # written from outside the tree (this test)
         root:
           guard:
             condition: {flag: {key: $bb.ready}}

@@ -87,3 +87,15 @@ def test_control_characters_are_a_yaml_error_not_a_crash(check):
     # found by benchmarks/fuzz.py: PyYAML's reader refuses them before parsing starts
     errs = check("root:\n  wait: {seconds: 1}\x18\n")
     assert len(errs) == 1 and "YAML" in errs[0]
+
+
+def test_a_condition_port_may_start_with_a_reference(make):
+    """`check_blackboard: {condition: "$param.gain > 0.1"}` is a condition,
+    not a reference named `gain > 0.1`."""
+    from rll_bt.tree import Status
+    text = ("params: {gain: {type: float, default: 0.5}}\n"
+            "root:\n  check_blackboard: {condition: \"$param.gain > 0.1\"}\n")
+    tree, _ = make(text)
+    assert tree.tick() is Status.SUCCESS
+    tree, _ = make(text, params={"gain": 0.05}, name="low.yaml")
+    assert tree.tick() is Status.FAILURE

@@ -5,6 +5,8 @@ from rll_bt.tree import Status
 
 def test_halt_before_start_in_priority_switch(make):
     tree, ev = make("""
+        blackboard:
+          obstacle: bool          # written from outside the tree (this test)
         root:
           reactive_selector:
             - reactive_sequence:

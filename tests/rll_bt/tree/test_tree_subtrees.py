@@ -162,3 +162,69 @@ def test_pass_errors_name_the_place(check):
     assert "requires parameter 'machine'" in errs[0] and "pass: [machine]" in errs[0]
     errs = check("params: {machine: int}\nroot:\n  subtree: {file: leaf.yaml, pass: [machine]}\n", files=files)
     assert "expects str but $param.machine is int" in errs[0]
+
+
+SEARCH = """
+    params:
+      zone: {type: int}
+    outputs:
+      found: {type: list, doc: names of the stations seen}
+      count: {type: int, doc: how many}
+    root:
+      reactive_sequence:
+        - set_blackboard: {key: $bb.found, value: [C-BS, C-CS1]}
+        - set_blackboard: {key: $bb.count, value: 2}
+        - set_blackboard: {key: $bb.scratch, value: $param.zone}
+    """
+
+
+def test_declared_outputs_are_the_callers_keys_of_the_same_name(make):
+    tree, _ = make("""
+        outputs:
+          found: {type: list, doc: what the search found}
+        root:
+          sequence_with_memory:
+            - subtree: {file: search.yaml, params: {zone: 3}, remap: {count: $bb.seen}}
+            - check_blackboard: {condition: "seen == 2"}
+        """, files={"search.yaml": SEARCH})
+    assert tree.tick() is Status.SUCCESS
+    bb = tree.blackboard
+    assert bb.get("/found") == ["C-BS", "C-CS1"]          # an output: the caller's key
+    assert bb.get("/seen") == 2 and "/count" not in bb     # remap sends an output elsewhere
+    assert bb.get("/search/scratch") == 3                  # not an output: the subtree's own scope
+    assert tree.outputs() == {"found": ["C-BS", "C-CS1"]}  # what the caller of the root tree reads
+    assert tree.spec.output_keys == {"found": "/found"} and tree.spec.outputs["found"].ptype.name == "list"
+
+
+def test_an_output_nothing_writes_is_an_error(check):
+    errs = check("outputs:\n  found: {type: list}\nroot:\n  set_blackboard: {key: $bb.fonud, value: []}\n")
+    assert len(errs) == 1 and "tree.yaml:2:3: output 'found' is declared but nothing in" in errs[0]
+    errs = check("outputs:\n  found: {type: list, default: []}\nroot:\n  set_blackboard: {key: $bb.found, value: []}\n")
+    assert "tree.yaml:2:32: output 'found' takes no default" in errs[0]
+    errs = check("outputs:\n  n: int\nroot:\n  set_blackboard: {key: $bb.n, value: many}\n")
+    assert "writes str to /n, which output 'n' of" in errs[0]
+
+
+def test_a_key_read_that_nothing_writes_or_declares_is_an_error(check):
+    errs = check("""
+        root:
+          sequence_with_memory:
+            - set_blackboard: {key: $bb.done, value: true}
+            - check_blackboard: {condition: "dnoe == true"}
+        """)
+    assert len(errs) == 1
+    assert "tree.yaml:5:37: port 'condition' of 'check_blackboard' reads blackboard key /dnoe, which nothing" in errs[0]
+    assert "did you mean '/done'?" in errs[0]
+    # declared under blackboard: (written from outside), the engine's error keys, a subtree's output: all fine
+    assert check("""
+        blackboard:
+          phase: str
+        root:
+          sequence_with_memory:
+            - subtree: {file: search.yaml, params: {zone: 1}}
+            - check_blackboard: {condition: "phase == 'PRODUCTION' and /error/code == null and count > 0"}
+        """, files={"search.yaml": SEARCH}) == []
+    # a subtree's own key is not the caller's
+    errs = check("root:\n  sequence_with_memory:\n    - subtree: {file: search.yaml, params: {zone: 1}}\n"
+                 "    - check_blackboard: {condition: \"scratch == 1\"}\n", files={"search.yaml": SEARCH})
+    assert "reads blackboard key /scratch, which nothing" in errs[0]

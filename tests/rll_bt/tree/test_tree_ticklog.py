@@ -7,6 +7,8 @@ from rll_bt.tree.ticklog import TickLogger, format_log, jsonable, replay
 
 def test_tick_log_records_and_replays(make, tmp_path):
     tree, _ = make("""
+        blackboard:
+          go: bool          # written from outside the tree (this test)
         root:
           reactive_selector:
             - reactive_sequence:
