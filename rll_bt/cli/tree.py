@@ -113,6 +113,8 @@ def register(cli) -> None:
                      description="Write the JSON Schema of tree files, covering every installed node type, "
                                  "for editor completion.")
     p.add_argument("-o", "--output", metavar="FILE", help="write here instead of stdout")
+    p.add_argument("--builtin", action="store_true",
+                   help="only the engine's own node types (the shipped rll_bt/tree/schema/tree.schema.json)")
     p.set_defaults(func=_schema)
 
 
@@ -336,7 +338,7 @@ def _replay(args) -> int:
 
 def _schema(args) -> int:
     from ..tree.schemagen import schema_text
-    text = schema_text()
+    text = schema_text(builtin_only=args.builtin)
     if args.output:
         Path(args.output).write_text(text, encoding="utf-8")
         print(f"wrote {args.output}", file=sys.stderr)

@@ -77,10 +77,13 @@ def test_run_argument_errors(capsys):
     assert rc == 1 and "--max-ticks" in capsys.readouterr().out
 
 
-def test_schema_command_and_shipped_schema_is_current(capsys):
+def test_schema_command_and_shipped_schema_is_current(capsys, tmp_path):
     from rll_bt.tree.schemagen import SHIPPED, schema_text
     assert SHIPPED.read_text() == schema_text(builtin_only=True), "regenerate rll_bt/tree/schema/tree.schema.json"
     assert main(["tree", "schema"]) == 0
     schema = json.loads(capsys.readouterr().out)
     names = {next(iter(e["properties"])) for e in schema["$defs"]["node"]["anyOf"][1:]}
     assert {"recovery", "parallel", "subtree", "guard"} <= names
+    out = tmp_path / "builtin.json"
+    assert main(["tree", "schema", "--builtin", "-o", str(out)]) == 0
+    assert out.read_text() == SHIPPED.read_text()
