@@ -143,6 +143,8 @@ def _validate(args) -> int:
             continue
         if not args.quiet:
             extra = f", {len(spec.files) - 1} subtree file(s)" if len(spec.files) > 1 else ""
+            if spec.outputs:
+                extra += ", outputs: " + ", ".join(spec.outputs)
             print(f"{f}: ok ({spec.count()} nodes{extra})")
     if bad:
         print(f"{bad} of {len(args.files)} file(s) invalid", file=sys.stderr)

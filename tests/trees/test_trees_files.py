@@ -52,6 +52,7 @@ def test_the_cli_validates_them_all(capsys):
     assert main(["tree", "validate", *map(str, ALL_FILES)]) == 0
     out = capsys.readouterr().out
     assert out.count(": ok") == len(ALL_FILES)
+    assert "explore_zone.yaml: ok (" in out and "outputs: found)" in out
 
 
 @pytest.mark.parametrize("kind", TREE_KINDS)
