@@ -11,17 +11,29 @@ keys of the same name unless ``remap:`` sends them elsewhere.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import Protocol
 
-from .errors import Loc, did_you_mean
+from .binding import Binder
+from .errors import Diagnostic, Loc, did_you_mean
 from .files import SEGMENT, Instance, TreeFile, display, valid_key
 from .ports import Binding, Const, Input
 from .registry import NodeType
 from .source import YList, YMap
 from .spec import NodeSpec
 
-if TYPE_CHECKING:
-    from .loader import Loader
+
+class Loader(Protocol):
+    """What including a file needs of the loader (:class:`rll_bt.tree.loader.Loader`)."""
+    search_path: list[Path]
+    scope_names: dict[str, set[str]]
+    diags: list[Diagnostic]
+    binder: Binder
+
+    def error(self, loc: Loc, message: str, hint: str = "") -> None: ...
+    def read(self, path: Path) -> TreeFile | None: ...
+    def instantiate(self, f: TreeFile, env: Instance) -> NodeSpec | None: ...
+
 
 def include(ld: Loader, nt: NodeType, opts: YMap, loc: Loc, env: Instance) -> NodeSpec | None:
     """The ``subtree`` node written at ``loc`` in ``env`` (None after reporting)."""
