@@ -27,7 +27,7 @@ import time
 
 from rll_bt import rules
 from rll_bt.clock import WallClock
-from teamserver import model as M
+from teamserver.knowledge import model as M
 from teamserver.planning.domain import Progress
 from teamserver.planning.estimate import SimRobot
 from teamserver.planning.planner import ProductionPlanner, World

@@ -7,8 +7,8 @@ A mixin of :class:`~teamserver.production.ProductionManager` (it needs
 """
 from __future__ import annotations
 
-from . import model as M
 from .caps import CLEANUP_ORDER
+from .knowledge import model as M
 from .planning.domain import CAPLESS, EXTRA
 from .planning.htn import Seq
 from .storage import place_key

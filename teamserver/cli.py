@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     from rll_bt.clock import WallClock
     from rll_bt.comm import MessageRegistry, StreamServer
 
-    from .links import udp_refbox_link
+    from .links.refbox_link import udp_refbox_link
     from .server import ServerConfig, TeamServer
 
     host, port = _host_port(args.listen)

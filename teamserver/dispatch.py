@@ -51,11 +51,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from . import model as M
 from . import parking
 from .feeding import FeedMonitor
 from .holding import HoldingMixin
-from .kb import KnowledgeBase
+from .knowledge import model as M
+from .knowledge.kb import KnowledgeBase
 from .production import ProductionManager
 
 log = logging.getLogger("teamserver.dispatch")

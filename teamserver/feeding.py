@@ -21,7 +21,7 @@ for it until it is fed, so the next robot's workpiece is processed with the
   (:meth:`~FeedMonitor.accepts`); such a task *adopts* the waiting
   instruction instead of sending it again (:meth:`~FeedMonitor.adoptable`);
 - checks every finished feed: the station must report that it took a
-  workpiece (:attr:`teamserver.model.Station.fed_at`) within ``confirm``
+  workpiece (:attr:`teamserver.knowledge.model.Station.fed_at`) within ``confirm``
   seconds, else the workpiece is lost and its product repaired
   (:meth:`~FeedMonitor.verify`); a feed a robot reports failed although its
   station took the workpiece counts as done (:meth:`~FeedMonitor.took`);
@@ -39,8 +39,8 @@ from __future__ import annotations
 
 import logging
 
-from . import model as M
-from .kb import KnowledgeBase
+from .knowledge import model as M
+from .knowledge.kb import KnowledgeBase
 
 log = logging.getLogger("teamserver.feeding")
 

@@ -17,11 +17,11 @@ from __future__ import annotations
 from rll_bt.contracts import TeamServerHandle, TeamServerOptions
 from rll_bt.plugins import offers
 
-from . import model as M
 from .exploration.strategies import STRATEGIES
 from .exploration.symmetry import consistent_set
 from .exploration.view import sure_properties
-from .links import RefboxLink
+from .knowledge import model as M
+from .links.refbox_link import RefboxLink
 from .server import ServerConfig, TeamServer
 
 

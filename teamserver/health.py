@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import logging
 
-from . import model as M
-from .kb import KnowledgeBase
+from .knowledge import model as M
+from .knowledge.kb import KnowledgeBase
 
 log = logging.getLogger("teamserver.health")
 

@@ -16,7 +16,7 @@ A mixin of :class:`~teamserver.dispatch.Dispatcher` (it needs ``kb``,
 """
 from __future__ import annotations
 
-from . import model as M
+from .knowledge import model as M
 
 
 class HoldingMixin:

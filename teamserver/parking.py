@@ -17,8 +17,8 @@ import numpy as np
 
 from rll_bt.rules import MPS, Profile
 
-from . import model as M
-from .kb import KnowledgeBase
+from .knowledge import model as M
+from .knowledge.kb import KnowledgeBase
 
 #: robot centre to the station face when docked (the skills' default approach distance), m
 APPROACH_DISTANCE = 0.62

@@ -1,6 +1,6 @@
 """Products: from chosen orders to tasks, bookkeeping of their progress, repair.
 
-A :class:`~teamserver.model.Product` owns the tasks of one unit of an
+A :class:`~teamserver.knowledge.model.Product` owns the tasks of one unit of an
 order.  When a task finishes, the workpieces it moved are updated (where
 each is, which rings and cap it has), the station locks its product gives
 up are released, and carry steps are bound to the robot that now holds the
@@ -18,11 +18,11 @@ import logging
 
 from rll_bt.rules import Profile
 
-from . import model as M
 from .caps import CLEANUP_ORDER, FREE, CapsMixin
 from .cleanup import CleanupMixin
 from .health import StationHealth
-from .kb import KnowledgeBase
+from .knowledge import model as M
+from .knowledge.kb import KnowledgeBase
 from .planning.domain import CAP_LOCK, CAPLESS, EXTRA, MAIN, Progress
 from .planning.estimate import SimRobot, SimTask
 from .planning.htn import Network, PlanningFailed

@@ -27,20 +27,20 @@ from rll_bt.clock import Clock
 from rll_bt.comm.transport import CONNECTED, DISCONNECTED
 from rll_bt.rules import CYAN, MAGENTA, PREFIX, Profile
 
-from . import model as M
-from .agents import AgentLink
 from .dispatch import DispatchConfig, Dispatcher
 from .exploration.lookout import LOOK, Lookout, is_look
 from .exploration.report import Reporter
 from .exploration.strategies import DEFAULT_THRESH, make_strategy
 from .exploration.symmetry import consistent_set
 from .exploration.view import ExplorationView
-from .kb import KnowledgeBase
+from .knowledge import model as M
+from .knowledge.kb import KnowledgeBase
+from .knowledge.store import Store
+from .links.agents import AgentLink
+from .links.refbox import RefboxClient
 from .planning.estimate import Durations
 from .planning.planner import StoragePolicy, make_planner
 from .production import ProductionManager
-from .refbox import RefboxClient
-from .store import Store
 
 log = logging.getLogger("teamserver")
 
@@ -78,7 +78,7 @@ class ServerConfig:
 class TeamServer:
     """The in-process team server.
 
-    ``refbox``: a :class:`~teamserver.links.RefboxLink` (or anything with
+    ``refbox``: a :class:`~teamserver.links.refbox_link.RefboxLink` (or anything with
     ``receive()``, ``send(msg)`` and ``set_team(color, key)``), None to run
     without a refbox.  ``agents``: a stream server transport of the team
     protocol (``receive()``, ``events()``, ``send(msg, to=peer)``).

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import logging
 
-from . import model as M
+from .knowledge import model as M
 from .planning.domain import EXTRA
 
 log = logging.getLogger("teamserver.production")

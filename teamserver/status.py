@@ -8,10 +8,10 @@ from __future__ import annotations
 from rll_bt import rules
 from rll_bt.errors import UserError
 
-from . import model as M
 from .exploration.symmetry import consistent_set
-from .kb import KnowledgeBase
-from .store import Store
+from .knowledge import model as M
+from .knowledge.kb import KnowledgeBase
+from .knowledge.store import Store
 
 
 def table(headers: list[str], rows: list[list]) -> str:

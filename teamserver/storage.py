@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import logging
 
-from . import model as M
+from .knowledge import model as M
 from .planning.htn import Network, PlanningFailed
 
 log = logging.getLogger("teamserver.production")

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from rll_bt.rules import MPS, Profile
 
-from .. import model as M
+from ..knowledge import model as M
 from .symmetry import ConsistentSet, consistent_set
 
 #: task parameter that marks an ``explore_zone`` task as a look at one machine

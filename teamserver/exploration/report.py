@@ -20,7 +20,7 @@ from collections.abc import Callable
 
 from rll_bt.rules import Profile
 
-from .. import model as M
+from ..knowledge import model as M
 from .symmetry import ConsistentSet
 
 

@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 
 from rll_bt.rules import CYAN, MAGENTA, PREFIX, Profile
 
-from .. import model as M
-from ..fusion import DiscreteBelief
+from ..knowledge import model as M
+from ..knowledge.fusion import DiscreteBelief
 
 _SWAPPING = ("RS", "CS")
 
@@ -106,7 +106,7 @@ def _normalised(opts: list[_Option], chosen: _Option) -> float:
 def consistent_set(profile: Profile, beliefs: dict) -> ConsistentSet:
     """The most probable consistent placement of all machines.
 
-    ``beliefs``: machine name -> :class:`~teamserver.kb.MachineBelief` (any
+    ``beliefs``: machine name -> :class:`~teamserver.knowledge.kb.MachineBelief` (any
     subset; missing machines count as unobserved).
     """
     kinds = list(profile.machine_types)

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from rll_bt.rules import PREFIX, Profile, mirror_machine_name
 
-from .. import model as M
+from ..knowledge import model as M
 from .symmetry import ConsistentSet, MachineGuess, consistent_set
 
 

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .. import model as M
+from ..knowledge import model as M
 from .htn import Domain, Par, Seq
 
 DOMAIN = Domain("rcll-production")

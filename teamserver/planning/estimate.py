@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 from rll_bt.rules import Profile
 
-from .. import model as M
+from ..knowledge import model as M
 
 
 @dataclass(frozen=True)

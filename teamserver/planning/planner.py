@@ -24,7 +24,7 @@ from dataclasses import dataclass, field, replace
 from rll_bt.clock import Clock, WallClock
 from rll_bt.rules import Profile
 
-from .. import model as M
+from ..knowledge import model as M
 from .domain import DOMAIN, ProductionContext, Progress, Storage, storage_pays
 from .estimate import Durations, SimRobot, SimTask, simulate
 from .htn import Network, Planner, PlanningFailed

@@ -4,7 +4,7 @@ from __future__ import annotations
 from rll_bt import msgs, rules
 from rll_bt.clock import SimClock
 from rll_bt.comm import Bus, MessageRegistry, StreamClient, StreamServer
-from teamserver.links import RefboxLink
+from teamserver.links.refbox_link import RefboxLink
 from teamserver.server import ServerConfig, TeamServer
 
 TEAM, KEY = "Testers", "secret"

@@ -5,11 +5,11 @@ never reached the reporting confidence because of it)."""
 import pytest
 
 from rll_bt import rules
-from teamserver import model as M
 from teamserver.exploration.report import Reporter
 from teamserver.exploration.symmetry import consistent_set
-from teamserver.fusion import DiscreteBelief
-from teamserver.kb import KnowledgeBase
+from teamserver.knowledge import model as M
+from teamserver.knowledge.fusion import DiscreteBelief
+from teamserver.knowledge.kb import KnowledgeBase
 
 P25 = rules.profile("rcll2025")
 

@@ -6,10 +6,10 @@ import math
 import pytest
 
 from rll_bt import rules
-from teamserver import model as M
 from teamserver.exploration.lookout import LOOK, Lookout, face_viewpoints, is_look
 from teamserver.exploration.symmetry import consistent_set
-from teamserver.kb import KnowledgeBase
+from teamserver.knowledge import model as M
+from teamserver.knowledge.kb import KnowledgeBase
 from tests.support.teamserver import Lockstep
 
 P25 = rules.profile("rcll2025")

@@ -3,10 +3,10 @@ zone and rotation): no visit for a machine already identified, a weak one
 looked at again once every machine is placed instead of a random search, and
 robots on blindly chosen zones redirected to an observed one."""
 from rll_bt import rules
-from teamserver import model as M
 from teamserver.exploration.strategies import Algorithm1, RandomStrategy
 from teamserver.exploration.view import ExplorationView
-from teamserver.kb import KnowledgeBase
+from teamserver.knowledge import model as M
+from teamserver.knowledge.kb import KnowledgeBase
 from tests.support.teamserver import Lockstep
 
 P25 = rules.profile("rcll2025")

@@ -2,7 +2,7 @@
 assignment by travel cost, station locks, PrepareMachine timing, failures and repair."""
 import pytest
 
-from teamserver import model as M
+from teamserver.knowledge import model as M
 from teamserver.server import ServerConfig
 from tests.support.teamserver import RS_2016, Lockstep, production_setup, task_kinds
 

@@ -2,7 +2,6 @@
 import pytest
 
 from rll_bt import rules
-from teamserver import model as M
 from teamserver.exploration.strategies import (
     Algorithm1,
     Algorithm1Paper,
@@ -12,7 +11,8 @@ from teamserver.exploration.strategies import (
     make_strategy,
 )
 from teamserver.exploration.view import ExplorationView, opposite_zone
-from teamserver.kb import KnowledgeBase
+from teamserver.knowledge import model as M
+from teamserver.knowledge.kb import KnowledgeBase
 
 P16 = rules.profile("rcll2016")
 CYAN_ZONES = list(range(1, 13))

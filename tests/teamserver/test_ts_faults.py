@@ -1,5 +1,5 @@
 """Faults: robots that drop out and come back, a team server killed and restarted."""
-from teamserver import model as M
+from teamserver.knowledge import model as M
 from teamserver.server import ServerConfig
 from tests.support.teamserver import Lockstep, production_setup, task_kinds
 

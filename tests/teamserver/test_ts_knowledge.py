@@ -3,10 +3,10 @@ import pytest
 
 from rll_bt import rules
 from rll_bt.errors import UserError
-from teamserver import model as M
-from teamserver.fusion import DiscreteBelief, PoseBelief
-from teamserver.kb import KnowledgeBase
-from teamserver.store import Store
+from teamserver.knowledge import model as M
+from teamserver.knowledge.fusion import DiscreteBelief, PoseBelief
+from teamserver.knowledge.kb import KnowledgeBase
+from teamserver.knowledge.store import Store
 
 P16 = rules.profile("rcll2016")
 

@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 
-from teamserver import model as M
 from teamserver import parking
+from teamserver.knowledge import model as M
 from tests.support.teamserver import Lockstep, production_setup, task_kinds
 
 

@@ -5,7 +5,7 @@ import pytest
 
 from rll_bt import rules
 from rll_bt.clock import SimClock
-from teamserver import model as M
+from teamserver.knowledge import model as M
 from teamserver.planning.domain import Progress
 from teamserver.planning.estimate import SimRobot
 from teamserver.planning.htn import Domain, Par, Planner, PlanningFailed, Seq

@@ -1,7 +1,7 @@
 """Production against scripted stations: deliveries inside the order's window, lost
 workpieces a station never took, stations left PREPARED with a stale instruction,
 robots left holding what they cannot use yet, places the robots keep failing at."""
-from teamserver import model as M
+from teamserver.knowledge import model as M
 from tests.support.teamserver import Lockstep, play, production_setup
 
 

@@ -8,12 +8,12 @@ from rll_bt.cli import main
 from rll_bt.clock import SimClock
 from rll_bt.comm import MessageRegistry
 from rll_bt.contracts import TeamServerOptions
-from teamserver import model as M
 from teamserver.caps import FREE
 from teamserver.cli import PLANNER_NAMES
 from teamserver.game import InProcessTeamServer
 from teamserver.health import StationHealth
-from teamserver.kb import KnowledgeBase
+from teamserver.knowledge import model as M
+from teamserver.knowledge.kb import KnowledgeBase
 from teamserver.planning.planner import PLANNERS, GreedyPlanner, ProductionPlanner, make_planner
 from teamserver.server import ServerConfig
 from tests.support.teamserver import Lockstep, play, production_setup

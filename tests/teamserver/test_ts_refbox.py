@@ -6,9 +6,9 @@ from rll_bt import msgs, rules
 from rll_bt.cli import main
 from rll_bt.clock import SimClock
 from rll_bt.comm import MessageRegistry
-from teamserver import model as M
-from teamserver.kb import KnowledgeBase
-from teamserver.refbox import RefboxClient
+from teamserver.knowledge import model as M
+from teamserver.knowledge.kb import KnowledgeBase
+from teamserver.links.refbox import RefboxClient
 from tests.support.teamserver import TEAM, Lockstep
 
 

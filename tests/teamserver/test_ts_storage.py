@@ -6,7 +6,7 @@ import math
 import pytest
 
 from rll_bt import rules
-from teamserver import model as M
+from teamserver.knowledge import model as M
 from teamserver.planning.domain import Progress
 from teamserver.planning.estimate import SimRobot
 from teamserver.planning.htn import PlanningFailed

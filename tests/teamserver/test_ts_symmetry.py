@@ -1,9 +1,9 @@
 """The symmetry sanity check and what gets reported."""
 from rll_bt import rules
-from teamserver import model as M
 from teamserver.exploration.report import Reporter
 from teamserver.exploration.symmetry import consistent_set
-from teamserver.kb import KnowledgeBase
+from teamserver.knowledge import model as M
+from teamserver.knowledge.kb import KnowledgeBase
 
 P16, P25 = rules.profile("rcll2016"), rules.profile("rcll2025")
 

@@ -15,10 +15,10 @@ import math
 from rll_bt import msgs
 from rll_bt.rules import CYAN, Profile, machine_team, machine_type
 
-from . import model as M
-from .kb import KnowledgeBase
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
 
-log = logging.getLogger("teamserver.agents")
+log = logging.getLogger("teamserver.links.agents")
 
 LIGHT_BITS = (("GREEN", 1), ("YELLOW", 2), ("RED", 4))
 TEAM_VALUE = {"CYAN": 0, "MAGENTA": 1}

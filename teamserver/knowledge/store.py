@@ -37,7 +37,7 @@ CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 
 
 class Store:
-    """The database behind a :class:`~teamserver.kb.KnowledgeBase`."""
+    """The database behind a :class:`~teamserver.knowledge.kb.KnowledgeBase`."""
 
     def __init__(self, path: str | Path = ":memory:", *, readonly: bool = False):
         self.path = str(path)

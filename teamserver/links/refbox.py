@@ -20,10 +20,10 @@ from typing import Any
 from rll_bt import msgs
 from rll_bt.rules import CYAN, MAGENTA, PREFIX, Profile
 
-from . import model as M
-from .kb import REFBOX, KnowledgeBase
+from ..knowledge import model as M
+from ..knowledge.kb import REFBOX, KnowledgeBase
 
-log = logging.getLogger("teamserver.refbox")
+log = logging.getLogger("teamserver.links.refbox")
 
 PHASES = {0: "PRE_GAME", 10: "SETUP", 20: "EXPLORATION", 30: "PRODUCTION", 40: "POST_GAME"}
 STATES = {0: "INIT", 1: "WAIT_START", 2: "RUNNING", 3: "PAUSED"}
