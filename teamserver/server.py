@@ -27,20 +27,23 @@ from rll_bt.clock import Clock
 from rll_bt.comm.transport import CONNECTED, DISCONNECTED
 from rll_bt.rules import CYAN, MAGENTA, PREFIX, Profile
 
-from .dispatch import DispatchConfig, Dispatcher
-from .exploration.lookout import LOOK, Lookout, is_look
+from .dispatch.config import DispatchConfig
+from .dispatch.dispatcher import Dispatcher
+from .exploration.explorer import Explorer
+from .exploration.lookout import Lookout
 from .exploration.report import Reporter
 from .exploration.strategies import DEFAULT_THRESH, make_strategy
 from .exploration.symmetry import consistent_set
-from .exploration.view import ExplorationView
 from .knowledge import model as M
 from .knowledge.kb import KnowledgeBase
 from .knowledge.store import Store
 from .links.agents import AgentLink
 from .links.refbox import RefboxClient
+from .links.tasks import TaskLink
 from .planning.estimate import Durations
 from .planning.planner import StoragePolicy, make_planner
-from .production import ProductionManager
+from .production.feeding import FeedMonitor
+from .production.manager import ProductionManager
 
 log = logging.getLogger("teamserver")
 
@@ -101,6 +104,7 @@ class TeamServer:
         self.kb = KnowledgeBase.load(self.profile, Store(state))
         self.refbox = RefboxClient(self.kb, team_name, clock=clock)
         self.link = AgentLink(self.kb, clock)
+        self.tasks = TaskLink(self.kb, self.link, self.refbox, self.send_agent, self.send_refbox)
         self.strategy = make_strategy(self.config.strategy, self.config.seed,
                                       self.config.explore_thresh, oracle)
         self.planner = make_planner(self.config.planner, self.profile, "C",
@@ -112,8 +116,7 @@ class TeamServer:
                                        else {"storage": self.config.storage}))
         self.production: ProductionManager | None = None
         self.dispatcher: Dispatcher | None = None
-        self.reporter: Reporter | None = None
-        self.lookout: Lookout | None = None
+        self.explorer: Explorer | None = None
         self._replan = True
         self._last = {"plan": -1e9, "report": -1e9, "phase": -1e9, "map": -1e9, "beacon": -1e9}
         self._map_bytes = b""
@@ -134,16 +137,23 @@ class TeamServer:
         return self.kb.get("team_color")
 
     def _colour_known(self, color: str) -> None:
+        """Our colour is known: build production, dispatch and exploration for it."""
         prefix = PREFIX[color]
+        cfg = self.config
         self.planner.prefix = prefix
-        self.production = ProductionManager(self.kb, self.planner, prefix,
-                                            cs_caps=self.config.cs_caps,
-                                            max_products=self.config.max_products,
-                                            clock=self.clock, prefill=self.config.prefill_caps)
-        self.dispatcher = Dispatcher(self.kb, self.production, self.clock, self.config.dispatch)
-        self.reporter = Reporter(self.profile, prefix, thresh=self.config.explore_thresh,
-                                 margin=self.config.report_margin)
-        self.lookout = Lookout(self.profile, prefix, thresh=self.config.explore_thresh)
+        self.production = ProductionManager(self.kb, self.planner, prefix, cs_caps=cfg.cs_caps,
+                                            max_products=cfg.max_products, clock=self.clock,
+                                            prefill=cfg.prefill_caps)
+        feeds = FeedMonitor(self.kb, self.clock, self.production.repairs,
+                            self.production.cleanup, cfg.dispatch.feed_confirm)
+        self.dispatcher = Dispatcher(self.kb, self.production, feeds, self.clock, self.tasks,
+                                     cfg.dispatch)
+        self.explorer = Explorer(
+            self.kb, self.clock, self.strategy,
+            Reporter(self.profile, prefix, thresh=cfg.explore_thresh, margin=cfg.report_margin),
+            Lookout(self.profile, prefix, thresh=cfg.explore_thresh), self.refbox,
+            self.dispatcher.fleet, self.tasks, self.send_refbox,
+            report_period=cfg.report_period, on_end=self._map_now)
         if self.refbox_link is not None:
             self.refbox_link.set_team(color, self.key)
 
@@ -156,14 +166,14 @@ class TeamServer:
         if self.dispatcher is None:
             self._periodic()
             return
-        if self.dispatcher.check_heartbeats():
+        if self.dispatcher.dropouts.check_heartbeats():
             self._replan = True
         if self.refbox.running():
-            if self._exploration_mode():
-                self._explore()
+            if self.explorer.active():
+                self.explorer.explore()
             elif self.refbox.phase == "PRODUCTION":
                 self._produce()
-        self._flush()
+        self.tasks.flush()
         self._periodic()
 
     # -- refbox ------------------------------------------------------------------------------
@@ -181,12 +191,12 @@ class TeamServer:
         elif ev.kind == "phase":
             self._last["phase"] = -1e9          # tell the robots at once
             self._replan = True
-            if self.dispatcher is not None and not self._exploration_mode():
-                self._end_exploration()
+            if self.dispatcher is not None and not self.explorer.active():
+                self.explorer.end()
         elif ev.kind == "station":
             name, old, new = ev.data
             if self.production is not None and new == "BROKEN" and old != "BROKEN":
-                self.production.station_broke(name)
+                self.production.repairs.station_broke(name)
             if new in ("BROKEN", "DOWN") or old in ("BROKEN", "DOWN"):
                 self._replan = True
         elif ev.kind in ("orders", "rings"):
@@ -237,8 +247,8 @@ class TeamServer:
                 status = self.link.ms.enum("TaskResult.Status").Name(m.status)
                 error = self.link.ms.enum("ErrorCode").Name(m.error)
                 holding = m.HasField("holding") if status != "RUNNING" else None
-                self.dispatcher.on_result(r.number, int(m.task_id), status, error, holding,
-                                          m.text)
+                self.dispatcher.results.on_result(r.number, int(m.task_id), status, error,
+                                                  holding, m.text)
                 if status in ("FAILED", "SUCCEEDED", "CANCELLED"):
                     self._replan = self._replan or status != "SUCCEEDED"
         elif name == "MachineObservation":
@@ -267,158 +277,40 @@ class TeamServer:
         elif robot.peer is not None:
             self.agents.send(msg, to=robot.peer)
 
-    # -- exploration -----------------------------------------------------------------------------
-    def _exploration_mode(self) -> bool:
-        if not self.refbox.exploring():
-            return False
-        if self.refbox.phase == "EXPLORATION":
-            return True
-        # exploring inside PRODUCTION (2017+): until everything is reported
-        own = self.profile.machines(self.color)
-        reported = self.kb.reported
-        return not all(m in reported and "zone" in reported[m] for m in own)
-
-    def exploration_zones(self) -> list[int]:
-        zones = self.kb.get("exploration_zones")
-        if zones:
-            return [int(z) for z in zones]
-        return self.profile.machine_zones(self.color)
-
-    def _explore(self) -> None:
-        busy = {int(t.params["zone"]) for t in self.kb.open_tasks()
-                if t.kind == M.EXPLORE_ZONE and t.state == M.ASSIGNED}
-        self._redirect_blind(busy)
-        for r in self.dispatcher.idle_robots():
-            view = ExplorationView.from_kb(self.kb, self.color, self.exploration_zones(), busy)
-            d = self.strategy.next_zone(view, r.pose)
-            if d is None:
-                continue
-            t = self.dispatcher.assign_explore(r, d.zone)
-            t.params["branch"] = d.branch
-            self.kb.save_task(t)
-            busy.add(d.zone)
-        now = self.clock.now()
-        if now - self._last["report"] >= self.config.report_period:
-            self._last["report"] = now
-            self.report()
-
-    def _redirect_blind(self, busy: set[int]) -> None:
-        """Turn robots away from zones their strategy chose blindly once it has
-        a better one for them (``Strategy.redirect``); looked at whenever an
-        observation came in.  The freed robots get their new zone at once."""
-        blind = [t for t in self.kb.open_tasks() if t.kind == M.EXPLORE_ZONE
-                 and t.state == M.ASSIGNED and not is_look(t)]
-        if not blind or self._last.get("redirect") == self.kb.observation_count:
-            return
-        self._last["redirect"] = self.kb.observation_count
-        cs = consistent_set(self.profile, self.kb.machines)
-        claimed: set[int] = set()
-        for t in blind:
-            zone = int(t.params["zone"])
-            r = self.kb.robots.get(t.robot) if t.robot is not None else None
-            view = ExplorationView.from_kb(self.kb, self.color, self.exploration_zones(),
-                                           (busy | claimed) - {zone}, cs)
-            d = self.strategy.redirect(view, t.params.get("branch"), r.pose if r else None)
-            if d is not None:
-                self._cancel_explore(t, f"{self.profile.zone_name(d.zone)} was observed")
-                busy.discard(zone)
-                claimed.add(d.zone)
-
-    def report(self) -> list[dict]:
-        """Report what is due (see :mod:`teamserver.exploration.report`); returns the entries."""
-        cs = consistent_set(self.profile, self.kb.machines)
-        new = self.reporter.new_values(cs, self.kb.reported, self.refbox.exploration_left(),
-                                       self.refbox.type_string)
-        for name, vals in new.items():
-            self.kb.mark_reported(name, vals)
-        entries = self.reporter.entries(self.kb.reported)
-        if entries and self.color is not None:
-            self.send_refbox(self.refbox.machine_report(entries))
-        return entries
-
-    def _end_exploration(self) -> None:
-        for t in self.kb.open_tasks():
-            if t.kind == M.EXPLORE_ZONE:
-                self._cancel_explore(t, "exploration is over")
-        self._last["map"] = -1e9
-
-    def _cancel_explore(self, t: M.Task, reason: str) -> None:
-        if t.state == M.ASSIGNED:
-            self.dispatcher.outbox.append(("cancel", t, reason))
-        r = self.kb.robots.get(t.robot) if t.robot is not None else None
-        if r is not None and r.task_id == t.id:
-            r.task_id = None
-            self.kb.save_robot(r)
-        t.state = M.CANCELLED
-        self.kb.save_task(t)
-
-    def _look_for_rotations(self) -> None:
-        """2017+, in the exploration window after every zone is reported: keep
-        reporting, and send a robot to look at a station whose rotation is
-        still lacking (see :mod:`teamserver.exploration.lookout`)."""
-        if not self.refbox.exploring():
-            if any(is_look(t) for t in self.kb.open_tasks()):
-                self._end_exploration()
-            return
-        now = self.clock.now()
-        if now - self._last["report"] >= self.config.report_period:
-            self._last["report"] = now
-            self.report()
-        cs = self.lookout.consistent(self.kb)
-        for t in self.lookout.done_looks(self.kb, cs):
-            self._cancel_explore(t, f"the rotation of {t.params[LOOK]} is known")
-        for target in self.lookout.targets(self.kb, cs, self.refbox.exploration_left()):
-            r = self.lookout.pick_robot(self.dispatcher.available_robots(), target, self.kb)
-            if r is None:
-                break
-            t = self.dispatcher.assign_explore(r, target.zone)
-            t.params.update({LOOK: target.machine, "branch": "look",
-                             "viewpoints": [list(v) for v in target.viewpoints]})
-            self.kb.save_task(t)
-
     # -- production -----------------------------------------------------------------------------
     def _produce(self) -> None:
-        if any(t.kind == M.EXPLORE_ZONE and not is_look(t) for t in self.kb.open_tasks()):
-            self._end_exploration()
+        d, pm = self.dispatcher, self.production
+        if self.explorer.exploring_blindly():
+            self.explorer.end()
         now = self.clock.now()
         gt = self.refbox.game_time()
         if self._replan or now - self._last["plan"] >= self.config.replan_period:
             horizon = self.profile.phases.production
-            cancels, choice = self.production.plan(gt, horizon)
+            cancels, choice = pm.plan(gt, horizon)
             for t in cancels:
-                self.dispatcher.outbox.append(("cancel", t, "plan repaired"))
+                self.tasks.cancel(t, "plan repaired")
             self.last_choice = choice
             self._replan, self._last["plan"] = False, now
-        if self.dispatcher.feeds.verify():
-            cancels, _ = self.production.plan(gt, self.profile.phases.production)
+        if d.feeds.verify():
+            cancels, _ = pm.plan(gt, self.profile.phases.production)
             for t in cancels:
-                self.dispatcher.outbox.append(("cancel", t, "its workpiece was lost"))
+                self.tasks.cancel(t, "its workpiece was lost")
             self._last["plan"] = now
-        self.dispatcher.feeds.unstick()
-        self.dispatcher.release_unusable()
-        self.dispatcher.discard_orphans()
-        self._look_for_rotations()
-        for t in self.dispatcher.assign(gt):
+        d.feeds.unstick()
+        d.dropouts.release_unusable()
+        d.discards.discard_orphans()
+        self.explorer.look_for_rotations()
+        for t in d.matcher.assign(gt):
             if t.kind == M.RETRIEVE_CAP:
-                n = self.kb.next_id(f"shelf:{t.machine}")
-                t.params["shelf_slot"] = (n - 1) % 3
-                self.kb.save_task(t)
-        self.dispatcher.prepare(self.refbox.running(), gt)
-        self.dispatcher.park()
-
-    def _flush(self) -> None:
-        for item in self.dispatcher.outbox:
-            kind, t = item[0], item[1]
-            robot = self.kb.robots.get(t.robot) if t.robot is not None else None
-            if kind == "task":
-                self.send_agent(robot, self.link.task_msg(t, self.color))
-            elif kind == "cancel":
-                self.send_agent(robot, self.link.cancel_msg(t, item[2]))
-            elif kind == "prepare":
-                self.send_refbox(self.refbox.prepare_machine(t.prepare))
-        self.dispatcher.outbox.clear()
+                pm.caps.choose_shelf_slot(t)
+        d.preparer.prepare(self.refbox.running(), gt)
+        d.parking.park()
 
     # -- periodic messages ------------------------------------------------------------------------
+    def _map_now(self) -> None:
+        """Send the machine map at the end of this tick if it changed."""
+        self._last["map"] = -1e9
+
     def _phase_msg(self):
         return self.link.game_phase_msg(self.refbox.phase, self.refbox.state,
                                         self.refbox.game_time(), self.color,

@@ -340,7 +340,7 @@ def play(ls, until, *, t0=0.0, dt=0.5, steps=800, fail=None, drop=None, drive=3)
     answered = {a.number: 0 for a in ls.agents}
     doing: dict[int, list] = {a.number: [] for a in ls.agents}
     gt = t0
-    pos = ls.server.production.positions
+    pos = ls.server.production.world.positions
     for _ in range(steps):
         gt += dt
         ls.refbox.game_state("PRODUCTION", "RUNNING", gt)

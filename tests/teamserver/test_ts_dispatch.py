@@ -241,9 +241,9 @@ def test_work_that_frees_a_stuck_robot_goes_first():
     ls.step(n=3)
     [retrieve] = [t for t in kb.tasks.values() if t.kind == M.RETRIEVE_CAP]
     assert retrieve.state == M.PENDING                              # C-CS2 is DOWN
-    assert retrieve.id in d.unblocking(0.0)
+    assert retrieve.id in d.holding.unblocking(0.0)
     # a second order: its cap retrieval at C-CS1 is right next to the free robot ...
-    x, y = ls.server.production.positions()["C-CS1"][:2]
+    x, y = ls.server.production.world.positions()["C-CS1"][:2]
     ls.agents[1].pose = (x + 0.8, y, 0.0)
     ls.agents[1].status()
     grey = ls.refbox.ms.enum("CapColor").Value("CAP_GREY")

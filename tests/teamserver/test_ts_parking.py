@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 
-from teamserver import parking
+from teamserver.dispatch import parking
 from teamserver.knowledge import model as M
 from tests.support.teamserver import Lockstep, production_setup, task_kinds
 

@@ -83,7 +83,7 @@ def test_a_station_waiting_with_another_gate_is_fed_a_spare_base_first():
     ls.step(n=3)
     # the DS waits with gate 1 of a delivery that is over; order 2 needs gate 2
     for p in list(kb.products.values()):
-        srv.production.cancel_open(p)
+        srv.production.products.cancel_open(p)
         p.state = "ABANDONED"
         kb.save_product(p)
     old = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
@@ -158,7 +158,7 @@ def test_one_robot_stays_free_while_the_others_hold_products_for_later_windows()
     [pickup] = [t for t in kb.tasks_of(third.tasks) if t.state == M.PENDING
                 and t.kind == M.GET_WORKPIECE]
     assert pickup.machine[2:4] == "CS"                 # the third waits at the CS output
-    assert ls.server.dispatcher.stuck(130.0) == 2
+    assert ls.server.dispatcher.holding.stuck(130.0) == 2
     assert play(ls, delivered(ls, 2, 3, 4), t0=130, steps=300, dt=1.0)
     assert all(gt >= 200 for gt, _ in ls.stations.deliveries)
 
@@ -178,7 +178,7 @@ def test_a_slide_the_robots_keep_failing_at_is_planned_around():
     assert play(ls, delivered(ls, 1), fail=fail)
     play(ls, lambda gt: False, fail=fail, steps=100, t0=ls.server.refbox.game_time())
     assert len(tries) == 4                                   # then the slide is left alone
-    assert "C-RS2:SLIDE" in ls.server.production.unusable()
+    assert "C-RS2:SLIDE" in ls.server.production.world.unusable()
     [c1] = [p for p in kb.products.values() if p.order_id == 5]
     assert c1.state == "ABANDONED"
 
@@ -219,11 +219,11 @@ def test_a_full_slide_takes_no_more_bases_until_a_mount_uses_some():
     [p] = [p for p in kb.products.values() if p.order_id == 5]
     put = next(t for t in kb.tasks_of(p.tasks) if t.kind == M.PUT_WORKPIECE)
     mount = next(t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_RING)
-    assert not pm.slide_ready(put) and pm.slide_ready(mount)
+    assert not pm.slides.slide_ready(put) and pm.slides.slide_ready(mount)
     ls.refbox.machines(ls.station_states, {"C-RS1": ("RING_BLUE", "RING_GREEN")},
                        **{"C-RS1": {"loaded_with": 1}})
     ls.step()
-    assert pm.slide_ready(put) and not pm.slide_ready(mount)
+    assert pm.slides.slide_ready(put) and not pm.slides.slide_ready(mount)
 
 
 def test_a_cap_retrieved_ahead_that_the_station_never_took_blocks_nothing():
@@ -260,6 +260,6 @@ def test_a_cap_retrieved_ahead_that_the_station_never_took_blocks_nothing():
     x = kb.products[cleanup]
     assert x.state == "ABANDONED"
     assert not [t for t in kb.tasks_of(x.tasks) if t.state in M.OPEN_STATES]
-    assert cleanup not in ls.server.production.locks.values()
-    assert cs not in ls.server.production.cap_buffer          # no cap there to mount
+    assert cleanup not in ls.server.production.locks.owners.values()
+    assert cs not in ls.server.production.buffers.owners          # no cap there to mount
     assert [g for _, g in ls.stations.deliveries] == [1]

@@ -8,13 +8,13 @@ from rll_bt.cli import main
 from rll_bt.clock import SimClock
 from rll_bt.comm import MessageRegistry
 from rll_bt.contracts import TeamServerOptions
-from teamserver.caps import FREE
 from teamserver.cli import PLANNER_NAMES
 from teamserver.game import InProcessTeamServer
-from teamserver.health import StationHealth
 from teamserver.knowledge import model as M
 from teamserver.knowledge.kb import KnowledgeBase
 from teamserver.planning.planner import PLANNERS, GreedyPlanner, ProductionPlanner, make_planner
+from teamserver.production.caps import FREE
+from teamserver.production.health import StationHealth
 from teamserver.server import ServerConfig
 from tests.support.teamserver import Lockstep, play, production_setup
 
@@ -24,15 +24,15 @@ def test_a_delivery_the_refbox_never_counted_opens_its_order_again():
     production_setup(ls, [{"id": 1}, {"id": 3, "quantity_requested": 2}])
     pm, kb = ls.server.production, ls.server.kb
     for p in list(kb.products.values()):
-        pm.cancel_open(p)
+        pm.products.cancel_open(p)
         p.state = "ABANDONED"
         kb.save_product(p)
     kb.save_product(M.Product("D1", 1, state="DELIVERED", delivered_at=100.0))
     kb.save_product(M.Product("D2", 3, state="DELIVERED", delivered_at=100.0))
     kb.save_product(M.Product("A1", 3))
-    w = pm.world(110.0, 900.0)
+    w = pm.world.build(110.0, 900.0)
     assert w.in_progress == {1: 1, 3: 2} and w.making == 1 and w.slots == 2
-    w = pm.world(130.0, 900.0)            # 30 s on, the refbox counted neither
+    w = pm.world.build(130.0, 900.0)            # 30 s on, the refbox counted neither
     assert w.in_progress == {3: 1} and w.slots == 2
     assert {c.order.id for c in pm.planner.candidates(w)} == {1, 3}
 
@@ -44,10 +44,10 @@ def test_caps_are_retrieved_ahead_and_mounted_by_the_next_product():
     [ahead] = [p for p in kb.products.values() if p.order_id == 0]
     kinds = [(t.kind, t.machine) for t in kb.tasks_of(ahead.tasks)]
     assert kinds == [(M.RETRIEVE_CAP, "C-CS1"), (M.GET_WORKPIECE, "C-CS1"), (M.DISCARD, None)]
-    assert pm.prefill(5.0, 900.0) == []                       # one at a time
-    assert play(ls, lambda gt: pm.cap_buffer.get("C-CS1") == FREE and ahead.state != "ACTIVE"
+    assert pm.caps.prefill(5.0, 900.0) == []                       # one at a time
+    assert play(ls, lambda gt: pm.buffers.owners.get("C-CS1") == FREE and ahead.state != "ACTIVE"
                 and kb.products[ahead.id].state == "DELIVERED")
-    assert not pm.locks.get("C-CS1") and not pm.locks.get("C-CS1#cap")
+    assert not pm.locks.owners.get("C-CS1") and not pm.locks.owners.get("C-CS1#cap")
     # a grey order comes: its product mounts the cap that waits, it retrieves none
     bc, cc = ls.refbox.ms.enum("BaseColor"), ls.refbox.ms.enum("CapColor")
     ls.order_msgs.append(dict(ls.order_msgs[0], id=2, delivery_gate=2,
@@ -58,16 +58,16 @@ def test_caps_are_retrieved_ahead_and_mounted_by_the_next_product():
     steps = kb.tasks_of(grey.tasks)
     assert {t.state for t in steps if t.kind == M.RETRIEVE_CAP} == {M.CANCELLED}
     assert [t.machine for t in steps if t.kind == M.MOUNT_CAP] == ["C-CS1"]
-    assert pm.cap_buffer["C-CS1"] == grey.id
+    assert pm.buffers.owners["C-CS1"] == grey.id
 
 
 def test_no_cap_is_retrieved_ahead_without_orders_or_near_the_end():
     ls = Lockstep()
     production_setup(ls, [])
     pm = ls.server.production
-    assert pm.prefill(10.0, 900.0) == []                      # nothing to make yet
+    assert pm.caps.prefill(10.0, 900.0) == []                      # nothing to make yet
     production_setup(ls, [{"id": 1}])
-    assert pm.prefill(850.0, 900.0) == []
+    assert pm.caps.prefill(850.0, 900.0) == []
 
 
 def test_a_cap_is_retrieved_once_the_ring_mounts_before_it_are_under_way():
@@ -78,13 +78,13 @@ def test_a_cap_is_retrieved_once_the_ring_mounts_before_it_are_under_way():
     [p] = [p for p in kb.products.values() if p.order_id == 6]
     [retrieve] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP]
     mounts = [t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_RING]
-    assert not pm.cap_due(retrieve) and not ls.server.dispatcher.ready(retrieve, 1.0)
+    assert not pm.caps.cap_due(retrieve) and not ls.server.dispatcher.readiness.ready(retrieve, 1.0)
     mounts[0].state = M.DONE
     kb.save_task(mounts[0])
-    assert not pm.cap_due(retrieve)
+    assert not pm.caps.cap_due(retrieve)
     mounts[1].state = M.ASSIGNED
     kb.save_task(mounts[1])
-    assert pm.cap_due(retrieve)
+    assert pm.caps.cap_due(retrieve)
 
 
 def test_a_cap_that_feeds_a_slide_is_retrieved_at_once():
@@ -94,7 +94,7 @@ def test_a_cap_that_feeds_a_slide_is_retrieved_at_once():
     kb = ls.server.kb
     [p] = [p for p in kb.products.values() if p.order_id == 5]
     [retrieve] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP]
-    assert ls.server.production.cap_due(retrieve)
+    assert ls.server.production.caps.cap_due(retrieve)
 
 
 def test_a_place_that_keeps_failing_is_paused_and_a_success_clears_the_count():
@@ -164,14 +164,14 @@ def test_a_cap_retrieved_ahead_goes_to_a_product_planned_before_it(order, rest):
     production_setup(ls, [order], states={"C-CS1": "DOWN"})     # grey cap (C-CS1)
     pm, kb = ls.server.production, ls.server.kb
     [p] = [p for p in kb.products.values() if p.order_id == order["id"]]
-    retrieve, pick, after = pm._cap_chain(p, "C-CS1")
+    retrieve, pick, after = pm.caps.cap_chain(p, "C-CS1")
     ls.station_states["C-CS1"] = "IDLE"
     ls.refbox.machines(ls.station_states)
     assert after.kind == rest
-    pm._take_cap("C-CS1", "free")                       # then a cap is retrieved ahead
-    assert not ls.server.dispatcher.ready(retrieve, 1.0)  # the CS cannot retrieve another
-    assert pm.adopt_free_caps() == [p]
-    assert pm.cap_buffer["C-CS1"] == p.id
+    pm.buffers.take("C-CS1", "free")                       # then a cap is retrieved ahead
+    assert not ls.server.dispatcher.readiness.ready(retrieve, 1.0)  # the CS cannot retrieve another
+    assert pm.caps.adopt_free_caps() == [p]
+    assert pm.buffers.owners["C-CS1"] == p.id
     assert {kb.tasks[t.id].state for t in (retrieve, pick)} == {M.CANCELLED}
     [mount] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_CAP]
     if rest == M.DISCARD:
@@ -225,10 +225,10 @@ def test_a_cap_waiting_ahead_is_not_given_to_a_product_far_from_its_cap():
                                "cap_color": 2}], states={"C-CS1": "DOWN"})
     pm, kb = ls.server.production, ls.server.kb
     [p] = [p for p in kb.products.values() if p.order_id == 6]
-    pm._take_cap("C-CS1", FREE)
-    assert pm.adopt_free_caps() == []          # two rings to go: it would block C-CS1
+    pm.buffers.take("C-CS1", FREE)
+    assert pm.caps.adopt_free_caps() == []          # two rings to go: it would block C-CS1
     for t in kb.tasks_of(p.tasks):
         if t.kind == M.MOUNT_RING:
             t.state = M.DONE
             kb.save_task(t)
-    assert pm.adopt_free_caps() == [p] and pm.cap_buffer["C-CS1"] == p.id
+    assert pm.caps.adopt_free_caps() == [p] and pm.buffers.owners["C-CS1"] == p.id

@@ -225,7 +225,7 @@ def estimate(ls, begin):
     """(ready, min_wait) the server's planner sees now for a C0 of order 3."""
     pm = ls.server.production
     o = order(3, begin=begin, end=begin + 300)
-    w = pm.world(T0, 1200.0)
+    w = pm.world.build(T0, 1200.0)
     return threshold(ls.server.planner, o, w)
 
 
@@ -252,7 +252,7 @@ def test_an_early_product_waits_in_the_storage_station_not_in_a_gripper():
         wp = kb.workpieces.get(p.workpiece or "")
         if wp is not None and wp.location == "C-SS:SHELF":
             seen.append((gt, [r.number for r in kb.robots.values() if r.holding == wp.id]))
-            shelf.append((gt, dict(ls.stations.shelf), pm.ss_places))
+            shelf.append((gt, dict(ls.stations.shelf), pm.shelf.places))
         return delivered(ls, 3)(gt)
     assert play(ls, waiting, t0=T0, steps=700)
     # stored soon after it was made, still there until shortly before the window
@@ -266,7 +266,7 @@ def test_an_early_product_waits_in_the_storage_station_not_in_a_gripper():
     [(gt, oid)] = st.deliveries
     assert oid == 3 and 400 <= gt <= 430                           # delivered as it opened
     assert ls.order_msgs[0]["quantity_delivered_cyan"] == 1
-    assert p.repairs == 0 and pm.ss_places == {} and st.shelf == {}
+    assert p.repairs == 0 and pm.shelf.places == {} and st.shelf == {}
 
 
 def test_a_product_whose_window_opens_soon_is_delivered_directly():
@@ -274,7 +274,7 @@ def test_a_product_whose_window_opens_soon_is_delivered_directly():
     setup_2025(ls)
     send_orders(ls, [{"id": 3, "delivery_period_begin": 240, "delivery_period_end": 500}])
     assert play(ls, delivered(ls, 3), t0=T0, steps=400)
-    assert ss_prepares(ls) == [] and ls.server.production.ss_places == {}
+    assert ss_prepares(ls) == [] and ls.server.production.shelf.places == {}
     [(gt, oid)] = ls.stations.deliveries
     assert oid == 3 and gt >= 240
 
@@ -327,6 +327,6 @@ def test_a_product_brought_out_but_not_picked_up_is_taken_from_the_output():
     assert [op for _, op, _, _ in ls.stations.ss_ops] == ["STORE", "RETRIEVE"]
     last = [t for t in kb.tasks_of(p.tasks) if t.machine == "C-SS" and t.state == M.DONE]
     assert [t.kind for t in last] == [M.PUT_WORKPIECE, M.GET_WORKPIECE]
-    assert last[-1].prepare is None and ls.server.production.ss_places == {}
+    assert last[-1].prepare is None and ls.server.production.shelf.places == {}
     [(gt, oid)] = ls.stations.deliveries
     assert oid == 3 and 400 <= gt <= 700

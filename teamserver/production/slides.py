@@ -8,22 +8,21 @@ base fell beside the slide) and another product's mount may take ours.
 So
 
 - a ring mount is sent only while the slide holds what its colour costs
-  (``loaded_with`` of MachineInfo, :meth:`SlidesMixin.slide_ready`), and a
+  (``loaded_with`` of MachineInfo, :meth:`Slides.slide_ready`), and a
   base is put on a slide only while it has room (:data:`SLIDE_MAX`; one
   more breaks the station);
 - a mount whose bases are all put but missing from the slide for
   ``settle`` seconds gets the missing ones fetched from the BS
-  (:meth:`SlidesMixin.top_up_slides`).
-
-A mixin of :class:`~teamserver.production.ProductionManager` (it needs
-``kb``, ``prefix``, ``clock``, ``active_products()`` and ``orders``).
+  (:meth:`Slides.top_up_slides`).
 """
 from __future__ import annotations
 
 import logging
 
-from .knowledge import model as M
-from .planning.domain import EXTRA
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+from ..planning.domain import EXTRA
+from .products import Products
 
 log = logging.getLogger("teamserver.production")
 
@@ -33,8 +32,17 @@ log = logging.getLogger("teamserver.production")
 SLIDE_MAX = 3
 
 
-class SlidesMixin:
-    settle: float = 6.0         # s after the last put before a short slide is topped up
+class Slides:
+    """Ring station slides of our team (``prefix``).  ``settle``: seconds after the
+    last put before a short slide is topped up."""
+
+    def __init__(self, kb: KnowledgeBase, products: Products, *, prefix: str, clock=None,
+                 settle: float = 6.0):
+        self.kb = kb
+        self.products = products
+        self.prefix = prefix
+        self.clock = clock
+        self.settle = settle
 
     def slide_ready(self, task: M.Task) -> bool:
         """May ``task`` go now as far as slides are concerned?  A ring mount when the
@@ -60,7 +68,7 @@ class SlidesMixin:
             return []
         now = self.clock.now()
         out = []
-        for p in self.active_products():
+        for p in self.products.active():
             tasks = {t.id: t for t in self.kb.tasks_of(p.tasks)}
             for t in tasks.values():
                 if t.kind != M.MOUNT_RING or t.state != M.PENDING or self.slide_ready(t):

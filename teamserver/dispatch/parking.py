@@ -2,7 +2,10 @@
 
 An idle robot stays where its last task ended, which is in front of a
 station; the next robot sent to that station then cannot get there.  These
-functions find the robots in the way and a free spot to park each of them.
+functions find the robots in the way and a free spot to park each of them;
+:class:`Parking` sends idle robots in the way there (GO_TO tasks).  A
+parking robot counts as idle: real work cancels its GO_TO.  A failed GO_TO
+waits ``park_retry`` seconds.
 
 All positions are field-frame metres; a machine pose is (x, y, ori) with
 ``ori`` in radians (the machine frame's x axis runs from the output face to
@@ -10,6 +13,7 @@ the input face, see :mod:`rll_bt.rules.geometry`).
 """
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 
@@ -17,8 +21,12 @@ import numpy as np
 
 from rll_bt.rules import MPS, Profile
 
-from .knowledge import model as M
-from .knowledge.kb import KnowledgeBase
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+from .config import DispatchConfig
+from .fleet import Fleet
+
+log = logging.getLogger("teamserver.dispatch")
 
 #: robot centre to the station face when docked (the skills' default approach distance), m
 APPROACH_DISTANCE = 0.62
@@ -119,3 +127,58 @@ def parking_spot(pose, profile: Profile, approach: list, centres: list, others: 
     if here is not None and free[best] <= here:
         return None
     return float(pts[best, 0]), float(pts[best, 1])
+
+
+class Parking:
+    """Sends idle robots that stand in front of a station to a free spot (see the
+    module doc)."""
+
+    def __init__(self, kb: KnowledgeBase, clock, fleet: Fleet, config: DispatchConfig,
+                 parking: ParkingConfig | None = None):
+        self.kb = kb
+        self.clock = clock
+        self.fleet = fleet
+        self.config = config
+        self.parking = parking if parking is not None else ParkingConfig()
+        self._wait: dict[int, float] = {}       # robot -> server time it may park again
+
+    def failed(self, robot: M.Robot) -> None:
+        """``robot``'s GO_TO failed: it does not park again for ``park_retry`` s."""
+        self._wait[robot.number] = self.clock.now() + self.config.park_retry
+
+    def park(self) -> list[M.Task]:
+        """Send idle robots that stand in front of a station to a free spot
+        (GO_TO tasks); returns the tasks assigned now."""
+        if not self.config.park:
+            return []
+        now = self.clock.now()
+        profile = self.kb.profile
+        approach, centres = station_points(self.kb, profile)
+        if not approach:
+            return []
+        out = []
+        for r in self.fleet.idle_robots():
+            if r.pose is None or self._wait.get(r.number, -math.inf) > now:
+                continue
+            if not in_the_way(r.pose, approach, self.parking):
+                continue
+            spot = parking_spot(r.pose, profile, approach, centres,
+                                self._other_robots(r), self.parking)
+            if spot is None:
+                self._wait[r.number] = now + self.config.park_retry
+                continue
+            theta = math.atan2(spot[1] - r.pose[1], spot[0] - r.pose[0])
+            t = M.Task(self.kb.next_id("task"), M.GO_TO,
+                       {"x": spot[0], "y": spot[1], "theta": theta}, created=now)
+            self.fleet.assign(t, r)
+            log.info("robot %d parks at (%.2f, %.2f), out of the stations' way", r.number, *spot)
+            out.append(t)
+        return out
+
+    def _other_robots(self, robot: M.Robot) -> list[tuple[float, float]]:
+        """Where the other robots stand and where they park."""
+        pts = [(o.pose[0], o.pose[1]) for o in self.kb.active_robots()
+               if o.number != robot.number and o.pose is not None]
+        pts += [(float(t.params["x"]), float(t.params["y"])) for t in self.kb.open_tasks()
+                if t.kind == M.GO_TO and t.robot != robot.number]
+        return pts

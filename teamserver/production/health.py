@@ -22,10 +22,10 @@ from __future__ import annotations
 
 import logging
 
-from .knowledge import model as M
-from .knowledge.kb import KnowledgeBase
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
 
-log = logging.getLogger("teamserver.health")
+log = logging.getLogger("teamserver.production.health")
 
 #: errors that say nothing about the place (the task was stopped, or the game was)
 NEUTRAL_ERRORS = ("CANCELLED", "NOT_RUNNING", "MACHINE_BROKEN", "INVALID_TASK")

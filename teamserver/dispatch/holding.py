@@ -5,21 +5,32 @@ parts of the step are still missing, or the order's window is not open)
 is *stuck* with it: it can do nothing else until the step is ready.  When
 every robot is stuck, nobody fetches the missing parts and production
 stops (seed 7 of the rcll2016 benchmark stopped this way for its last
-420 s).  :class:`HoldingMixin` tells which pickups would leave their robot
-stuck (:meth:`~HoldingMixin.blocks`), how many robots are stuck
-(:meth:`~HoldingMixin.stuck`) and how many may be
-(:meth:`~HoldingMixin.hold_limit`).
-
-A mixin of :class:`~teamserver.dispatch.Dispatcher` (it needs ``kb``,
-``production``, ``feeds``, ``config``, ``ready()``, ``station_usable()`` and
-``deliver_from()``).
+420 s).  :class:`Holding` tells which pickups would leave their robot
+stuck (:meth:`~Holding.blocks`), how many robots are stuck
+(:meth:`~Holding.stuck`) and how many may be (:meth:`~Holding.hold_limit`),
+and which tasks free a stuck robot (:meth:`~Holding.unblocking`).
 """
 from __future__ import annotations
 
-from .knowledge import model as M
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+from ..production.feeding import FeedMonitor
+from ..production.locks import StationLocks
+from .config import DispatchConfig
+from .readiness import Readiness
 
 
-class HoldingMixin:
+class Holding:
+    """See the module doc."""
+
+    def __init__(self, kb: KnowledgeBase, readiness: Readiness, locks: StationLocks,
+                 feeds: FeedMonitor, config: DispatchConfig):
+        self.kb = kb
+        self.readiness = readiness
+        self.locks = locks
+        self.feeds = feeds
+        self.config = config
+
     @staticmethod
     def hold_limit(task: M.Task, robots: int) -> int:
         """How many robots may be left holding what they cannot use yet, counting the
@@ -49,11 +60,11 @@ class HoldingMixin:
             dep = self.kb.tasks.get(d)
             if d != pickup and (dep is None or dep.state != M.DONE):
                 return False
-        if not (self.production.lock_free(task) and self.station_usable(task.machine)
+        if not (self.locks.free_for(task) and self.readiness.station_usable(task.machine)
                 and self.feeds.accepts(task)):
             return False
         if task.kind == M.DELIVER:
-            return game_time + self.config.pickup_time >= self.deliver_from(task)
+            return game_time + self.config.pickup_time >= self.readiness.deliver_from(task)
         return True
 
     def _next_carries(self) -> dict[int, M.Task]:
@@ -71,7 +82,7 @@ class HoldingMixin:
             if t is not None and t.state == M.ASSIGNED and t.kind != M.GO_TO:
                 n += self.blocks(t, game_time)
             elif r.holding and r.number in bound:
-                n += not self.ready(bound[r.number], game_time)
+                n += not self.readiness.ready(bound[r.number], game_time)
         return n
 
     def unblocking(self, game_time: float | None) -> set[int]:
@@ -81,7 +92,7 @@ class HoldingMixin:
         out: set[int] = set()
         for r in self.kb.active_robots():
             nxt = bound.get(r.number) if r.holding else None
-            if nxt is None or self.ready(nxt, game_time):
+            if nxt is None or self.readiness.ready(nxt, game_time):
                 continue
             todo = list(nxt.deps)
             while todo:

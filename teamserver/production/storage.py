@@ -1,41 +1,34 @@
-"""The storage station (rcll2025): finished products that wait for their window.
+"""The storage station's shelf (rcll2025): where finished products wait for their window.
 
 An order's product delivered before its window opens scores nothing, so a
 product finished early must wait.  Without a storage station a robot holds
 it (and can do nothing else) or it stays on the cap station's output (and
 blocks that station).  The planner stores such a product in the SS instead
 when the wait is long enough to pay for the detour (see
-:mod:`teamserver.planning.planner` and ``docs/planning.md``); this mixin
-keeps the books:
+:mod:`teamserver.planning.planner` and ``docs/planning.md``; whether to
+store is decided again later by :mod:`.handover`).  :class:`Shelf` keeps the
+books:
 
 - each storing product gets one shelf place (shelf 0-5, slot 0-7) for its
-  STORE and RETRIEVE instructions (:meth:`StorageMixin.fill_places`): its
-  own again after a failed store, else the first place neither reserved by
+  STORE and RETRIEVE instructions (:meth:`Shelf.fill_places`): its own
+  again after a failed store, else the first place neither reserved by
   another product nor reported filled by the refbox (MachineInfo
   ``status_ss``);
 - the place is reserved until the product is retrieved; a place holding a
   workpiece nobody will fetch (an abandoned product, a spare base that
-  flushed a stale STORE) stays reserved for good;
-- once a product is finished, the choice between storing it and handing it
-  over directly is made again from the clock (:meth:`StorageMixin.redecide`):
-  at the pickup from the cap station and at every planning round while no
-  robot is on its way with it.
+  flushed a stale STORE) stays reserved for good.
 
 A stored product still counts against ``max_products``: its robot helps
 the products under way instead of one more starting (with three robots
-on four products, fewer were finished).
-
-A mixin of :class:`~teamserver.production.ProductionManager` (it needs
-``kb``, ``planner``, ``progress()``, ``world()``, ``add_network()`` and
-``restart()``).  The places live in the
-knowledge base (``ss_places``: ``"shelf,slot"`` -> product id).
+on four products, fewer were finished).  The places live in the knowledge
+base (``ss_places``: ``"shelf,slot"`` -> product id).
 """
 from __future__ import annotations
 
 import logging
 
-from .knowledge import model as M
-from .planning.htn import Network, PlanningFailed
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
 
 log = logging.getLogger("teamserver.production")
 
@@ -52,52 +45,63 @@ def stores(steps) -> bool:
                for s in steps)
 
 
-class StorageMixin:
+class Shelf:
+    """The places of storage station ``ss`` (None: the rules have none)."""
+
+    def __init__(self, kb: KnowledgeBase, ss: str | None):
+        self.kb = kb
+        self.ss = ss
+
     # -- places ---------------------------------------------------------------------
     @property
-    def ss_places(self) -> dict[str, str]:
+    def places(self) -> dict[str, str]:
+        """``"shelf,slot"`` -> the product it is reserved for (a copy)."""
         return dict(self.kb.get("ss_places", {}))
 
-    def _set_ss_places(self, places: dict[str, str]) -> None:
+    def _set(self, places: dict[str, str]) -> None:
         self.kb.set("ss_places", places)
+
+    def reserve(self, shelf: int, slot: int, product_id: str) -> None:
+        """Reserve a place for ``product_id`` (for good, unless it is freed)."""
+        self._set({**self.places, place_key(shelf, slot): product_id})
 
     def storage_place(self, product_id: str) -> tuple[int, int] | None:
         """The shelf place for ``product_id`` (reserved now), None when all are taken."""
         mine = self.place_of(product_id)
         if mine is not None:
             return mine
-        places = self.ss_places
-        ss = self.kb.stations.get(self.planner.ss or "")
+        places = self.places
+        ss = self.kb.stations.get(self.ss or "")
         filled = set(ss.shelf if ss is not None else ())
         for shelf in range(SHELVES):
             for slot in range(SLOTS):
                 key = place_key(shelf, slot)
                 if key not in places and key not in filled:
                     places[key] = product_id
-                    self._set_ss_places(places)
+                    self._set(places)
                     return shelf, slot
         return None
 
     def storage_open(self) -> bool:
         """May a product be stored now: the storage station is neither BROKEN nor DOWN and
         has a free place?"""
-        ss = self.kb.stations.get(self.planner.ss or "")
+        ss = self.kb.stations.get(self.ss or "")
         if ss is not None and ss.state in ("BROKEN", "DOWN"):
             return False
-        taken = set(self.ss_places) | set(ss.shelf if ss is not None else ())
+        taken = set(self.places) | set(ss.shelf if ss is not None else ())
         return len(taken) < SHELVES * SLOTS
 
     def place_of(self, product_id: str) -> tuple[int, int] | None:
         """The place reserved for ``product_id`` (where its workpiece is stored, if it is)."""
-        for key, owner in sorted(self.ss_places.items()):
+        for key, owner in sorted(self.places.items()):
             if owner == product_id:
                 return tuple(int(v) for v in key.split(","))
         return None
 
     def free_place(self, product_id: str) -> None:
         """``product_id`` no longer needs its place (retrieved, or never stored)."""
-        places = {k: v for k, v in self.ss_places.items() if v != product_id}
-        self._set_ss_places(places)
+        places = {k: v for k, v in self.places.items() if v != product_id}
+        self._set(places)
 
     def fill_places(self, product: M.Product, tasks: list[M.Task]) -> None:
         """Give the STORE/RETRIEVE instructions of ``tasks`` ``product``'s shelf place."""
@@ -131,43 +135,9 @@ class StorageMixin:
         """Has the storage station brought ``product``'s stored workpiece to its output
         (its RETRIEVE went out and the station is busy with it or waits for the pickup)?
         A pickup that failed there leaves it on the output, no longer on the shelf."""
-        ss = self.kb.stations.get(self.planner.ss or "")
+        ss = self.kb.stations.get(self.ss or "")
         if ss is None or ss.state not in ("PROCESSING", "READY-AT-OUTPUT"):
             return False
         return any(t.prepare and t.prepare.get("ss", {}).get("operation") == "RETRIEVE"
                    and t.prepared_at is not None and t.prepared_at <= ss.since
                    for t in self.kb.tasks_of(product.tasks))
-
-    # -- store or not -------------------------------------------------------------------
-    def redecide(self, product: M.Product) -> bool:
-        """Plan the hand-over of a finished ``product`` again from now, if no robot is on
-        its way with it yet: store it when that pays now, else hand it over directly.
-        True if the plan changed."""
-        if self.planner.ss is None or product.state != "ACTIVE" or product.repair:
-            return False
-        wp = self.kb.workpieces.get(product.workpiece or "")
-        if wp is None or wp.cap is None or wp.location == "gone" or self.is_stored(product):
-            return False
-        open_tasks = [t for t in self.kb.tasks_of(product.tasks) if t.state in M.OPEN_STATES]
-        if not open_tasks or any(t.state == M.ASSIGNED for t in open_tasks):
-            return False
-        order = self.kb.orders.get(product.order_id)
-        if order is None or order.open <= 0:
-            return False
-        try:
-            net = self.plan_rest(product, order)
-        except PlanningFailed:
-            return False
-        if stores(s.fields for s in net.steps) == stores(open_tasks):
-            return False
-        self.restart(product)
-        self.add_network(product, net)
-        log.info("%s is %s", product.id, "stored until its window" if stores(
-            s.fields for s in net.steps) else "handed over directly after all")
-        return True
-
-    def plan_rest(self, product: M.Product, order: M.Order) -> Network:
-        """The rest of ``product`` from what exists (raises PlanningFailed)."""
-        world = self.world(float(self.kb.get("game_time", 0.0)), 0.0, exclude=product.id)
-        return self.planner.decompose(self.planner.context(world, order, self.progress(product)),
-                                      world)

@@ -4,47 +4,77 @@ A cap station holds at most one retrieved cap; while it does it cannot
 retrieve another, and the product the cap is for keeps the station (its
 ``#cap`` lock) until the cap is mounted.  So
 
-- a product retrieves its cap only when it is *due* (:meth:`CapsMixin.cap_due`):
+- a product retrieves its cap only when it is *due* (:meth:`Caps.cap_due`):
   once every ring mount that does not wait for the cap-less base is under
   way;
-- an idle cap station gets a cap *ahead* (:meth:`CapsMixin.prefill`) while
+- an idle cap station gets a cap *ahead* (:meth:`Caps.prefill`) while
   robots have nothing else to do; it is *free* (owner :data:`FREE`), and the
   most urgent product whose cap is due there takes it instead of retrieving
-  one (:meth:`CapsMixin.adopt_free_caps`).
+  one (:meth:`Caps.adopt_free_caps`).
 
-A mixin of :class:`~teamserver.production.ProductionManager` (it needs
-``kb``, ``prefix``, ``cs_caps``, ``planner``, ``locks``, ``unusable()``,
-``active_products()``, ``add_network()`` and the ``prefill_*`` settings).
-The buffers live in the knowledge base (``cap_buffer``: CS -> product id or
-:data:`FREE`).
+:class:`CapBuffers` keeps who owns the cap each station holds, in the
+knowledge base (``cap_buffer``: CS -> product id or :data:`FREE`).
 """
 from __future__ import annotations
 
 import logging
 
-from .knowledge import model as M
-from .planning.domain import CAPLESS, EXTRA, ProductionContext
-from .planning.htn import Seq
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+from ..planning.domain import CAPLESS, EXTRA, ProductionContext
+from ..planning.htn import Seq
+from ..planning.planner import ProductionPlanner
+from .locks import StationLocks
+from .products import CLEANUP_ORDER, Products
+from .world import PlanningWorld
 
 log = logging.getLogger("teamserver.production")
 
-CLEANUP_ORDER = 0          # order id of products that only clear a station (or fill one)
 FREE = "free"              # owner of a retrieved cap no product owns yet (cap_buffer)
 
 
-class CapsMixin:
+class CapBuffers:
+    """CS -> the product whose retrieved cap it holds (or :data:`FREE`)."""
+
+    def __init__(self, kb: KnowledgeBase):
+        self.kb = kb
+
     @property
-    def cap_buffer(self) -> dict[str, str]:
-        """CS -> product whose retrieved cap it holds."""
+    def owners(self) -> dict[str, str]:
+        """CS -> owner of the cap it holds (a copy)."""
         return dict(self.kb.get("cap_buffer", {}))
 
-    def _set_cap_buffer(self, buf: dict[str, str]) -> None:
+    def set(self, buf: dict[str, str]) -> None:
         self.kb.set("cap_buffer", buf)
 
-    def _take_cap(self, cs: str, product_id: str) -> None:
-        buf = self.cap_buffer
+    def take(self, cs: str, product_id: str) -> None:
+        """``cs`` holds a cap for ``product_id`` (or :data:`FREE`)."""
+        buf = self.owners
         buf[cs] = product_id
-        self._set_cap_buffer(buf)
+        self.set(buf)
+
+
+class Caps:
+    """When caps are retrieved, and caps retrieved ahead (see the module doc).
+    ``prefill``: retrieve caps ahead at all; ``prefill_stop``: not this close
+    (s) to the end; ``prefill_unknown``: until this game time also a colour
+    no order wants yet."""
+
+    def __init__(self, kb: KnowledgeBase, buffers: CapBuffers, products: Products,
+                 planner: ProductionPlanner, world: PlanningWorld, locks: StationLocks, *,
+                 prefix: str, cs_caps: dict[str, str], prefill: bool = True,
+                 prefill_stop: float = 120.0, prefill_unknown: float = 600.0):
+        self.kb = kb
+        self.buffers = buffers
+        self.products = products
+        self.planner = planner
+        self.world = world
+        self.locks = locks
+        self.prefix = prefix
+        self.cs_caps = cs_caps
+        self.prefill_caps = prefill
+        self.prefill_stop = prefill_stop
+        self.prefill_unknown = prefill_unknown
 
     def adopt_free_caps(self) -> list[M.Product]:
         """Give each cap retrieved ahead (or left by an abandoned product) to the most
@@ -54,15 +84,15 @@ class CapsMixin:
         (A station holding a cap cannot retrieve another: without this the product
         would wait for ever.)"""
         out = []
-        for cs, owner in sorted(self.cap_buffer.items()):
+        for cs, owner in sorted(self.buffers.owners.items()):
             if owner != FREE:
                 continue
             best = None
-            for p in self.active_products():
+            for p in self.products.active():
                 order = self.kb.orders.get(p.order_id)
                 if order is None:
                     continue
-                chain = self._cap_chain(p, cs)
+                chain = self.cap_chain(p, cs)
                 if chain is None or not self.cap_due(chain[0]):
                     continue                    # it would keep the cap long unmounted
                 if best is None or order.end < best[0]:
@@ -93,7 +123,7 @@ class CapsMixin:
                 self.kb.save_task(after)
                 p.tasks = tuple(p.tasks) + (get.id,)
                 self.kb.save_product(p)
-            self._take_cap(cs, p.id)
+            self.buffers.take(cs, p.id)
             out.append(p)
             log.info("%s mounts the cap waiting in %s", p.id, cs)
         return out
@@ -117,7 +147,7 @@ class CapsMixin:
         return not any(t.kind == M.MOUNT_RING and t.state == M.PENDING and t.id not in after
                        for t in tasks)
 
-    def _cap_chain(self, product: M.Product, cs: str):
+    def cap_chain(self, product: M.Product, cs: str):
         """(retrieve, cap-less pickup, what takes the base) of ``product`` at ``cs``, all
         still PENDING; None if there is none."""
         tasks = self.kb.tasks_of(product.tasks)
@@ -140,28 +170,33 @@ class CapsMixin:
         discarded.  Returns the cleanup products made now."""
         if game_time > horizon - self.prefill_stop or not self.kb.orders:
             return []
-        buf, made = self.cap_buffer, []
+        buf, made = self.buffers.owners, []
         busy = {t.machine for t in self.kb.open_tasks() if t.machine}
-        prefilling = {t.machine for p in self.active_products() if p.order_id == CLEANUP_ORDER
+        prefilling = {t.machine for p in self.products.active() if p.order_id == CLEANUP_ORDER
                       for t in self.kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP}
         for cs, cap in sorted(self.cs_caps.items()):
             st = self.kb.stations.get(cs)
             if buf.get(cs) is not None or cs in busy or cs in prefilling or st is None or \
-                    st.state != "IDLE" or cs in self.unusable() or cs in self.locks:
+                    st.state != "IDLE" or cs in self.world.unusable() or cs in self.locks.owners:
                 continue
             wanted = any(o.cap == cap and o.open > 0 for o in self.kb.orders.values())
             if not wanted and game_time > self.prefill_unknown:
                 continue
-            pid = f"X{self.kb.next_id('product')}"
-            product = M.Product(pid, CLEANUP_ORDER, created=game_time)
-            self.kb.save_product(product)
+            product = self.products.new("X", CLEANUP_ORDER, created=game_time)
             ctx = ProductionContext(self.prefix, {}, {}, self.cs_caps, None)
             net = self.planner.htn.plan(ctx, Seq(("retrieve_cap", cs), ("pickup", cs, True,
                                                                           CAPLESS), ("discard",)))
-            self.add_network(product, net)
+            self.products.add_network(product, net)
             made.append(product)
-            log.info("%s retrieves a cap into %s ahead", pid, cs)
+            log.info("%s retrieves a cap into %s ahead", product.id, cs)
         return made
+
+    def choose_shelf_slot(self, task: M.Task) -> None:
+        """Set the shelf slot an assigned RETRIEVE_CAP takes its cap carrier from: the
+        cap station's three slots in turn."""
+        n = self.kb.next_id(f"shelf:{task.machine}")
+        task.params["shelf_slot"] = (n - 1) % 3
+        self.kb.save_task(task)
 
     def spare_robots(self) -> int:
         """Idle robots with empty grippers beyond the steps that could start now."""

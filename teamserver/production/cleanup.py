@@ -1,29 +1,36 @@
 """Small products that only move a workpiece out of the way (order id 0):
 take one from a station output and discard it, discard what a robot holds,
-or feed a spare base to a station left PREPARED for nothing.
-
-A mixin of :class:`~teamserver.production.ProductionManager` (it needs
-``kb``, ``prefix``, ``cs_caps``, ``planner``, ``ss_places`` and ``add_network()``).
-"""
+or feed a spare base to a station left PREPARED for nothing."""
 from __future__ import annotations
 
-from .caps import CLEANUP_ORDER
-from .knowledge import model as M
-from .planning.domain import CAPLESS, EXTRA
-from .planning.htn import Seq
-from .storage import place_key
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+from ..planning.domain import CAPLESS, EXTRA
+from ..planning.htn import Seq
+from ..planning.planner import ProductionPlanner
+from .products import CLEANUP_ORDER, Products
+from .storage import Shelf
 
 
-class CleanupMixin:
+class Cleanup:
+    """Makes clean-up products (see the module doc) for our team (``prefix``)."""
+
+    def __init__(self, kb: KnowledgeBase, products: Products, planner: ProductionPlanner,
+                 shelf: Shelf, *, prefix: str, cs_caps: dict[str, str]):
+        self.kb = kb
+        self.products = products
+        self.planner = planner
+        self.shelf = shelf
+        self.prefix = prefix
+        self.cs_caps = cs_caps
+
     def clear_output(self, machine: str) -> M.Product:
         """A small product that takes a workpiece from ``machine``'s output and discards it."""
-        pid = f"X{self.kb.next_id('product')}"
-        product = M.Product(pid, CLEANUP_ORDER)
-        self.kb.save_product(product)
+        product = self.products.new("X", CLEANUP_ORDER)
         ctx = None
         net = self.planner.htn.plan(ctx, Seq(("pickup", machine, False, CAPLESS),
                                              ("discard",)))
-        self.add_network(product, net)
+        self.products.add_network(product, net)
         return product
 
     def flush(self, machine: str, instruction: dict) -> M.Product | None:
@@ -45,9 +52,8 @@ class CleanupMixin:
         else:
             return None
         only_feed = kind in ("DS", "SS")        # nothing comes out to take away
-        pid = f"X{self.kb.next_id('product')}"
-        product = M.Product(pid, CLEANUP_ORDER, created=self.kb.get("game_time", 0.0))
-        self.kb.save_product(product)
+        product = self.products.new("X", CLEANUP_ORDER, created=self.kb.get("game_time", 0.0))
+        pid = product.id
         now = self.kb.get("game_time", 0.0)
         ids = [self.kb.next_id("task") for _ in range(2 if only_feed else 4)]
         tasks = [M.Task(ids[0], M.GET_WORKPIECE, {"machine": bs, "side": M.OUTPUT, "base": base,
@@ -60,7 +66,7 @@ class CleanupMixin:
                         releases=(machine,) if only_feed else (), carry=True, created=now)]
         if kind == "SS":
             ss = instruction["ss"]
-            self._set_ss_places({**self.ss_places, place_key(ss["shelf"], ss["slot"]): pid})
+            self.shelf.reserve(ss["shelf"], ss["slot"], pid)
         if not only_feed:
             tasks += [M.Task(ids[2], M.GET_WORKPIECE, {"machine": machine, "side": M.OUTPUT,
                                                        "role": EXTRA},
@@ -76,10 +82,8 @@ class CleanupMixin:
 
     def discard_for(self, robot: M.Robot) -> M.Task:
         """A task for a robot holding a workpiece nothing needs: discard it."""
-        pid = f"X{self.kb.next_id('product')}"
-        product = M.Product(pid, CLEANUP_ORDER)
-        self.kb.save_product(product)
-        t = M.Task(self.kb.next_id("task"), M.DISCARD, {}, product=pid, carry=True,
+        product = self.products.new("X", CLEANUP_ORDER)
+        t = M.Task(self.kb.next_id("task"), M.DISCARD, {}, product=product.id, carry=True,
                    holder=robot.number, created=self.kb.get("game_time", 0.0))
         self.kb.save_task(t)
         product.tasks = (t.id,)

@@ -39,10 +39,12 @@ from __future__ import annotations
 
 import logging
 
-from .knowledge import model as M
-from .knowledge.kb import KnowledgeBase
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+from .cleanup import Cleanup
+from .repair import Repairs
 
-log = logging.getLogger("teamserver.feeding")
+log = logging.getLogger("teamserver.production.feeding")
 
 #: (a PutWorkpiece feeds only with a prepare: a storage station's STORE)
 FEED_KINDS = (M.MOUNT_RING, M.MOUNT_CAP, M.RETRIEVE_CAP, M.DELIVER, M.PUT_WORKPIECE)
@@ -55,13 +57,15 @@ def is_feed(task: M.Task) -> bool:
 
 
 class FeedMonitor:
-    """See the module doc.  ``production``: the
-    :class:`~teamserver.production.ProductionManager` (repairs, flush products)."""
+    """See the module doc.  ``repairs`` undoes a feed the station never took;
+    ``cleanup`` makes the products that feed a spare base."""
 
-    def __init__(self, kb: KnowledgeBase, production, clock, confirm: float = 10.0):
+    def __init__(self, kb: KnowledgeBase, clock, repairs: Repairs, cleanup: Cleanup,
+                 confirm: float = 10.0):
         self.kb = kb
-        self.production = production
         self.clock = clock
+        self.repairs = repairs
+        self.cleanup = cleanup
         self.confirm = confirm
 
     # -- the instruction a station waits with ------------------------------------------
@@ -157,7 +161,7 @@ class FeedMonitor:
 
     def verify(self) -> list[M.Task]:
         """Feeds the station never took within ``confirm`` s; their products are
-        repaired (:meth:`ProductionManager.feed_lost`).  Returns those tasks."""
+        repaired (:meth:`~teamserver.production.repair.Repairs.feed_lost`).  Returns those tasks."""
         feeds = dict(self.kb.get("feeds") or {})
         if not feeds:
             return []
@@ -173,7 +177,7 @@ class FeedMonitor:
                 if st.state not in ("BROKEN", "DOWN"):
                     log.warning("%s never took the workpiece of task %d (%s)", st.name, t.id,
                                 t.kind)
-                    self.production.feed_lost(t)
+                    self.repairs.feed_lost(t)
                     lost.append(t)
         self.kb.set("feeds", feeds)
         return lost
@@ -207,7 +211,7 @@ class FeedMonitor:
             p = self.kb.products.get(flushing.get(machine, ""))
             if p is not None and p.state == "ACTIVE":
                 continue
-            p = self.production.flush(machine, instr)
+            p = self.cleanup.flush(machine, instr)
             if p is not None:
                 flushing[machine] = p.id
                 made.append(p)

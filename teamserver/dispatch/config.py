@@ -1,0 +1,27 @@
+"""Seconds, metres and counts that steer the dispatcher."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass
+class DispatchConfig:
+    """Seconds, metres and counts that steer the dispatcher (see :mod:`teamserver.dispatch`)."""
+
+    heartbeat_timeout: float = 10.0
+    prepare_distance: float = 1.5
+    prepare_lead: float = 3.0
+    retrieve_lead: float = 12.0     # ... a storage station's RETRIEVE this many seconds away
+    prepare_retry: float = 6.0
+    speed: float = 0.5
+    max_attempts: int = 3
+    deliver_early: float = 60.0     # at most this long before the window a delivery starts
+    deliver_margin: float = 5.0     # ... and this long more than the drive to the DS takes
+    window_margin: float = 1.0      # the DS is prepared this long after the window opened
+    feed_confirm: float = 10.0      # a fed station reports the workpiece within this time
+    pickup_time: float = 30.0       # a pickup's drive and grab, for "ready once held"
+    urgency: float = 0.01           # metres of drive a second of an order's slack is worth
+    unblock: float = 20.0           # metres of drive that freeing a stuck robot is worth
+    park: bool = True
+    park_retry: float = 15.0
+    discard_backoff: float = 5.0

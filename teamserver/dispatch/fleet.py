@@ -1,0 +1,80 @@
+"""The robots as the dispatcher sees them: who is idle, who may get work, and
+giving a robot a task.
+
+A robot is *idle* without a task; a robot driving to a parking spot (a
+GO_TO task) is *available* too: real work cancels its GO_TO.  Assigning a
+task takes its station locks, tells the robot through the task link and
+cancels the robot's parking.
+"""
+from __future__ import annotations
+
+import math
+
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+from ..links.tasks import TaskLink
+from ..production.locks import StationLocks
+
+
+def travel(robot: M.Robot, pos) -> float:
+    """Metres from the robot to ``pos`` (0 when either is unknown)."""
+    if pos is None or robot.pose is None:
+        return 0.0
+    return math.hypot(pos[0] - robot.pose[0], pos[1] - robot.pose[1])
+
+
+class Fleet:
+    """See the module doc."""
+
+    def __init__(self, kb: KnowledgeBase, clock, locks: StationLocks, tasks: TaskLink):
+        self.kb = kb
+        self.clock = clock
+        self.locks = locks
+        self.tasks = tasks
+
+    def idle_robots(self) -> list[M.Robot]:
+        """Robots without a task (a parking robot has one: see :meth:`available_robots`)."""
+        return [r for r in self.kb.active_robots() if r.task_id is None]
+
+    def parking_task(self, robot: M.Robot) -> M.Task | None:
+        """The GO_TO task ``robot`` is driving, if it is parking."""
+        t = self.kb.tasks.get(robot.task_id) if robot.task_id is not None else None
+        return t if t is not None and t.kind == M.GO_TO and t.state == M.ASSIGNED else None
+
+    def available_robots(self) -> list[M.Robot]:
+        """Robots that may get work: idle ones and parking ones."""
+        return [r for r in self.kb.active_robots()
+                if r.task_id is None or self.parking_task(r) is not None]
+
+    def assign(self, task: M.Task, robot: M.Robot) -> None:
+        """Give ``task`` to ``robot`` (which stops parking)."""
+        park = self.parking_task(robot)
+        if park is not None and park is not task:
+            park.state, park.finished_at = M.CANCELLED, self.clock.now()
+            self.kb.save_task(park)
+            self.tasks.cancel(park, f"task {task.id} for this robot")
+        task.state, task.robot = M.ASSIGNED, robot.number
+        task.assigned_at, task.attempts = self.clock.now(), task.attempts + 1
+        task.prepared_at = None
+        self.locks.acquire(task)
+        self.kb.save_task(task)
+        robot.task_id = task.id
+        self.kb.save_robot(robot)
+        self.tasks.send(task)
+
+    def assign_explore(self, robot: M.Robot, zone: int) -> M.Task:
+        """A new EXPLORE_ZONE task of ``zone`` for ``robot``."""
+        t = M.Task(self.kb.next_id("task"), M.EXPLORE_ZONE, {"zone": int(zone)},
+                   created=self.clock.now())
+        self.assign(t, robot)
+        return t
+
+    def back_to_pool(self, task: M.Task, why: str) -> None:
+        """An assigned task is PENDING again, for any robot (an exploration task is
+        cancelled instead: exploration picks a fresh zone)."""
+        task.state, task.robot, task.assigned_at, task.prepared_at = M.PENDING, None, None, None
+        task.error = why
+        self.kb.save_task(task)
+        if task.kind == M.EXPLORE_ZONE:
+            task.state = M.CANCELLED        # exploration picks a fresh zone instead
+            self.kb.save_task(task)

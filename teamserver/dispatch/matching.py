@@ -1,0 +1,104 @@
+"""Ready tasks to available robots.
+
+Carry tasks go to the robot holding the workpiece; the others are matched
+to idle robots with empty grippers by travel distance plus ``urgency``
+times the seconds left until the order's window closes (an optimal
+assignment, ``scipy.optimize.linear_sum_assignment``), earlier products
+first on ties; tasks that free a stuck robot are preferred by ``unblock``
+metres.  Pickups that would leave one more robot stuck wait while
+``robots - 1`` are (:mod:`.holding`).  Locks are taken at assignment.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+from ..production.caps import Caps
+from ..production.locks import StationLocks
+from ..production.slides import Slides
+from ..production.world import PlanningWorld
+from .config import DispatchConfig
+from .fleet import Fleet, travel
+from .holding import Holding
+from .readiness import Readiness
+
+
+class Matcher:
+    """See the module doc."""
+
+    def __init__(self, kb: KnowledgeBase, fleet: Fleet, readiness: Readiness, holding: Holding,
+                 locks: StationLocks, caps: Caps, slides: Slides, world: PlanningWorld,
+                 config: DispatchConfig):
+        self.kb = kb
+        self.fleet = fleet
+        self.readiness = readiness
+        self.holding = holding
+        self.locks = locks
+        self.caps = caps
+        self.slides = slides
+        self.world = world
+        self.config = config
+
+    def assign(self, game_time: float | None) -> list[M.Task]:
+        """Give ready tasks to idle robots; returns the tasks assigned now."""
+        idle = {r.number: r for r in self.fleet.available_robots()}
+        if not idle:
+            return []
+        self.caps.adopt_free_caps()
+        self.slides.top_up_slides()
+        ready = [t for t in self.kb.open_tasks() if self.readiness.ready(t, game_time)]
+        assigned: list[M.Task] = []
+        # carry tasks: their holder, if idle
+        for t in sorted(ready, key=lambda t: t.id):
+            if t.carry:
+                r = idle.get(t.holder) if t.holder is not None else None
+                if r is not None and self.locks.free_for(t):
+                    self.fleet.assign(t, r)
+                    assigned.append(t)
+                    del idle[r.number]
+        free = [r for r in idle.values() if not r.holding]
+        pool = [t for t in ready if not t.carry]
+        if not free or not pool:
+            return assigned
+        # robots must stay able to fetch what the held workpieces wait for
+        stuck, n = self.holding.stuck(game_time), len(self.kb.active_robots())
+        blocking = {t.id: self.holding.hold_limit(t, n) for t in pool
+                    if self.holding.blocks(t, game_time)}
+        pool = [t for t in pool if stuck < blocking.get(t.id, n)]
+        if not pool:
+            return assigned
+        positions = self.world.positions()
+        frees = self.holding.unblocking(game_time) if stuck else set()
+        cost = np.zeros((len(free), len(pool)))
+        for i, r in enumerate(free):
+            for j, t in enumerate(pool):
+                cost[i, j] = (travel(r, positions.get(t.machine)) + 1e-3 * _age(t)
+                              + self.config.urgency * self._slack(t, game_time)
+                              - self.config.unblock * (t.id in frees))
+        rows, cols = linear_sum_assignment(cost)
+        for i, j in sorted(zip(rows, cols), key=lambda ij: cost[ij[0], ij[1]]):
+            t, r = pool[j], free[i]
+            if not self.locks.free_for(t):
+                continue                    # another assignment just took the station
+            if t.id in blocking:
+                if stuck >= blocking[t.id]:
+                    continue                # the next tick matches this robot anew
+                stuck += 1
+            self.fleet.assign(t, r)
+            assigned.append(t)
+        return assigned
+
+    def _slack(self, task: M.Task, game_time: float | None) -> float:
+        """Game seconds until the end of the window of ``task``'s order (0 for work
+        that only clears a station: it goes first)."""
+        p = self.kb.products.get(task.product or "")
+        o = self.kb.orders.get(p.order_id) if p is not None else None
+        if o is None or game_time is None:
+            return 0.0
+        return min(max(o.end - game_time, 0.0), float(self.kb.profile.phases.production))
+
+
+def _age(task: M.Task) -> float:
+    return float(task.id)

@@ -1,0 +1,97 @@
+"""When a task may go: the readiness policy of the dispatcher.
+
+A production task is *ready* when
+
+- its predecessors are DONE and its station locks are free (or held by its
+  own product: :mod:`teamserver.production.locks`);
+- its station is neither BROKEN nor DOWN (:meth:`Readiness.station_usable`);
+- the station can take its workpiece (:mod:`teamserver.production.feeding`);
+- a delivery's robot would reach the DS when the order's window opens
+  (:meth:`Readiness.deliver_from`); a stored product's retrieval is not
+  before its ``not_before`` (shortly before the window);
+- a ring mount's slide holds the bases its colour costs
+  (:mod:`teamserver.production.slides`);
+- a cap retrieval's station holds no cap and its product has started its
+  last ring mount that does not need the cap-less base
+  (:mod:`teamserver.production.caps`).
+
+A delivery's DS is prepared only inside the order's window
+(:meth:`Readiness.window_open`).  A rule about when a station may be used
+(prepare before feeding, time-outs of a prepared station, costs of
+storing) goes here or into the collaborator it is about.
+"""
+from __future__ import annotations
+
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+from ..production.caps import CapBuffers, Caps
+from ..production.feeding import FeedMonitor
+from ..production.locks import StationLocks
+from ..production.slides import Slides
+from ..production.world import PlanningWorld
+from .config import DispatchConfig
+from .fleet import travel
+
+UNUSABLE_STATES = ("BROKEN", "DOWN")
+
+
+class Readiness:
+    """See the module doc."""
+
+    def __init__(self, kb: KnowledgeBase, locks: StationLocks, feeds: FeedMonitor,
+                 slides: Slides, caps: Caps, buffers: CapBuffers, world: PlanningWorld,
+                 config: DispatchConfig):
+        self.kb = kb
+        self.locks = locks
+        self.feeds = feeds
+        self.slides = slides
+        self.caps = caps
+        self.buffers = buffers
+        self.world = world
+        self.config = config
+
+    def station_usable(self, machine: str | None) -> bool:
+        if machine is None:
+            return True
+        st = self.kb.stations.get(machine)
+        return st is None or st.state not in UNUSABLE_STATES
+
+    def ready(self, task: M.Task, game_time: float | None) -> bool:
+        if task.state != M.PENDING or task.kind == M.EXPLORE_ZONE:
+            return False
+        if game_time is None:
+            return False
+        for d in task.deps:
+            dep = self.kb.tasks.get(d)
+            if dep is None or dep.state != M.DONE:
+                return False
+        if not self.locks.free_for(task):
+            return False
+        if not self.station_usable(task.machine):
+            return False
+        if not self.feeds.accepts(task):
+            return False
+        if task.kind == M.DELIVER and game_time < self.deliver_from(task):
+            return False
+        if task.kind != M.DELIVER and game_time < float(task.params.get("not_before", 0.0)):
+            return False                # a stored product is retrieved shortly before its window
+        if not self.slides.slide_ready(task):
+            return False                # the ring station would break for want of bases
+        # a CS holding a cap cannot retrieve another
+        return not (task.kind == M.RETRIEVE_CAP and (self.buffers.owners.get(task.machine)
+                                                     or not self.caps.cap_due(task)))
+
+    def deliver_from(self, task: M.Task) -> float:
+        """Game time from which a delivery may start: its robot reaches the DS when
+        the order's window opens (never more than ``deliver_early`` s before it)."""
+        nb = float(task.params.get("not_before", 0.0))
+        robot = self.kb.robots.get(task.holder) if task.holder is not None else None
+        pos = self.world.positions().get(task.machine) if robot is not None else None
+        drive = travel(robot, pos) / self.config.speed if robot is not None else 0.0
+        return nb - min(drive + self.config.deliver_margin, self.config.deliver_early)
+
+    def window_open(self, task: M.Task, game_time: float | None) -> bool:
+        """A delivery's DS is prepared only inside the order's window."""
+        if task.kind != M.DELIVER or game_time is None:
+            return True
+        return game_time >= float(task.params.get("not_before", 0.0)) + self.config.window_margin

@@ -1,0 +1,136 @@
+"""Task results from the robots: done, failed, cancelled.
+
+A TaskResult closes the robot's task.  A success books what the task did
+(:mod:`teamserver.production.outcomes`) and starts checking that its
+station took the workpiece (:mod:`teamserver.production.feeding`); a feed
+reported failed although its station took the workpiece counts as done.
+A failure after which the same step may simply be tried again
+(:data:`RETRY_ERRORS`, at most ``max_attempts`` times, not at a place the
+robots keep failing at) gets a fresh copy of the step; any other failure,
+or a lost workpiece, has the product repaired.  Every outcome at a station
+is counted by :mod:`teamserver.production.health`.
+"""
+from __future__ import annotations
+
+import logging
+
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+from ..links.tasks import TaskLink
+from ..production.feeding import FeedMonitor
+from ..production.health import StationHealth
+from ..production.outcomes import Outcomes
+from ..production.products import Products
+from ..production.repair import Repairs
+from .config import DispatchConfig
+from .discards import Discards
+from .parking import Parking
+
+log = logging.getLogger("teamserver.dispatch")
+
+#: errors after which the same step is simply tried again
+RETRY_ERRORS = {"NAVIGATION_FAILED", "LOCALISATION_LOST", "MACHINE_NOT_FOUND", "ALIGN_FAILED",
+                "SENSOR_LOST", "GRAB_FAILED", "TIMEOUT", "NOT_RUNNING", "MACHINE_BROKEN", "NONE"}
+
+
+class Results:
+    """See the module doc."""
+
+    def __init__(self, kb: KnowledgeBase, clock, *, feeds: FeedMonitor, outcomes: Outcomes,
+                 products: Products, repairs: Repairs, health: StationHealth,
+                 parking: Parking, discards: Discards, tasks: TaskLink, config: DispatchConfig):
+        self.kb = kb
+        self.clock = clock
+        self.feeds = feeds
+        self.outcomes = outcomes
+        self.products = products
+        self.repairs = repairs
+        self.health = health
+        self.parking = parking
+        self.discards = discards
+        self.tasks = tasks
+        self.config = config
+
+    def on_result(self, robot_number: int, task_id: int, status: str, error: str = "NONE",
+                  holding: bool | None = None, text: str = "") -> None:
+        """A TaskResult: ``status`` RUNNING/SUCCEEDED/FAILED/CANCELLED, ``error`` the
+        ErrorCode name, ``holding`` whether the gripper holds something afterwards
+        (None: not said)."""
+        task = self.kb.tasks.get(task_id)
+        robot = self.kb.robots.get(robot_number)
+        if task is None or robot is None:
+            return
+        if task.robot != robot_number or task.state != M.ASSIGNED:
+            if status == "RUNNING" and task.robot != robot_number:
+                self.tasks.cancel(task, "task no longer yours")
+            return
+        if status == "RUNNING":
+            return
+        robot.task_id = None
+        task.finished_at = self.clock.now()
+        if task.kind == M.GO_TO:
+            task.state = M.DONE if status == "SUCCEEDED" else M.FAILED
+            task.error = None if status == "SUCCEEDED" else (f"{error}: {text}" if text else error)
+            self.kb.save_task(task)
+            self.kb.save_robot(robot)
+            if status != "SUCCEEDED":
+                self.parking.failed(robot)
+            return
+        if status == "FAILED" and self.feeds.took(task):
+            log.info("task %d failed (%s), but %s took its workpiece: done", task.id, error,
+                     task.machine)
+            status = "SUCCEEDED"
+        if task.kind == M.DISCARD and status != "CANCELLED":
+            self.discards.outcome(robot, status == "SUCCEEDED")
+        if status != "CANCELLED":
+            self.health.outcome(task, status == "SUCCEEDED", error, self.clock.now())
+        if status == "SUCCEEDED":
+            task.state = M.DONE
+            self.kb.save_task(task)
+            if task.kind == M.EXPLORE_ZONE:
+                self.kb.mark_visited(int(task.params["zone"]), self.clock.now())
+            else:
+                self.outcomes.task_done(task, robot)
+                self.feeds.finished(task)
+            self.kb.save_robot(robot)
+            return
+        task.error = f"{error}: {text}" if text else error
+        if status == "CANCELLED" or task.kind == M.EXPLORE_ZONE:
+            task.state = M.CANCELLED if status == "CANCELLED" else M.FAILED
+            self.kb.save_task(task)
+            if task.kind != M.EXPLORE_ZONE:
+                self.products.needs_repair(task.product, f"task {task.id} cancelled")
+            self.kb.save_robot(robot)
+            return
+        self._failed(task, robot, error, holding)
+
+    def _failed(self, task: M.Task, robot: M.Robot, error: str, holding: bool | None) -> None:
+        lost = False
+        if task.carry and holding is False:
+            lost = True                      # the workpiece it carried is gone
+        if not task.carry and task.kind == M.GET_WORKPIECE and holding:
+            lost = False
+        if lost and robot.holding:
+            wp = self.kb.workpieces.get(robot.holding)
+            if wp is not None:
+                wp.location = "gone"
+                self.kb.save_workpiece(wp)
+            robot.holding = None
+        self.kb.save_robot(robot)
+        if error == "MACHINE_BROKEN" and task.machine:
+            st = self.kb.stations.get(task.machine)
+            if st is not None and st.state == "BROKEN":
+                self.repairs.station_broke(task.machine)
+        retry = (not lost and error in RETRY_ERRORS and task.attempts < self.config.max_attempts
+                 and not (task.kind == M.DISCARD and not task.machine)
+                 and self.health.usable(task, self.clock.now()))
+        if retry:
+            again = self.products.retry(task)
+            log.info("task %d failed (%s), trying again as %d", task.id, error, again.id)
+            if again.carry:
+                again.holder = robot.number
+                self.kb.save_task(again)
+            return
+        task.state = M.FAILED
+        self.kb.save_task(task)
+        self.products.needs_repair(task.product, f"task {task.id} {task.kind} failed: {error}")
