@@ -15,6 +15,15 @@ PrepareMachine just before each robot arrives; then send GamePhase,
 MachineMap and heartbeats to the robots.  All state goes through the
 knowledge base into SQLite, so a new TeamServer on the same ``state`` file
 carries on where a killed one stopped.
+
+The server composes; the deciding is done by its collaborators, built once
+our colour is known (:meth:`TeamServer._colour_known`): the
+:class:`~teamserver.exploration.explorer.Explorer`, the
+:class:`~teamserver.production.manager.ProductionManager`, the
+:class:`~teamserver.production.feeding.FeedMonitor` and the
+:class:`~teamserver.dispatch.dispatcher.Dispatcher`, all telling the robots
+and the refbox about tasks through one
+:class:`~teamserver.links.tasks.TaskLink`.  See ``docs/architecture.md``.
 """
 from __future__ import annotations
 
