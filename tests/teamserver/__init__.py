@@ -1,0 +1,1 @@
+"""Tests of the team server (teamserver/), a package per sub-package."""

@@ -4,7 +4,7 @@ PyBullet world, the team server and three agents running the put/get trees at C-
 A 300 s production is too short for a product to be ready long before its window,
 so the team server is told to store every product (``min_wait`` -inf): what is
 checked is the machinery on the wire and in the world, not when storing pays
-(tests/teamserver/test_ts_storage.py)."""
+(tests/teamserver/production/test_ts_storage.py)."""
 import json
 import math
 
