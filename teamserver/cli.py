@@ -9,7 +9,9 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 
 from rll_bt import rules
 from rll_bt.errors import Unavailable, UserError
@@ -53,6 +55,9 @@ def register(cli) -> None:
                     help="send a BeaconSignal of the team server with this jersey number")
     gp.add_argument("--duration", type=float, default=0.0, metavar="S",
                     help="stop after this many seconds (0: run until interrupted)")
+    from rll_bt.cli.watching import add_options
+    add_options(gp, "the team server's messages: every message it sends and receives on its link to the "
+                    "robots and on the refbox's channels")
     gp.set_defaults(func=run)
     st = sub.add_parser("status", help="robots, tasks, orders and machines of a state database",
                         description="Print the robots, tasks, orders and known machines "
@@ -90,8 +95,10 @@ def run(args: argparse.Namespace) -> int:
                         hint="rll-bt teamserver --team NAME --key KEY  (or: rll-bt teamserver "
                              "status)")
     from rll_bt import msgs
+    from rll_bt.cli.watching import close_watch, open_watch
     from rll_bt.clock import WallClock
     from rll_bt.comm import MessageRegistry, StreamServer
+    from rll_bt.watch.process import watch_links
 
     from .links.refbox_link import udp_refbox_link
     from .server import ServerConfig, TeamServer
@@ -114,11 +121,22 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         refbox.close()
         raise Unavailable(f"cannot listen for robots: {exc}", where=args.listen) from None
+    try:
+        watch = open_watch(args, "rll-bt teamserver", {"kind": "teamserver", "team": args.team,
+                                                        "profile": args.profile})
+    except BaseException:
+        agents.close()
+        refbox.close()
+        raise
+    if watch is not None:
+        agents, refbox.public, refbox.team_factory = watch_links(
+            watch, "teamserver", link=agents, public=refbox.public, team=refbox.team_factory)
     server = TeamServer(args.profile, args.team, clock=clock, refbox=refbox, agents=agents,
                         key=args.key, state=args.state, config=config, team_color=args.color)
     print(f"team server for {args.team} ({args.profile}) listening on {host}:{agents.port}, "
           f"state in {args.state}", file=sys.stderr)
     start, last = clock.now(), -1e9
+    old = signal.signal(signal.SIGTERM, _on_term) if threading.current_thread() is threading.main_thread() else None
     try:
         while not args.duration or clock.now() - start < args.duration:
             server.tick()
@@ -126,11 +144,24 @@ def run(args: argparse.Namespace) -> int:
             if clock.now() - last >= 5.0:
                 last = clock.now()
                 print(_progress(server), file=sys.stderr)
+    except _Stop:                  # SIGTERM: stop like at the end of --duration (the recording is closed)
+        pass
     finally:
+        if old is not None:
+            signal.signal(signal.SIGTERM, old)
         agents.close()
         refbox.close()
         server.close()
+        close_watch(watch, args)
     return 0
+
+
+class _Stop(BaseException):
+    """SIGTERM, raised wherever the server is."""
+
+
+def _on_term(signum, frame):
+    raise _Stop()
 
 
 def _progress(server) -> str:

@@ -92,6 +92,10 @@ def register(cli) -> None:
                         "particles and beams, for several simulated robots on one machine)")
     g.add_argument("--seconds", type=_positive_float, metavar="S", help="stop after S seconds")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    from .watching import add_options
+    add_options(p, "the robot: its pose, laser scans, camera frames, detections, every tick of its task "
+                   "trees and every message it sends and receives (team-server link and refbox channels)",
+                camera=True)
     p.set_defaults(func=cmd_agent)
 
 
@@ -164,7 +168,9 @@ def _open_refbox(args, config, clock):
 def cmd_agent(args) -> int:
     from ..agent import RobotAgent, default_trees_dir, team_server_link
     from ..clock import WallClock
+    from ..watch.process import watch_agent
     from .tree import _backend
+    from .watching import close_watch, open_watch
     config = _config(args)
     trees_dir = config.trees_dir or default_trees_dir()
     missing, notes = _check_trees(trees_dir)
@@ -176,13 +182,23 @@ def cmd_agent(args) -> int:
     _resolve(host, "--teamserver")
     clock = WallClock()
     backend = _backend(args, clock)
-    link = public = agent = None
+    link = public = agent = watch = None
     try:
         public, team = _open_refbox(args, config, clock)
         link = team_server_link(host, port, key=args.key, clock=clock)
-        agent = RobotAgent(config, clock=clock, backend=backend, link=link, public=public, team=team,
+        watch = open_watch(args, "rll-bt agent", {"kind": "agent", "robot": config.robot_id, "team": config.team_name,
+                                                  "profile": config.profile})
+        robot_watch = None
+        if watch is not None:
+            robot_watch, backend_used, link, public, team = watch_agent(
+                watch, config.robot_id, backend, link, public, team, camera_hz=args.record_camera or 0.0)
+        else:
+            backend_used = backend
+        agent = RobotAgent(config, clock=clock, backend=backend_used, link=link, public=public, team=team,
                            services={"localisation": args.localisation},
                            start_pose=args.start_pose, restarted=not args.first_start)
+        if robot_watch is not None:
+            robot_watch.attach(agent)
         _say(args, f"robot {config.robot_id} ({config.peer_name}) of {config.team_name}, backend {args.backend}, "
                    f"team server {host}:{port}, trees {trees_dir}, localisation {args.localisation}")
         return _loop(args, agent, clock, host, port)
@@ -199,6 +215,7 @@ def cmd_agent(args) -> int:
         except Exception:
             pass
         backend.close()
+        close_watch(watch, args)
 
 
 class _Stop(BaseException):
