@@ -123,7 +123,7 @@ class ProcessGame:
             lambda team, n: self.backends[int(n)] if team == TEAM else None, self.clock.now)
         self.snapshot_file = self.dir / "teamserver.json"
         self.refbox_file = self.dir / "refbox.json"
-        self._refbox_log = self.dir / "refbox-messages.jsonl" if o.out is not None else None
+        self._refbox_log = self.dir / "refbox-messages.jsonl" if o.out is not None or o.record else None
         self._snap: dict = {}
         self.procs: dict[str, subprocess.Popen] = {}
         self.recorder: Recorder | None = None
@@ -136,6 +136,10 @@ class ProcessGame:
         self._t0 = 0.0                  # sim time the game started (the world runs while processes start)
         self._started = False
         self._result_made = False
+        self.watch = None
+        if o.record is not None:             # each process records its part, merged at the end (.procwatch)
+            from .procwatch import ProcessWatch
+            self.watch = ProcessWatch(self, o.record, self.dir / "recording")
         try:
             self._start_children()
         except BaseException:
@@ -208,7 +212,13 @@ class ProcessGame:
             "--teamserver", f"127.0.0.1:{self._ts_port}", "--refbox-host", BROADCAST, "--layout", "sim",
             "--public-recv", str(pub.recv), "--public-send", str(pub.send),
             "--team-recv", str(team.recv), "--team-send", str(team.send), *start, "--hz", str(o.hz),
-            "--localisation", o.localisation, "-q"] + (["--first-start"] if first_start else []))
+            "--localisation", o.localisation, "-q"] + (["--first-start"] if first_start else []) + self._record_args(n))
+
+    def _record_args(self, n: int) -> list[str]:
+        if self.watch is None:
+            return []
+        cam = self.options.record_camera
+        return ["--record", str(self.watch.agent_part(n))] + (["--record-camera", str(cam)] if cam > 0 else [])
 
     def _serve(self, timeout: float) -> None:
         """Answer the agents' backend calls (up to ``timeout`` s) and the refbox's station calls."""
@@ -271,6 +281,8 @@ class ProcessGame:
         if dt >= self.options.world_step * 0.5:
             self.world.step(dt)
             self.time_map.add(now, self.clock.now())
+            if self.watch is not None:
+                self.watch.stepped()
             self.refbox.step()
             if self._started:
                 before = len(self.recorder.rec.samples)
@@ -381,11 +393,14 @@ class ProcessGame:
             for path in [self._refbox_log, *self._team_logs]:
                 path.unlink(missing_ok=True)
         collisions = self.world.collision_log()
-        return GameResult(finished=finished, status=self.refbox.status(), recording=rec,
-                          awards=self.refbox.awards(), deliveries=self.refbox.deliveries(), snapshot=snap,
-                          stations=self.refbox.stations(), orders=self.refbox.orders(), collisions=len(collisions),
-                          sim_time=end - t0, messages=messages,
-                          collision_log=[(round(t - t0, 3), *rest) for t, *rest in collisions])
+        result = GameResult(finished=finished, status=self.refbox.status(), recording=rec,
+                            awards=self.refbox.awards(), deliveries=self.refbox.deliveries(), snapshot=snap,
+                            stations=self.refbox.stations(), orders=self.refbox.orders(), collisions=len(collisions),
+                            sim_time=end - t0, messages=messages,
+                            collision_log=[(round(t - t0, 3), *rest) for t, *rest in collisions])
+        if self.watch is not None:
+            self.watch.finish(result, self.dir / "messages.jsonl", t0)
+        return result
 
     def _stop_children(self, timeout: float = 10.0) -> None:
         """SIGTERM to every child; keep serving the backends while they stop their robots."""
@@ -402,6 +417,8 @@ class ProcessGame:
 
     def close(self) -> None:
         self._stop_children()
+        if self.watch is not None:
+            self.watch.watch.close()
         for log in self._logs:
             log.close()
         self.server.close()

@@ -105,26 +105,29 @@ class GameWatch:
 
     def stations(self) -> None:
         stations = self.game.refbox.stations()
-        self.watch.json("/game/stations", {"stations": [_station(s) for s in stations.values()]},
+        self.watch.json("/game/stations", {"stations": [station_record(s) for s in stations.values()]},
                         schema=SAMPLE_SCHEMA)
         self.watch.scene("/field", field_scene(self.game.options.rules, stations))
 
     def result(self, result, summary: dict | None = None) -> None:
         self.stations()
-        self.watch.json("/game/result", {"finished": bool(result.finished), "sim_time": result.sim_time,
-                                         "status": asdict(result.status), "points": result.status.points,
-                                         "collisions": result.collisions, "messages": result.messages,
-                                         "collision_log": [list(c) for c in result.collision_log],
-                                         "team_server_restarts": result.snapshot.get("restarts", 0),
-                                         "orders": result.orders, "awards": [asdict(a) for a in result.awards],
-                                         "deliveries": [asdict(d) for d in result.deliveries]},
-                        schema=SAMPLE_SCHEMA)
+        self.watch.json("/game/result", result_record(result), schema=SAMPLE_SCHEMA)
 
     def close(self) -> None:
         self.watch.close()
 
 
-def _station(s) -> dict:
+def result_record(result) -> dict:
+    """``/game/result``: the end of a game and what the report needs of it."""
+    return {"finished": bool(result.finished), "sim_time": result.sim_time, "status": asdict(result.status),
+            "points": result.status.points, "collisions": result.collisions, "messages": result.messages,
+            "collision_log": [list(c) for c in result.collision_log],
+            "team_server_restarts": result.snapshot.get("restarts", 0), "orders": result.orders,
+            "awards": [asdict(a) for a in result.awards], "deliveries": [asdict(d) for d in result.deliveries]}
+
+
+def station_record(s) -> dict:
+    """A station of ``/game/stations``."""
     return {"name": s.name, "team": s.team, "zone": s.zone, "rotation": s.rotation,
             "pose": [s.pose.x, s.pose.y, s.pose.theta], "state": s.state, "light": list(s.light)}
 
@@ -172,4 +175,4 @@ def field_scene(profile, stations: dict) -> list:
     return entities
 
 
-__all__ = ["GameWatch", "field_scene", "sender", "topic_for"]
+__all__ = ["GameWatch", "field_scene", "result_record", "sender", "station_record", "topic_for"]
