@@ -6,7 +6,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.rll-bt-installed
 SEED   ?= 1
 
-.PHONY: sim test test-fast lint install protos clean
+.PHONY: sim test test-fast lint install protos clean browser
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -19,13 +19,24 @@ install: $(STAMP)
 sim: $(STAMP)
 	$(BIN)/rll-bt sim --seed $(SEED)
 
-# the whole suite, after the linter (what CI runs)
-test: lint
+# the whole suite, after the linter (what CI runs); the live-view test drives Debian's chromium
+test: lint browser
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
 # the inner loop: the linter and every test not marked slow (whole games, training)
 test-fast: lint
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m "not slow"
+
+# headless Chromium for the browser test of the live view (tests/games/view): Debian's package,
+# installed with apt-get when root and missing; anyone else is told the one command
+browser:
+	@command -v chromium >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends chromium; \
+	  else \
+	    echo "the browser test needs Debian's chromium; install it with:  sudo apt-get install -y chromium" >&2; \
+	    exit 1; \
+	  fi; }
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -55,11 +55,13 @@ def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
         from .processes import ProcessGame
         game = ProcessGame(options, progress=bar, clock=clock)
     else:
-        # a game watched live (--gui, --live) keeps to real time
-        game = LockstepGame(options, progress=bar, pace=clock if options.gui or options.live is not None else None)
+        # a game watched live (--gui, --live, --view) keeps to real time, or to --speed
+        game = LockstepGame(options, progress=bar, pace=clock if options.pace > 0 else None)
+        import sys
         if game.watch is not None and game.watch.port is not None:
-            import sys
             print(f"Foxglove live: open connection ws://localhost:{game.watch.port}", file=sys.stderr)
+        if game.view is not None:
+            print(f"live view: open {game.view.url} in a browser", file=sys.stderr)
     try:
         result = game.run()
         if bar is not None:

@@ -23,6 +23,7 @@ ones the simulator, the team server and the skills publish
 from __future__ import annotations
 
 import argparse
+import errno
 import sys
 from pathlib import Path
 
@@ -44,6 +45,9 @@ def _positive(text: str) -> float:
     if v <= 0:
         raise argparse.ArgumentTypeError(f"must be > 0, not {text}")
     return v
+
+
+DEFAULT_VIEW_PORT = 8766
 
 
 def register(cli) -> None:
@@ -101,6 +105,12 @@ def register(cli) -> None:
     g.add_argument("--live", type=int, nargs="?", const=8765, metavar="PORT",
                    help="serve the same channels over Foxglove's WebSocket protocol (default port 8765; "
                         "0: any free port); Foxglove: Open connection, ws://localhost:PORT")
+    g.add_argument("--view", type=int, nargs="?", const=DEFAULT_VIEW_PORT, metavar="PORT",
+                   help=f"serve the live page (field, robots, orders, score, trees) on http://localhost:PORT/ "
+                        f"(default port {DEFAULT_VIEW_PORT}; 0: any free port)")
+    g.add_argument("--speed", type=_seconds, metavar="X",
+                   help="game seconds per wall second (1: real time, the default with --gui, --live or --view; "
+                        "0: as fast as the machine goes, the default otherwise)")
     g.add_argument("--record-camera", type=_seconds, default=0.0, metavar="HZ",
                    help="also take camera frames for the recording, per robot and second (default 0: only the "
                         "frames the robots' perception reads; a frame costs about 0.2 s of CPU)")
@@ -123,6 +133,8 @@ def register(cli) -> None:
                    help="where the PNGs go (default: FILE's folder / <FILE stem>_report)")
     p.add_argument("--no-png", action="store_true", help="only print the summary")
     p.set_defaults(func=replay)
+    from .view.command import add
+    add(cli)
 
 
 def options_from(args):
@@ -140,7 +152,7 @@ def options_from(args):
                            exploration=args.exploration, production=args.production, dt=args.dt,
                            hz=args.hz, laser_rate=args.laser_rate, localisation=args.localisation,
                            baseline=args.baseline, record=args.record, live=args.live,
-                           record_camera=args.record_camera)
+                           record_camera=args.record_camera, view=args.view, speed=args.speed)
     except ValueError as exc:
         raise UserError(str(exc)) from None
 
@@ -151,9 +163,14 @@ def run(args) -> int:
 
     from . import play
     options = options_from(args)
-    if options.processes and (options.record is not None or options.live is not None):
-        raise UserError("--record and --live watch a lockstep game; with --processes record each part "
-                        "(rll-bt agent --record, rll-bt teamserver --record)", where="--processes")
+    if options.processes and (options.live is not None or options.view is not None):
+        raise UserError("--live and --view serve a lockstep game; with --processes give --record (every process "
+                        "records its part, merged into one file at the end) and replay it with rll-bt view FILE",
+                        where="--processes")
+    for name in ("live", "view"):
+        port = getattr(options, name)
+        if port is not None and not 0 <= port < 65536:
+            raise UserError(f"not a port: {port}", where=f"--{name}")
     wall = WallClock()
     try:
         summary = play(options, progress=not args.quiet, clock=wall)
@@ -161,6 +178,16 @@ def run(args) -> int:
         raise Unavailable(str(exc), where="--gui" if options.gui else None,
                           hint="leave out --gui to play headless, or run where DISPLAY (X11) or "
                                "WAYLAND_DISPLAY names a display") from None
+    except OSError as exc:
+        if options.view is None or exc.errno not in (errno.EADDRINUSE, errno.EACCES, errno.EADDRNOTAVAIL):
+            raise
+        raise Unavailable(f"cannot serve the live page: {exc.strerror}", where=f"--view {options.view}",
+                          hint="another program on the port? give --view 0 for any free port") from None
+    except RuntimeError as exc:
+        if options.live is None or "bind" not in str(exc):
+            raise
+        raise Unavailable(f"cannot serve Foxglove's WebSocket: {exc}", where=f"--live {options.live}",
+                          hint="another program on the port? give --live 0 for any free port") from None
     print(summary["table"])
     if options.out is not None:
         print(f"\nwrote {', '.join(summary['files'])} to {options.out}", file=sys.stderr)

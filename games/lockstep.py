@@ -60,7 +60,7 @@ class LockstepGame:
 
     def __init__(self, options: GameOptions, *, progress: Callable | None = None, pace=None):
         self.options = o = options
-        self.pace = pace              # a wall Clock: keep to real time (``--gui``); None: as fast as possible
+        self.pace = pace              # a wall Clock: keep to ``options.pace`` (real time: 1); None: as fast as possible
         sim_factory = load_simulator(o.simulator)
         ts_factory = load_teamserver(o.teamserver)
         self.sim = sim_factory(profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key,
@@ -71,6 +71,8 @@ class LockstepGame:
         try:
             self._wire(o, ts_factory)
         except BaseException:
+            if getattr(self, "watch", None) is not None:
+                self.watch.close()
             self.sim.close()
             raise
         self.progress = progress
@@ -90,10 +92,14 @@ class LockstepGame:
             self.log = MessageLog(o.out / "messages.jsonl", self.clock,
                                   {"teamserver": self.team_reg}, self.ref_reg, key=o.key)
             self.bus.tap(self.log.tap)
-        self.watch = None
-        if o.record is not None or o.live is not None:
+        self.watch = self.view = None
+        if o.record is not None or o.live is not None or o.view is not None:
             from .watch import GameWatch
             self.watch = GameWatch(self, o)
+        if o.view is not None:
+            from .view import attach
+            self.view = attach(self.watch.watch, port=o.view, profile=o.profile,
+                               meta={"kind": "sim", "name": f"rll-bt sim --seed {o.seed}", "seed": o.seed})
         self.refbox.attach_bus(self.bus)
         self._tmp = None
         state = o.state
@@ -209,7 +215,8 @@ class LockstepGame:
         if not hasattr(self, "_pace0"):
             self._pace0 = (self.pace.now(), self.clock.now())
         wall0, sim0 = self._pace0
-        ahead = (self.clock.now() - sim0) - (self.pace.now() - wall0)
+        speed = self.options.pace or 1.0
+        ahead = (self.clock.now() - sim0) / speed - (self.pace.now() - wall0)
         if ahead > 0:
             self.pace.sleep(ahead)
 
@@ -274,6 +281,8 @@ class LockstepGame:
         self.teamserver.close()
         if self.log is not None:
             self.log.close()
+        if self.view is not None:
+            self.view.close()
         if self.watch is not None:
             self.watch.close()
         self.sim.close()

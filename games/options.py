@@ -67,6 +67,9 @@ class GameOptions:
     record: Path | None = None         # an MCAP recording of the game (games.watch)
     live: int | None = None            # Foxglove WebSocket port for a live view (0: any free)
     record_camera: float = 0.0         # camera frames taken for the recording itself, per robot and second
+    view: int | None = None            # port of the live page (games.view; 0: any free)
+    speed: float | None = None         # game seconds per wall second; 0: as fast as possible;
+                                       # None: real time when watched (gui, live, view), else as fast as possible
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -95,8 +98,17 @@ class GameOptions:
             v = getattr(self, name)
             if v is not None and v < 0:
                 raise ValueError(f"{name} must be >= 0 seconds, not {v}")
+        if self.speed is not None and not self.speed >= 0:
+            raise ValueError(f"speed must be >= 0 (0: as fast as possible), not {self.speed}")
         if self.out is not None:
             self.out = Path(self.out)
+
+    @property
+    def pace(self) -> float:
+        """Game seconds per wall second a lockstep game keeps to (0: as fast as it goes)."""
+        if self.speed is not None:
+            return float(self.speed)
+        return 1.0 if self.gui or self.live is not None or self.view is not None else 0.0
 
     @property
     def rules(self):
