@@ -57,7 +57,9 @@ class GameWatch:
     def __init__(self, game, options):
         o = options
         self.game = game
-        self.watch = Watch(record=o.record, live=o.live, clock=game.clock, name="rll-bt sim",
+        # the profile in the name: a page following the live server (rll-bt view ws://...) draws its field
+        self.watch = Watch(record=o.record, live=o.live, clock=game.clock,
+                           name=f"rll-bt sim ({o.profile}, seed {o.seed})",
                            meta={"kind": "sim", "team": "CYAN", **{k: getattr(o, k) for k in (
                                "profile", "seed", "robots", "strategy", "perception", "baseline", "until", "setup",
                                "exploration", "production")}})

@@ -25,7 +25,7 @@ from pathlib import Path
 from .state import ViewState
 
 _SHOWN = re.compile(r"^(/robot\d+/(pose|true_pose|tree|tree/structure)|/game/(sample|stations|task|event|result)"
-                    r"|/[a-z0-9_]+/public/(GameState|OrderInfo|MachineInfo))$")
+                    r"|/[a-z0-9_]+/public/(GameState|OrderInfo)|/refbox/(public|cyan|magenta)/MachineInfo)$")
 
 
 def shown(topic: str) -> bool:
@@ -82,6 +82,7 @@ class Playback:
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self._feed_to(self.start_t)                # the first moment shows before play
         self._publish()
 
     def _publish(self) -> None:

@@ -223,12 +223,14 @@ class ViewState:
             self._path(n, what, t, pose)
         elif what == "tree/structure":
             d = dict(value)
+            if "task_id" not in d:
+                return
             self._robot_entry(n)["tree"] = {"task_id": d.get("task_id"), "kind": d.get("kind"),
                                             "name": d.get("name"), "nodes": d.get("nodes", []), "running": [],
                                             "visited": [], "status": None, "tick": 0, "outcome": None}
             self._touch(f"robots/{n}")
         elif what == "tree":
-            tree = self._robot_entry(n)["tree"]
+            tree = (self.data["robots"].get(n) or {}).get("tree")
             if tree is None or tree["task_id"] != value.get("task_id"):
                 return
             tree.update(running=value.get("running", []), visited=value.get("visited", []),
@@ -268,7 +270,7 @@ class ViewState:
             self.data["stations"] = {s["name"]: dict(s) for s in d["stations"]}
             self._touch("stations")
         elif kind == "task":
-            robot = self._robot_entry(str(d["robot"]))
+            robot = self._robot_entry(str(int(d["robot"])))
             robot["task"] = None if d.get("end") is not None else {"kind": d.get("kind"), "id": d.get("id"),
                                                                     "start": d.get("start")}
             self._touch(f"robots/{d['robot']}")
@@ -335,12 +337,16 @@ class ViewState:
 
 
 def _order(o: dict) -> dict:
-    """An order as the page shows it (``OrderInfo``'s fields or a game result's)."""
-    return {"id": o.get("id"), "complexity": o.get("complexity", "C0"), "base": o.get("base_color", o.get("base")),
-            "rings": list(o.get("ring_colors", o.get("rings", []))), "cap": o.get("cap_color", o.get("cap")),
+    """An order as the page shows it: ``OrderInfo``'s fields, or a game result's (the refbox's own)."""
+    complexity = o.get("complexity", "C0")
+    delivered = o.get("delivered")
+    if not isinstance(delivered, dict):
+        delivered = {"CYAN": o.get("quantity_delivered_cyan", 0), "MAGENTA": o.get("quantity_delivered_magenta", 0)}
+    return {"id": o.get("id"), "complexity": f"C{complexity}" if isinstance(complexity, int) else str(complexity),
+            "base": o.get("base_color", o.get("base")), "rings": list(o.get("ring_colors", o.get("rings", []))),
+            "cap": o.get("cap_color", o.get("cap")),
             "requested": int(o.get("quantity_requested", o.get("quantity", 1)) or 0),
-            "delivered": {"CYAN": int(o.get("quantity_delivered_cyan", 0) or 0),
-                          "MAGENTA": int(o.get("quantity_delivered_magenta", 0) or 0)},
+            "delivered": {k: int(delivered.get(k, 0) or 0) for k in ("CYAN", "MAGENTA")},
             "begin": o.get("delivery_period_begin", o.get("begin")), "end": o.get("delivery_period_end", o.get("end")),
             "competitive": bool(o.get("competitive", False))}
 

@@ -253,7 +253,10 @@ function drawHeader(s) {
     seek.min = pb.start; seek.max = pb.end;
     if (document.activeElement !== seek) seek.value = pb.t;
     const speed = document.getElementById("speed");
-    if (document.activeElement !== speed) speed.value = String(pb.speed);
+    if (![...speed.options].some(o => Number(o.value) === pb.speed)) {
+      el("option", { value: String(pb.speed) }, speed, null).textContent = `${pb.speed}×`;
+    }
+    if (document.activeElement !== speed) speed.value = [...speed.options].find(o => Number(o.value) === pb.speed).value;
   }
   const res = s.result;
   document.getElementById("result").textContent = res ?

@@ -121,3 +121,55 @@ def test_runs_a_task_from_a_team_server_over_tcp(trees):
         th.join(timeout=15)
         server_t.close()
     assert rc.get("rc") == 0
+
+
+def test_record_holds_the_robots_trees_and_both_directions_of_its_link(trees, tmp_path):
+    """``rll-bt agent --record``: the task's tree tick by tick and the link's messages, decoded."""
+    from mcap.reader import make_reader
+    from mcap_protobuf.decoder import DecoderFactory
+
+    from games.replay import JsonDecoderFactory
+    server_t = tcp_server()
+    srv = ScriptedServer(server_t)
+    rec = tmp_path / "r2.mcap"
+    rc = {}
+    th = threading.Thread(target=lambda: rc.setdefault("rc", main(base_args(server_t.port, trees, "--seconds", "4",
+                                                                             "--record", str(rec)))))
+    th.start()
+    try:
+        deadline = time.monotonic() + 10
+        while not srv.of("RobotHello") and time.monotonic() < deadline:
+            server_t.wait(0.05)
+            srv.pump()
+        srv.task(3, "get_workpiece", robot=2, machine="C-BS")
+        while not srv.results(3, "SUCCEEDED") and time.monotonic() < deadline:
+            server_t.wait(0.05)
+            srv.pump()
+    finally:
+        th.join(timeout=15)
+        server_t.close()
+    assert rc.get("rc") == 0
+    with open(rec, "rb") as fh:
+        reader = make_reader(fh, decoder_factories=[DecoderFactory(), JsonDecoderFactory()])
+        meta = next(m.metadata for m in reader.iter_metadata() if m.name == "rll-bt")
+        msgs_ = [(ch.topic, d) for _s, ch, _m, d in reader.iter_decoded_messages(log_time_order=True)]
+    assert meta["kind"] == "agent" and meta["robot"] == "2" and meta["clock"] == "wall"
+    topics = {t for t, _d in msgs_}
+    assert {"/robot2/link/RobotHello", "/robot2/link/TaskResult", "/teamserver/link/Task",
+            "/robot2/tree/structure", "/robot2/tree"} <= topics, sorted(topics)
+    task = next(d for t, d in msgs_ if t == "/teamserver/link/Task")
+    assert task.task_id == 3 and task.get_workpiece.machine == "C-BS"
+    structure = next(d for t, d in msgs_ if t == "/robot2/tree/structure")
+    assert structure["kind"] == "get_workpiece" and {n["type"] for n in structure["nodes"]} >= {"log", "wait"}
+    ticks = [d for t, d in msgs_ if t == "/robot2/tree"]
+    assert ticks[-1]["outcome"]["status"] == "SUCCEEDED" and any(d["status"] == "RUNNING" for d in ticks)
+    results = [d for t, d in msgs_ if t == "/robot2/link/TaskResult"]
+    status = results[0].DESCRIPTOR.fields_by_name["status"].enum_type.values_by_number
+    assert any(r.task_id == 3 and status[r.status].name == "SUCCEEDED" for r in results)
+
+
+def test_record_to_a_place_that_cannot_be_written_is_a_usage_error(trees, tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert main(base_args(free_port(), trees, "--record", str(blocker / "x.mcap"), "--connect-timeout", "1")) == 2
+    assert "--record" in capsys.readouterr().err
