@@ -122,8 +122,8 @@ def run(args: argparse.Namespace) -> int:
         refbox.close()
         raise Unavailable(f"cannot listen for robots: {exc}", where=args.listen) from None
     try:
-        watch = open_watch(args, "rll-bt teamserver", {"kind": "teamserver", "team": args.team,
-                                                        "profile": args.profile})
+        watch = open_watch(args, f"rll-bt teamserver ({args.profile})",
+                           {"kind": "teamserver", "team": args.team, "profile": args.profile})
     except BaseException:
         agents.close()
         refbox.close()

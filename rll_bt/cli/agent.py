@@ -186,8 +186,9 @@ def cmd_agent(args) -> int:
     try:
         public, team = _open_refbox(args, config, clock)
         link = team_server_link(host, port, key=args.key, clock=clock)
-        watch = open_watch(args, "rll-bt agent", {"kind": "agent", "robot": config.robot_id, "team": config.team_name,
-                                                  "profile": config.profile})
+        watch = open_watch(args, f"rll-bt agent R{config.robot_id} ({config.profile})",
+                           {"kind": "agent", "robot": config.robot_id, "team": config.team_name,
+                            "profile": config.profile})
         robot_watch = None
         if watch is not None:
             robot_watch, backend_used, link, public, team = watch_agent(

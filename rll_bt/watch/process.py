@@ -22,13 +22,16 @@ from .links import LINK, LinkRecorder
 from .robot import RobotWatch
 from .sink import Watch
 
+#: a process that may be killed (SIGKILL) loses at most this much of its recording
+CHUNK = 64 * 1024
+
 
 def wall_watch(*, record: str | Path | None, live: int | None, name: str, meta: dict | None = None,
                host: str = "127.0.0.1") -> Watch:
     """A :class:`Watch` on the machine's monotonic clock, stamped in Unix time."""
     base_ns = time.time_ns() - time.monotonic_ns()
     return Watch(record=record, live=live, clock=WallClock(), name=name, base_ns=base_ns,
-                 meta={"clock": "wall", **(meta or {})}, host=host)
+                 meta={"clock": "wall", **(meta or {})}, host=host, chunk_size=CHUNK)
 
 
 def watch_links(watch: Watch, me: str, *, link=None, public=None, team=None):

@@ -54,11 +54,12 @@ def quaternion(theta: float):
 class Watch:
     """See the module doc.  ``record``: an MCAP path; ``live``: a WebSocket
     port (0: any free one, see :attr:`port`); ``clock``: gives the seconds
-    that message times count (``now()``); ``meta``: extra metadata."""
+    that message times count (``now()``); ``meta``: extra metadata;
+    ``chunk_size``: bytes of messages written to the file at a time."""
 
     def __init__(self, *, record: str | Path | None = None, live: int | None = None, clock=None,
                  name: str = "rll-bt", base_ns: int | None = None, meta: dict | None = None,
-                 host: str = "127.0.0.1"):
+                 host: str = "127.0.0.1", chunk_size: int = 1 << 20):
         fox, self._channels_mod, self._m = _sdk()
         self.clock = clock
         self.base_ns = time.time_ns() if base_ns is None else int(base_ns)
@@ -74,7 +75,12 @@ class Watch:
         self.path = Path(record) if record is not None else None
         if self.path is not None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.writer = fox.open_mcap(str(self.path), allow_overwrite=True, context=self.context)
+            from foxglove.mcap import MCAPWriteOptions
+            # one compression thread: up to 9 games share 2 cores; ``chunk_size``: what a killed
+            # process loses at most (its file holds the chunks written before)
+            opts = MCAPWriteOptions(chunk_size=int(chunk_size), compression_threads=0)
+            self.writer = fox.open_mcap(str(self.path), allow_overwrite=True, context=self.context,
+                                        writer_options=opts)
             self.writer.write_metadata(METADATA, {"base_ns": str(self.base_ns), "name": name,
                                                   **{k: str(v) for k, v in (meta or {}).items()}})
         if live is not None:

@@ -100,7 +100,7 @@ def test_a_robot_the_world_does_not_have_is_an_error_not_a_hang(served):
 def test_a_short_game_in_processes_scores_exploration_and_logs_both_links(tmp_path, capsys):
     out = tmp_path / "game"
     rc = main(["sim", "--processes", "--robots", "1", "--setup", "1", "--exploration", "15", "--production", "2",
-               "--out", str(out), "-q"])
+               "--out", str(out), "-q", "--record", str(out / "game.mcap")])
     assert rc == 0, (out / "teamserver.log").read_text() if (out / "teamserver.log").exists() else ""
     rep = json.loads((out / "report.json").read_text())
     assert rep["finished"] and rep["points"]["exploration"] > 0       # reports reached the refbox
@@ -137,6 +137,54 @@ def test_a_short_game_in_processes_scores_exploration_and_logs_both_links(tmp_pa
     text = (out / "refbox.log").read_text()
     assert text.startswith("refbox sim: rcll2016") and "stations of the world at 127.0.0.1:" in text
     assert "final score" in text and "Traceback" not in text
+    _the_recording_holds_every_process(out, rep, log)
+
+
+def _the_recording_holds_every_process(out, rep, log):
+    """``--record``: the agent process's part, the world's and the refbox's and team server's messages,
+    merged on the game's clock; replay draws the game's report."""
+    from mcap.reader import make_reader
+    from mcap_protobuf.decoder import DecoderFactory
+
+    from games.replay import JsonDecoderFactory, read, redraw
+    with open(out / "game.mcap", "rb") as fh:
+        reader = make_reader(fh, decoder_factories=[DecoderFactory(), JsonDecoderFactory()])
+        summary = reader.get_summary()
+        base = int(next(m.metadata for m in reader.iter_metadata() if m.name == "rll-bt")["base_ns"])
+        msgs = [(ch.topic, (m.log_time - base) / 1e9, d)
+                for _s, ch, m, d in reader.iter_decoded_messages(log_time_order=True)]
+    schemas = {ch.topic: summary.schemas[ch.schema_id].name for ch in summary.channels.values()}
+    counts = {summary.channels[c].topic: n for c, n in summary.statistics.channel_message_counts.items()}
+    assert schemas["/robot1/pose"] == schemas["/robot1/true_pose"] == "foxglove.PoseInFrame"    # agent, world
+    assert schemas["/robot1/scan"] == "foxglove.LaserScan" and schemas["/robot1/tree"] == "rllbt.TreeTick"
+    assert schemas["/refbox/public/GameState"] == "llsf_msgs.GameState"
+    assert schemas["/teamserver/link/Task"] == "rllbt.Task" and schemas["/robot1/link/RobotHello"] == "rllbt.RobotHello"
+    assert schemas["/robot1/cyan/BeaconSignal"] == "llsf_msgs.BeaconSignal"
+    # every message of the game's log once (the agent's own copies left out), on the game's clock
+    proto = sum(n for t, n in counts.items()
+                if t.count("/") == 3 and t.split("/")[2] in ("public", "cyan", "magenta", "link"))
+    assert proto == len(log) == rep["messages"]
+    by_topic = {}
+    for t, sec, d in msgs:
+        by_topic.setdefault(t, []).append((sec, d))
+    assert abs(by_topic["/teamserver/link/Task"][0][0] - next(x["t"] for x in log if x["type"] == "Task")) < 1e-3
+    # the agent's estimate (its clock mapped onto the game's) follows the world's truth
+    est, truth = by_topic["/robot1/pose"], by_topic["/robot1/true_pose"]
+    assert rep["sim_time"] - 1.5 < est[-1][0] <= rep["sim_time"] + 1.0
+    sec, e = est[-1]
+    t_sec, t_pose = min(truth, key=lambda x: abs(x[0] - sec))
+    assert abs(t_sec - sec) < 0.2
+    assert abs(e.pose.position.x - t_pose.pose.position.x) + abs(e.pose.position.y - t_pose.pose.position.y) < 0.5
+    assert e.timestamp.ToNanoseconds() == round(sec * 1e9) + base       # the stamp moved with the log time
+    ticks = [d for _s, d in by_topic["/robot1/tree"]]
+    assert any(d.get("outcome") for d in ticks) and {d["status"] for d in ticks} >= {"RUNNING"}
+    assert not (out / "recording").exists()                           # the parts are merged and gone
+    replayed = read(out / "game.mcap")
+    assert replayed.meta["processes"] == "True" and replayed.result["points"]["CYAN"] == rep["points"]["total"]
+    pngs = redraw(replayed, out / "replay")
+    assert {p.name for p in pngs} == {"field.png", "timeline.png", "score.png"}
+    for png in pngs:
+        assert png.read_bytes() == (out / png.name).read_bytes(), png.name
 
 
 

@@ -26,7 +26,7 @@ def _working(game) -> dict[int, int]:
 
 def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
     opts = GameOptions(seed=3, robots=2, setup=1.0, exploration=3.0, production=300.0, strategy="oracle",
-                       processes=True, out=tmp_path / "game")
+                       processes=True, out=tmp_path / "game", record=tmp_path / "game.mcap")
     game = ProcessGame(opts)
     try:
         # the refbox is a process of its own, neither this one (the world's) nor another child
@@ -89,3 +89,16 @@ def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
     assert [x["t"] for x in log] == sorted(x["t"] for x in log)
     assert "DOWN" in {s for _, s in result.recording.stations["C-BS"]}   # the refbox process's states, recorded here
     assert "Traceback" not in (opts.out / "refbox.log").read_text()
+    # the recording holds the killed agent's part (cut off by SIGKILL) and its successor's
+    from games.replay import read
+    rep = read(opts.record)
+    assert rep.recording == result.recording
+    events = {e["what"]: e["t"] for e in result.recording.events}
+    from mcap.reader import make_reader
+    with open(opts.record, "rb") as fh:
+        reader = make_reader(fh)
+        base = int(next(m.metadata for m in reader.iter_metadata() if m.name == "rll-bt")["base_ns"])
+        poses = [(m.log_time - base) / 1e9 for _s, _c, m in reader.iter_messages(topics=[f"/robot{victim}/pose"])]
+    assert any(t < events["agent killed"] - 1.0 for t in poses)
+    assert any(t > events["agent started"] + 5.0 for t in poses)
+    assert not any(events["agent killed"] + 0.5 < t < events["agent started"] for t in poses)   # nobody estimated
