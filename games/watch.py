@@ -70,7 +70,28 @@ class GameWatch:
         self._next_truth = -1e18
         self.truth_period = 0.1
         self._station_states: dict[str, str] = {}
+        if o.live is not None:
+            self._declare(o)
         game.bus.tap(self.tap)
+
+    def _declare(self, o) -> None:
+        """The channels a Foxglove layout opens, created before anyone connects (see Watch.declare)."""
+        from rll_bt import msgs
+        from rll_bt.watch.robot import DETECTIONS_SCHEMA, STRUCTURE_SCHEMA, TREE_SCHEMA
+        w = self.watch
+        for n in range(1, o.robots + 1):
+            for what, kind in (("pose", "PoseInFrame"), ("true_pose", "PoseInFrame"), ("scan", "LaserScan"),
+                               ("camera", "CompressedImage")):
+                w.declare(f"/robot{n}/{what}", kind)
+            for what, schema in (("tree", TREE_SCHEMA), ("tree/structure", STRUCTURE_SCHEMA),
+                                 ("detections", DETECTIONS_SCHEMA)):
+                w.declare(f"/robot{n}/{what}", "json", schema)
+        w.declare("/field", "SceneUpdate")
+        for kind in ("sample", "task", "event", "stations", "result"):
+            w.declare(f"/game/{kind}", "json", SAMPLE_SCHEMA)
+        ms = msgs.message_set(o.profile)
+        for name in ("GameState", "OrderInfo", "MachineInfo", "RobotInfo"):
+            w.declare(f"/refbox/public/{name}", "proto", ms.get(name))
 
     @property
     def port(self) -> int | None:

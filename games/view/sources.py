@@ -33,6 +33,11 @@ def shown(topic: str) -> bool:
     return bool(_SHOWN.match(topic))
 
 
+#: s a subscription waits after its channel's advertisement (see FoxgloveSource._control)
+SUBSCRIBE_DELAY = 0.02
+MAX_RETRIES = 5
+
+
 class SourceError(ValueError):
     """A recording or live server that cannot be followed."""
 
@@ -172,9 +177,12 @@ class FoxgloveSource:
         self.server_name: str | None = None
         self.error: str | None = None
         self.messages = 0
+        self.retries: dict[int, int] = {}       # channel id -> subscriptions refused as unknown
         self._stop = threading.Event()
         self._ws = None
         self._subs: dict[int, tuple[str, object]] = {}
+        self._sub_of: dict[int, int] = {}            # channel id -> subscription id
+        self._pending: dict[int, tuple[float, int]] = {}   # channel id -> (when to subscribe, tries)
         self._next_sub = 1
         self._t0: int | None = None
         self._thread = threading.Thread(target=self._run, name="rll-bt view foxglove", daemon=True)
@@ -190,8 +198,9 @@ class FoxgloveSource:
                          max_size=None) as ws:
                 self._ws = ws
                 while not self._stop.is_set():
+                    self._subscribe_due(ws)
                     try:
-                        m = ws.recv(timeout=0.2)
+                        m = ws.recv(timeout=0.02 if self._pending else 0.2)
                     except TimeoutError:
                         continue
                     if isinstance(m, str):
@@ -217,7 +226,6 @@ class FoxgloveSource:
                                 **({"profile": m.group(0)} if m else {}))
             self.connected.set()
         elif kind == "advertise":
-            subs = []
             for ch in op.get("channels", []):
                 if not shown(ch.get("topic", "")):
                     continue
@@ -226,9 +234,32 @@ class FoxgloveSource:
                     continue
                 sid, self._next_sub = self._next_sub, self._next_sub + 1
                 self._subs[sid] = (ch["topic"], decode)
-                subs.append({"id": sid, "channelId": ch["id"]})
-            if subs:
-                ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
+                self._sub_of[ch["id"]] = sid
+                self._pending[ch["id"]] = (time.monotonic() + SUBSCRIBE_DELAY, 0)
+        elif kind == "status":
+            # foxglove-sdk (0.30 and its main branch) sends an advertisement before it files the
+            # channel under the client: a subscription arriving in between is refused with
+            # "Unknown channel ID: N".  The channel is there a moment later, so ask again.
+            m = re.fullmatch(r"Unknown channel ID: (\d+)", str(op.get("message", "")))
+            if m and int(m.group(1)) in self._sub_of:
+                cid = int(m.group(1))
+                tries = self.retries.get(cid, 0) + 1
+                self.retries[cid] = tries
+                if tries <= MAX_RETRIES:
+                    self._pending[cid] = (time.monotonic() + SUBSCRIBE_DELAY * 2 ** tries, tries)
+        elif kind == "unadvertise":
+            for cid in op.get("channelIds", []):
+                self._pending.pop(cid, None)
+                self._subs.pop(self._sub_of.pop(cid, -1), None)
+
+    def _subscribe_due(self, ws) -> None:
+        now = time.monotonic()
+        due = [cid for cid, (when, _tries) in self._pending.items() if when <= now]
+        if due:
+            ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                {"id": self._sub_of[cid], "channelId": cid} for cid in due]}))
+            for cid in due:
+                del self._pending[cid]
 
     def _data(self, m: bytes) -> None:
         sid, ns = struct.unpack_from("<IQ", m, 1)

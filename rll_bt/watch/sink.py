@@ -119,31 +119,52 @@ class Watch:
             ch = self._channels[topic] = getattr(self._channels_mod, kind + "Channel")(topic, context=self.context)
         return ch
 
-    def proto(self, topic: str, msg, t: float | None = None) -> None:
-        """A protobuf message, with its own schema."""
+    def _proto_channel(self, topic: str, cls):
         import foxglove
-        if self.closed:
-            return
         ch = self._channels.get(topic)
         if ch is None:
             from mcap_protobuf.schema import build_file_descriptor_set
-            fds = build_file_descriptor_set(type(msg))
-            schema = foxglove.Schema(name=msg.DESCRIPTOR.full_name, encoding="protobuf",
-                                     data=fds.SerializeToString())
+            fds = build_file_descriptor_set(cls)
+            schema = foxglove.Schema(name=cls.DESCRIPTOR.full_name, encoding="protobuf", data=fds.SerializeToString())
             ch = self._channels[topic] = foxglove.Channel(topic, message_encoding="protobuf", schema=schema,
                                                           context=self.context)
-        self._log(topic, ch, msg.SerializeToString(), self.stamp(t), msg)
+        return ch
 
-    def json(self, topic: str, data: dict, t: float | None = None, schema: dict | None = None) -> None:
-        """A JSON object (``schema``: its JSON Schema, given on the first message of a topic)."""
+    def _json_channel(self, topic: str, schema: dict | None):
         import foxglove
-        if self.closed:
-            return
         ch = self._channels.get(topic)
         if ch is None:
             ch = self._channels[topic] = foxglove.Channel(topic, schema=schema or {"type": "object"},
                                                           context=self.context)
-        self._log(topic, ch, json.dumps(data, separators=(",", ":"), default=str).encode(), self.stamp(t), data)
+        return ch
+
+    def declare(self, topic: str, kind: str, schema=None) -> None:
+        """Create ``topic``'s channel before its first message: ``kind`` a Foxglove
+        well-known schema ("PoseInFrame", "LaserScan", ...), "json" (``schema``: its JSON
+        Schema) or "proto" (``schema``: the message class).  A live client that connects
+        later is told of it as it connects (foxglove-sdk files a channel created while a
+        client is connected only after advertising it, so a quick subscription can miss it)."""
+        if self.closed:
+            return
+        if kind == "json":
+            self._json_channel(topic, schema)
+        elif kind == "proto":
+            self._proto_channel(topic, schema)
+        else:
+            self._well_known(topic, kind)
+
+    def proto(self, topic: str, msg, t: float | None = None) -> None:
+        """A protobuf message, with its own schema."""
+        if self.closed:
+            return
+        self._log(topic, self._proto_channel(topic, type(msg)), msg.SerializeToString(), self.stamp(t), msg)
+
+    def json(self, topic: str, data: dict, t: float | None = None, schema: dict | None = None) -> None:
+        """A JSON object (``schema``: its JSON Schema, given on the first message of a topic)."""
+        if self.closed:
+            return
+        payload = json.dumps(data, separators=(",", ":"), default=str).encode()
+        self._log(topic, self._json_channel(topic, schema), payload, self.stamp(t), data)
 
     def pose(self, topic: str, pose: Pose2D, t: float | None = None, frame: str = FIELD, z: float = 0.0) -> None:
         """A field pose as ``foxglove.PoseInFrame``."""
