@@ -152,10 +152,15 @@ def _game(rep: Replay, kind: str, d: Any) -> None:
 def summary_lines(rep: Replay) -> list[str]:
     """What the recording holds: topics, their schemas and message counts."""
     m = rep.meta
-    lines = [f"{rep.path}: {m.get('name', 'rll-bt')} recording, {m.get('profile', '?')} seed {m.get('seed', '?')}, "
-             f"{rep.end - rep.start:.1f} s of {m.get('kind', '?')} time, "
-             f"{sum(i['count'] for i in rep.topics.values())} "
-             f"messages on {len(rep.topics)} topics" + ("" if rep.result else " (cut short: no /game/result)"), ""]
+    total = sum(i["count"] for i in rep.topics.values())
+    if m.get("kind", "sim") == "sim":
+        what = f"{m.get('profile', '?')} seed {m.get('seed', '?')}, {rep.end - rep.start:.1f} s of sim time"
+        cut = "" if rep.result else " (cut short: no /game/result)"
+    else:                                    # an agent's or a team server's own recording
+        what = f"{m.get('profile', '?')}, {rep.end - rep.start:.1f} s of wall time"
+        cut = ""
+    lines = [f"{rep.path}: {m.get('name', 'rll-bt')} recording, {what}, {total} messages on {len(rep.topics)} "
+             f"topics{cut}", ""]
     width = max((len(t) for t in rep.topics), default=5)
     lines.append(f"{'topic':{width}}  {'messages':>8}  schema")
     for topic in sorted(rep.topics):
