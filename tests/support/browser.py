@@ -59,14 +59,19 @@ class Page:
         return r["result"].get("value")
 
     def wait_for(self, expression: str, timeout: float = 20.0, poll: float = 0.1, between=None):
-        """Until ``expression`` is truthy (its value); ``between()`` is called between polls."""
+        """Until ``expression`` is truthy (its value); ``between()`` is called between polls.
+        An expression that throws (the page is not there yet) counts as false until the timeout."""
         end = time.monotonic() + timeout
         while True:
-            value = self.eval(expression)
+            try:
+                value, error = self.eval(expression), None
+            except BrowserError as exc:
+                value, error = None, exc
             if value:
                 return value
             if time.monotonic() > end:
-                raise BrowserError(f"timed out after {timeout:g} s waiting for: {expression}")
+                raise BrowserError(f"timed out after {timeout:g} s waiting for: {expression}"
+                                   + (f" (last: {error})" if error else ""))
             if between is not None:
                 between()
             else:
@@ -140,6 +145,8 @@ class Browser:
         w, h = self.size
         page.send("Emulation.setDeviceMetricsOverride", width=w, height=h, deviceScaleFactor=1, mobile=False)
         page.send("Page.navigate", url=url)
+        page.wait_for(f"document.readyState === 'complete' && location.href.startsWith({json.dumps(url)})",
+                      timeout=30)
         return page
 
     def close(self) -> None:
