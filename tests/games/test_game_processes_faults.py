@@ -4,6 +4,7 @@ the robots' backends and the refbox's stations.  One short game takes the faults
 (each process start costs seconds)."""
 import json
 import os
+import time
 
 import pytest
 
@@ -24,6 +25,27 @@ def _working(game) -> dict[int, int]:
     return {int(n): r["task_id"] for n, r in robots.items() if r.get("task") in PRODUCTION_KINDS}
 
 
+class _OnDisk:
+    """Whether an agent process's recording part holds, on disk, a pose it stamped
+    ``age`` seconds or more ago (its writer puts whole chunks in the file, so a
+    process killed before its first chunk leaves nothing to keep); the part is
+    read again only when it grew."""
+
+    def __init__(self, path, age: float = 3.0):
+        self.path, self.age, self.size, self.oldest = path, age, -1, None
+
+    def __call__(self) -> bool:
+        from games.procwatch import _records
+        size = self.path.stat().st_size if self.path.exists() else 0
+        if size != self.size:
+            self.size = size
+            _meta, _schemas, channels, messages = _records(self.path)
+            poses = {c.id for c in channels.values() if c.topic.endswith("/pose")}
+            stamps = [m.log_time for m in messages if m.channel_id in poses]
+            self.oldest = min(stamps) if stamps else None
+        return self.oldest is not None and self.oldest < time.time_ns() - self.age * 1e9
+
+
 def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
     opts = GameOptions(seed=3, robots=2, setup=1.0, exploration=3.0, production=300.0, strategy="oracle",
                        processes=True, out=tmp_path / "game", record=tmp_path / "game.mcap")
@@ -33,7 +55,10 @@ def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
         refbox = game.procs["refbox"].pid
         assert refbox != os.getpid() and refbox not in {p.pid for n, p in game.procs.items() if n != "refbox"}
         assert json.loads(game.refbox_file.read_text())["pid"] == refbox
-        assert game.run_until(lambda g: bool(_working(g)), limit=60.0), "no production task was handed out"
+        # (and the agents' recordings hold poses on disk: the victim's must outlive its SIGKILL)
+        parts = [_OnDisk(game.watch.parts / "agent1.mcap"), _OnDisk(game.watch.parts / "agent2.mcap")]
+        assert game.run_until(lambda g: bool(_working(g)) and all(p() for p in parts), limit=90.0), \
+            "no production task was handed out, or no agent recorded a pose"
 
         # an agent process dies without a goodbye: its task goes back, the game goes on
         victim, tid = sorted(_working(game).items())[0]
