@@ -87,7 +87,7 @@ class Page:
 class Browser:
     """A headless Chromium process and its DevTools connection (see the module doc)."""
 
-    def __init__(self, profile_dir: Path, width: int = 1400, height: int = 1100, start_timeout: float = 30.0):
+    def __init__(self, profile_dir: Path, width: int = 1400, height: int = 1100, start_timeout: float = 120.0):
         self.profile = Path(profile_dir)
         if self.profile.exists():
             shutil.rmtree(self.profile)
@@ -119,7 +119,7 @@ class Browser:
         port, path = port_file.read_text().splitlines()[:2]
         self.ws = connect(f"ws://127.0.0.1:{port}{path}", max_size=None, open_timeout=10)
 
-    def send(self, method: str, session: str | None = None, timeout: float = 30.0, **params) -> dict:
+    def send(self, method: str, session: str | None = None, timeout: float = 60.0, **params) -> dict:
         msg_id = next(self._ids)
         msg = {"id": msg_id, "method": method, "params": params}
         if session is not None:
@@ -146,7 +146,7 @@ class Browser:
         page.send("Emulation.setDeviceMetricsOverride", width=w, height=h, deviceScaleFactor=1, mobile=False)
         page.send("Page.navigate", url=url)
         page.wait_for(f"document.readyState === 'complete' && location.href.startsWith({json.dumps(url)})",
-                      timeout=30)
+                      timeout=120)
         return page
 
     def close(self) -> None:
