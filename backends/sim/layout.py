@@ -15,15 +15,17 @@ rotation in 45 degree steps; magenta mirrors cyan (zone n -> n + 12, x -> -x,
 rotation by ``profile.mirror_placement``); then one RS and one CS (random
 index) swap their places between the teams.
 
-2017+ (:func:`placement_2025`): stations at zone centres with 45 degree
-rotations in the team's machine zones (insertion zones and the entrance
-(5,2) stay free), no two stations in neighbouring zones, the magenta twin by
-``profile.mirror_placement`` (with its wall rule), then the RS/CS swap of
-zone and rotation.
+2017+ (:func:`placement_2025`): the cyan stations as the real refbox's
+solver places them (:mod:`.placing2025`: the zones in front of every
+input and output kept free, the border, centre line and insertion zones
+free, neighbouring zones and column 1 allowed), at zone centres with 45
+degree rotations; the magenta twin by ``profile.mirror_placement`` (with its
+wall rule), then the RS/CS swap of zone and rotation.
 
-Both also keep every station reachable: the points 0.45 m in front of its
-input and output faces lie inside the field, clear of the walls and of other
-stations, and the lanes from the insertion areas into the field stay free.
+2016 layouts also keep every station reachable by our own check: the points
+0.45 m in front of its input and output faces lie inside the field, clear of
+the walls and of other stations, and the lanes from the insertion areas into
+the field stay free.
 """
 from __future__ import annotations
 
@@ -35,6 +37,7 @@ from rll_bt import rules
 from rll_bt.backend import Pose2D
 from rll_bt.rules import CYAN, MAGENTA, Profile, machine_type, mirror_machine_name
 
+from . import placing2025
 from .collide import Box2D, box_distance
 from .fieldgeom import approach_points, entry_point, footprint
 
@@ -234,35 +237,20 @@ def _place_pair(profile: Profile, machine: str, placed: list[MachinePlacement], 
     return False
 
 
-def _grid(profile: Profile, zone: int) -> tuple[int, int]:
-    """Zone column on one axis across the whole field (magenta x=1 is next to cyan x=1), row."""
-    x, y = profile.zones.digits(zone)
-    return (x if profile.zone_team(zone) == CYAN else 1 - x), y
-
-
-def _neighbours(profile: Profile, a: int, b: int) -> bool:
-    (ax, ay), (bx, by) = _grid(profile, a), _grid(profile, b)
-    return abs(ax - bx) <= 1 and abs(ay - by) <= 1
-
-
 def placement_2025(profile: Profile, rng: random.Random, *, seed: int | None = None) -> FieldLayout:
-    """A random 2017+ placement with the refbox's constraints (module docstring)."""
-    candidates = [z for z in profile.machine_zones(CYAN)
-                  if not _neighbours(profile, z, profile.mirror_zone(z))]
-    free: dict[tuple[int, ...], list[int]] = {}      # zones left, by zones used so far
-
-    def draw(machine: str, placed: list[MachinePlacement]) -> MachinePlacement | None:
-        used = tuple(pl.zone for pl in placed)
-        if used not in free:
-            free[used] = [z for z in candidates if not any(_neighbours(profile, z, u) for u in used)]
-        options = free[used]
-        if not options:
-            return None
-        zone = rng.choice(options)
-        x, y = profile.zone_centre(zone)
-        return _placement(machine, zone, _random_rotation(profile, rng), x, y)
-
-    return _generate(profile, rng, seed, draw, keep_xy=False, tries=30)
+    """A random 2017+ placement with the real refbox's constraints (:mod:`.placing2025`):
+    the cyan machines at zone centres, each magenta twin by ``profile.mirror_placement``
+    (with its wall rule), then the RS/CS swap of zone and rotation."""
+    cyan = placing2025.solve(rng)
+    placed: list[MachinePlacement] = []
+    for machine in profile.machines(CYAN):
+        x, y, angle = cyan[machine[2:]]
+        zone = 10 * x + y
+        cx, cy = profile.zone_centre(zone)
+        pl = _placement(machine, zone, angle, cx, cy)
+        placed += [pl, _twin(profile, pl, keep_xy=False)]
+    machines = {pl.machine: pl for pl in placed}
+    return FieldLayout(profile.name, machines, seed, _swap(profile, machines, rng))
 
 
 def generate_layout(profile: Profile | str | None = None, seed: int = 0) -> FieldLayout:

@@ -92,15 +92,19 @@ def test_2025_wall_rule_is_applied_to_rs_and_cs_twins():
 
 @pytest.mark.parametrize("prof", [P16, P25], ids=lambda p: p.name)
 def test_stations_are_reachable(prof):
+    """2016: our own check keeps half a metre between stations; 2025 stands them as close as
+    the real generator does, but the zones in front of inputs and outputs are free."""
     for seed in range(6):
         lay = generate_layout(prof, seed)
         boxes = {m: footprint(prof, lay.pose(m)) for m in lay}
         f = prof.field
         for m in lay:
             for other in lay:
-                if other != m:
+                if other != m and prof is P16:
                     assert box_distance(boxes[m], boxes[other]) >= 0.5
-            for x, y in approach_points(prof, lay.pose(m)).values():
+            for side, (x, y) in approach_points(prof, lay.pose(m)).items():
+                if machine_type(m) == "DS" and side != "input" and prof is P25:
+                    continue                          # a DS is used from its input only
                 assert f.x_min + prof.robot.radius < x < f.x_max - prof.robot.radius
                 assert f.y_min + prof.robot.radius < y < f.y_max - prof.robot.radius
                 assert all(b.sdf(x, y) > 0.25 for o, b in boxes.items() if o != m)
