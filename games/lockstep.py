@@ -52,6 +52,7 @@ class GameResult:
     collision_log: list = field(default_factory=list)
     wall_time: float = 0.0
     messages: int = 0
+    tally: dict = field(default_factory=dict)    # team -> rll_bt.contracts.Tally
 
 
 class LockstepGame:
@@ -269,6 +270,7 @@ class LockstepGame:
                           awards=self.refbox.awards(), deliveries=self.refbox.deliveries(),
                           snapshot=self.teamserver.snapshot(), stations=self.refbox.stations(),
                           orders=self.refbox.orders(), collisions=len(collisions),
+                          tally={TEAM: self.refbox.tally(TEAM)},
                           sim_time=self.clock.now(), messages=self.bus.frames,
                           collision_log=collisions)
 

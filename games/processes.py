@@ -396,7 +396,7 @@ class ProcessGame:
         result = GameResult(finished=finished, status=self.refbox.status(), recording=rec,
                             awards=self.refbox.awards(), deliveries=self.refbox.deliveries(), snapshot=snap,
                             stations=self.refbox.stations(), orders=self.refbox.orders(), collisions=len(collisions),
-                            sim_time=end - t0, messages=messages,
+                            sim_time=end - t0, messages=messages, tally={TEAM: self.refbox.tally(TEAM)},
                             collision_log=[(round(t - t0, 3), *rest) for t, *rest in collisions])
         if self.watch is not None:
             self.watch.finish(result, self.dir / "messages.jsonl", t0)

@@ -79,7 +79,16 @@ class Replay:
                           snapshot={"restarts": r.get("team_server_restarts", 0)}, stations=self.stations,
                           orders=r.get("orders", []), collisions=int(r.get("collisions", 0)),
                           sim_time=self.sim_time, collision_log=[tuple(c) for c in r.get("collision_log", [])],
-                          messages=int(r.get("messages", 0)))
+                          messages=int(r.get("messages", 0)), tally=_tally(r))
+
+
+def _tally(result: dict) -> dict:
+    """The team's tally back from a report's ``stations_broken`` and ``referee``."""
+    from rll_bt.contracts import Tally
+    if "stations_broken" not in result:
+        return {}
+    return {result.get("team", "CYAN"): Tally(dict(result["stations_broken"].get("by_cause", {})),
+                                              dict(result.get("referee", {}).get("calls", {})))}
 
 
 def read(path: str | Path) -> Replay:

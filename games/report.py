@@ -6,7 +6,10 @@ until every exploration point was scored, i.e. every own station correctly
 reported, and until the team server was sure of every station), orders
 delivered, and per
 robot the busy time (s a task tree was running), tasks, failures and
-distance driven (m, ground truth).  :func:`table` renders it for a person.
+distance driven (m, ground truth); the team's stations that went BROKEN,
+by cause, and the referee calls (a dropped workpiece, an obstruction, a
+machine prepared and never fed) with the rulebook's penalties, which the
+refbox leaves to a human referee and the score does not include.  :func:`table` renders it for a person.
 """
 from __future__ import annotations
 
@@ -14,6 +17,8 @@ import json
 import math
 from dataclasses import asdict
 from pathlib import Path
+
+from rll_bt.contracts import Tally
 
 from .options import GameOptions, max_exploration_points
 
@@ -54,6 +59,15 @@ def all_points_after(awards, team: str, want: int) -> float | None:
         if got >= want:
             return round(a.game_time, 2)
     return None
+
+
+def _tally(result, team: str) -> dict:
+    """The stations of ``team`` that went BROKEN by cause, and the referee calls (what the
+    refbox leaves to a human referee: reported with the rulebook's penalty, not scored)."""
+    t = getattr(result, "tally", {}).get(team) or Tally()
+    return {"stations_broken": {"total": t.broken_total, "by_cause": dict(t.broken)},
+            "referee": {"calls": {k: dict(v) for k, v in t.referee.items()},
+                        "penalty": t.referee_penalty}}
 
 
 def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float | None = None) -> dict:
@@ -103,6 +117,7 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
         "messages": result.messages,
         "team_server_restarts": result.snapshot.get("restarts", 0),
         "hardware_stats": result.snapshot.get("hardware", {}),
+        **_tally(result, team),
         "awards": [asdict(a) for a in result.awards if a.team == team],
         "events": rec.events,
     }
@@ -126,6 +141,11 @@ def table(summary: dict) -> str:
         f"{'production points':22} {s['points']['production']:5d}",
         f"{'total score':22} {s['points']['total']:5d}",
         f"{'orders delivered':22} {s['orders_delivered']:5d}",
+        f"{'stations broken':22} {s.get('stations_broken', {}).get('total', 0):5d}   "
+        + ", ".join(f"{k} {v}" for k, v in s.get("stations_broken", {}).get("by_cause", {}).items()),
+        f"{'referee calls':22} {sum(c['count'] for c in s.get('referee', {}).get('calls', {}).values()):5d}   "
+        + ", ".join(f"{k} {c['count']} ({c['penalty']:+d})"
+                    for k, c in s.get("referee", {}).get("calls", {}).items()),
         f"{'collisions':22} {s['collisions']:5d}   "
         + ", ".join(f"{k} {v}" for k, v in sorted(s.get("collisions_by_kind", {}).items())),
         "",

@@ -28,6 +28,7 @@ from rll_bt.contracts import (
     RefboxProcess,
     Simulation,
     StationTruth,
+    Tally,
     World,
 )
 from rll_bt.plugins import offers
@@ -113,6 +114,9 @@ class _ViewOfWorld:
     def station_log(self) -> list[dict]:
         """Every station state change the refbox made (see :mod:`.refbox.view`)."""
         return self.view.station_log()
+
+    def tally(self, team: str) -> Tally:
+        return self.view.tally(team)
 
 
 class RefboxHere(_ViewOfWorld, InProcessRefbox):

@@ -7,8 +7,8 @@ mid-base height is within ``grab_tolerance_z`` of the gripper's is taken,
 unless the grab fails (probability ``grab_failure``).  When an open finishes
 with a workpiece held, it goes to the nearest free station slot within
 ``place_tolerance`` / ``place_tolerance_z`` of the gripper point, or else
-onto the floor below it.  Takes from and puts on slots become
-:class:`~backends.sim.stationapi.SlotEvent` s.
+onto the floor below it.  Takes from and puts on slots, and drops on the
+floor, become :class:`~backends.sim.stationapi.SlotEvent` s.
 """
 from __future__ import annotations
 
@@ -74,6 +74,7 @@ class GripperHandling:
         r.holding = None
         if best is None:
             self.store.put_floor(wp, gp[0], gp[1])
+            self._events.append(SlotEvent("drop", None, None, wp, r.key, self.time))
             return
         self.store.put(wp, *best)
         self._events.append(SlotEvent("put", best[0], best[1], wp, r.key, self.time))

@@ -17,11 +17,12 @@ _KEEP = object()
 
 @dataclass(frozen=True)
 class SlotEvent:
-    """A robot put a workpiece at a station slot (``kind="put"``) or took one
-    from it (``kind="take"``)."""
+    """A robot put a workpiece at a station slot (``kind="put"``), took one
+    from it (``kind="take"``) or let one fall on the floor (``kind="drop"``,
+    machine and slot None)."""
     kind: str
-    machine: str
-    slot: str
+    machine: str | None
+    slot: str | None
     workpiece: Workpiece
     robot: tuple[str, int]
     time: float

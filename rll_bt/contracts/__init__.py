@@ -3,7 +3,8 @@
 - :mod:`.world`: :class:`World`, the field, its robots and stations on one
   clock (step, a robot's backend, its true pose, collisions);
 - :mod:`.refbox`: :class:`RefboxView`, the referee box's game read-only
-  (status, awards, deliveries, stations, orders, and their types), and
+  (status, awards, deliveries, stations, orders, the tally of stations broken
+  and referee calls, and their types), and
   :class:`SimulatedRefbox` (with :class:`InProcessRefbox`,
   :class:`RefboxProcess`): what the host of a simulated game does with it;
 - :mod:`.simulation`: the simulator (``rll_bt.simulators``), a world and
@@ -21,11 +22,13 @@ from .refbox import (
     RefboxView,
     SimulatedRefbox,
     StationTruth,
+    Tally,
 )
 from .simulation import SIMULATORS, Simulation, SimulatorFactory, load_simulator
 from .teamserver import TEAMSERVERS, TeamServerFactory, TeamServerHandle, TeamServerOptions, load_teamserver
 from .world import World
 
-__all__ = ["Award", "Delivery", "GameStatus", "StationTruth", "RefboxView", "SimulatedRefbox", "InProcessRefbox",
-           "RefboxProcess", "World", "SIMULATORS", "Simulation", "SimulatorFactory", "load_simulator",
+__all__ = ["Award", "Delivery", "GameStatus", "StationTruth", "Tally", "RefboxView", "SimulatedRefbox",
+           "InProcessRefbox", "RefboxProcess", "World", "SIMULATORS", "Simulation", "SimulatorFactory",
+           "load_simulator",
            "TEAMSERVERS", "TeamServerFactory", "TeamServerHandle", "TeamServerOptions", "load_teamserver"]

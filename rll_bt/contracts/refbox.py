@@ -14,7 +14,7 @@ radians of the rules profile.
 from __future__ import annotations
 
 import abc
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..backend.types import Pose2D
@@ -79,6 +79,25 @@ class Delivery:
     how: str
 
 
+@dataclass(frozen=True)
+class Tally:
+    """What a game report counts of one team beside its points: its stations that went
+    BROKEN, by cause (the refbox's reason as a short key, e.g. "not-prepared",
+    "timeout"), and the referee calls the refbox leaves to a human referee (what ->
+    {"count": n, "penalty": the rulebook's points, not taken off the score})."""
+
+    broken: dict[str, int] = field(default_factory=dict)
+    referee: dict[str, dict] = field(default_factory=dict)
+
+    @property
+    def broken_total(self) -> int:
+        return sum(self.broken.values())
+
+    @property
+    def referee_penalty(self) -> int:
+        return sum(int(c.get("penalty") or 0) for c in self.referee.values())
+
+
 class RefboxView(abc.ABC):
     """The referee box's game, read-only (see the module doc)."""
 
@@ -101,6 +120,10 @@ class RefboxView(abc.ABC):
     def orders(self) -> list[dict]:
         """The game's orders as plain dicts (id, complexity, quantity, window)."""
         return []
+
+    def tally(self, team: str) -> Tally:
+        """``team``'s stations gone BROKEN and referee calls (empty where unknown)."""
+        return Tally()
 
 
 class SimulatedRefbox(RefboxView):

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from . import rcll2016, rcll2025
 from .geometry import MPS, ROBOT, WORKPIECE, MpsGeometry, RobotGeometry, WorkpieceGeometry
+from .machines import BROKEN_TIME, MPS_TIMES, PREPARED_BLINK_TIME, WAIT_IDLE_TIME, MachineTimes
 from .profile import (
     BASE_COLORS,
     CAP_COLORS,
@@ -54,4 +55,5 @@ __all__ = [
     "machine_team", "machine_type", "mirror_machine_name", "other_team",
     "rotation_to_theta", "theta_to_rotation",
     "MPS", "ROBOT", "WORKPIECE", "MpsGeometry", "RobotGeometry", "WorkpieceGeometry",
+    "MachineTimes", "MPS_TIMES", "BROKEN_TIME", "WAIT_IDLE_TIME", "PREPARED_BLINK_TIME",
 ]

@@ -8,6 +8,7 @@ import random
 from dataclasses import dataclass, field
 
 from .geometry import MPS, ROBOT, WORKPIECE, MpsGeometry, RobotGeometry, WorkpieceGeometry
+from .machines import MPS_TIMES, MachineTimes
 from .zones import CYAN, MAGENTA, Rect
 
 TEAMS = (CYAN, MAGENTA)
@@ -74,9 +75,20 @@ class Scoring:
     delivery_late_grace: float = 10.0     # seconds after the window end with reduced points
     delivery_late_penalty: float = 1.5   # points per full second late, inside the grace period
     delivery_too_late: int = 5
+    # 2025 (orders.clp): late by up to 1/steps, 2/steps, ... of the window's length costs
+    # 1/steps, 2/steps, ... of late_share of the delivery points (0 steps: the 2016 scheme)
+    delivery_late_steps: int = 0
+    delivery_late_share: float = 0.0
     delivery_wrong: int = 1
     competitive_first: int = 0
     competitive_second: int = 0
+    # storage station (2025): each store, retrieve and relocation
+    ss_store: int = 0
+    ss_retrieve: int = 0
+    ss_relocate: int = 0
+    # 2025: a machine going BROKEN takes back +additional_base per unused base on an RS
+    # slide and +cap_retrieved for a retrieved cap still in a CS
+    break_revokes: bool = False
 
 
 @dataclass(frozen=True)
@@ -110,6 +122,17 @@ class Profile:
     excluded_machine_zones: frozenset[int] = frozenset()
     down_period: tuple[float, float] = (30.0, 120.0)
     prepare_requires_report: bool = False   # 2025: PrepareMachine rejected until correctly reported
+    # production rules of the refbox (refbox-rules.md)
+    unprepared_input_breaks: bool = False   # 2016: a workpiece put on a machine not PREPARED breaks it
+    stuck_timeout: float | None = None      # 2025: PREPARED/PROCESSING/PROCESSED this long -> BROKEN
+    rs_paid_at_prepare: bool = False        # 2025: an RS prepared without its bases breaks at once
+    wait_idle_after_delivery: bool = False  # 2025: WAIT-IDLE after a delivery or a store
+    down_start: float = 1.0                 # earliest start of a down period (production s)
+    # 2025: products in every storage station at the start: (shelf, slot, base, cap)
+    prestored: tuple[tuple[int, int, str, str], ...] = ()
+    # what a human referee penalises (rulebook), reported as referee events
+    referee_penalties: dict[str, int] = field(default_factory=dict)
+    machine_times: MachineTimes = MPS_TIMES
     mps: MpsGeometry = MPS
     robot: RobotGeometry = ROBOT
     workpiece: WorkpieceGeometry = WORKPIECE
@@ -219,12 +242,27 @@ class Profile:
             raise ValueError(f"{self.name}: no light code {code}") from None
 
     # -- scoring ----------------------------------------------------------
-    def delivery_points(self, complexity: int, delivered_at: float, window_end: float) -> int:
+    def delivery_points(self, complexity: int, delivered_at: float, window_end: float,
+                        window_start: float | None = None) -> int:
+        """Delivery points (without the product's steps) for an order of ``complexity``
+        delivered at ``delivered_at`` whose window is [``window_start``, ``window_end``].
+
+        2016: in the window full, up to ``delivery_late_grace`` late
+        int(points - 1.5 * floor(seconds late)), later ``delivery_too_late``.
+        2025 (``delivery_late_steps``): the refbox's orders.clp deducts
+        int(p * late_share * points), p growing by 1/steps while the delay exceeds
+        p times the window's length, at most 1 (75 % with the defaults)."""
         s = self.scoring
         full = s.delivery_by_complexity[complexity]
         if delivered_at <= window_end:
             return full
         late = delivered_at - window_end
+        if s.delivery_late_steps > 0:
+            length = window_end - (window_end if window_start is None else window_start)
+            share = 0.0
+            while share < 1.0 and late > share * length:
+                share += 1.0 / s.delivery_late_steps
+            return full - int(min(share, 1.0) * s.delivery_late_share * full)
         if late <= s.delivery_late_grace:
             # the refbox's orders.clp: int(points - 1.5 * floor(seconds late))
             return max(int(full - s.delivery_late_penalty * math.floor(late)), 0)

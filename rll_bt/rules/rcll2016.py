@@ -39,4 +39,8 @@ PROFILE = Profile(
     exploration_reports="type+zone",
     insertion={CYAN: Rect(3.0, -1.0, 6.0, 0.0), MAGENTA: Rect(-6.0, -1.0, -3.0, 0.0)},
     down_period=(30.0, 120.0),
+    unprepared_input_breaks=True,       # production.clp prod-machine-input-not-prepared
+    down_start=1.0,
+    # rulebook 2016, scoring table: the obstruction penalty a referee applies
+    referee_penalties={"obstruction": -20},
 )

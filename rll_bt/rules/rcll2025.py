@@ -30,6 +30,8 @@ PROFILE = Profile(
         cap_mounted=10, cap_retrieved=2, delivery_by_complexity=(20, 30, 50, 100),
         delivery_late_grace=10.0, delivery_too_late=5, delivery_wrong=0,
         competitive_first=10, competitive_second=-10,
+        delivery_late_steps=4, delivery_late_share=0.75,
+        ss_store=-5, ss_retrieve=-5, ss_relocate=0, break_revokes=True,
     ),
     # #1-2 standing (C0/C1 and C2/C3); #3-10 random; #11 C0 overtime, competitive;
     # one more random order is competitive (chosen per game)
@@ -44,4 +46,15 @@ PROFILE = Profile(
     excluded_machine_zones=_EXCLUDED,
     down_period=(30.0, 60.0),
     prepare_requires_report=True,
+    stuck_timeout=20.0,                 # PROCESSING-WAIT-TILL-RESET, auto-break-machines on
+    rs_paid_at_prepare=True,
+    wait_idle_after_delivery=True,
+    down_start=180.0,                   # down periods start after the exploration time
+    # facts.clp storage-slots (default-storage): one C0 of every base x cap pair, in the back
+    prestored=((0, 1, "BASE_RED", "CAP_GREY"), (1, 1, "BASE_RED", "CAP_BLACK"),
+               (2, 1, "BASE_SILVER", "CAP_GREY"), (3, 1, "BASE_SILVER", "CAP_BLACK"),
+               (4, 1, "BASE_BLACK", "CAP_GREY"), (5, 1, "BASE_BLACK", "CAP_BLACK")),
+    # rulebook 2025, scoring table: manual penalties a referee applies
+    referee_penalties={"dropped-workpiece": -10, "obstruction": -20,
+                       "prepare-without-workpiece": -1},
 )

@@ -355,6 +355,14 @@ def cmd_sim(args) -> int:
     print(f"final score: {_score(game)} ({game.phase}"
           + (f", stopped by signal {stop[0]}" if stop else "")
           + (", the world was lost" if lost else "") + ")", file=out, flush=True)
+    for color, name in game.teams.items():
+        if name:
+            t = game.tally(color)
+            print(f"{name} ({color}): stations broken {t.broken_total}"
+                  + "".join(f", {k} {v}" for k, v in t.broken.items())
+                  + f"; referee calls {sum(c['count'] for c in t.referee.values())}"
+                  + "".join(f", {k} {c['count']} ({c['penalty']:+d})" for k, c in t.referee.items()),
+                  file=out, flush=True)
     if lost is not None:
         raise Unavailable(f"{lost}; the refbox stops", where="--world")
     return 0

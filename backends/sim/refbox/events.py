@@ -2,7 +2,7 @@
 
 The game core appends an :class:`Event` for every phase or state change,
 award, machine state change, robot seen or lost, order activation, report,
-delivery and attention message.  The network node turns ``attention``
+delivery, attention message and referee call (:mod:`.referee`).  The network node turns ``attention``
 events into AttentionMessages and ``machine`` events into an immediate
 MachineInfo; the CLI prints ``phase`` and ``points`` events; tests read them.
 """
@@ -21,8 +21,9 @@ ORDER = "order"            # an order became active (data: id)
 REPORT = "report"          # an exploration report entry was judged (data: type_ok, zone_ok)
 DELIVERY = "delivery"      # the DS consumed a workpiece (data: order, how)
 WORKPIECE = "workpiece"    # a station spawned, changed or consumed a workpiece
+REFEREE = "referee"        # what a human referee would penalise (data: what, penalty)
 KINDS = (PHASE, STATE, POINTS, ATTENTION, MACHINE, LIGHTS, ROBOT, ORDER, REPORT, DELIVERY,
-         WORKPIECE)
+         WORKPIECE, REFEREE)
 
 
 @dataclass(frozen=True)

@@ -9,9 +9,10 @@ and the 12 zones of each team with the swapped RS/CS zones exchanged.
 A MachineReport entry names a machine and gives the type string read off its
 lights and its zone.  Per team and machine only the first type and the first
 zone count: type right +5 / wrong -4, zone right +3 / wrong -2 (profile
-scoring).  An entry for a machine of the other team costs -6 once
-(``EXPLORATION-INVALID-REPORT-POINTS`` of the 2016 refbox's globals.clp) and
-is otherwise ignored; unknown names are ignored.  A fully correct report
+scoring).  An entry for a machine of the other team is ignored and costs
+nothing: the 2016 refbox defines ``EXPLORATION-INVALID-REPORT-POINTS`` (-6)
+in globals.clp, but only rules that are commented out use it
+(refbox-rules.md); unknown names are ignored too.  A fully correct report
 (type and zone right) makes the machine blink green for ``feedback_time``
 game seconds, a wrong one blink red.
 """
@@ -28,7 +29,6 @@ from .world import BLINK, OFF, ON, lights
 STATE_NAMES = {None: "NO_REPORT", True: "CORRECT_REPORT", False: "WRONG_REPORT"}
 TYPE_STRING_CHARS = string.ascii_uppercase + string.digits
 TYPE_STRING_LEN = 8
-INVALID_REPORT_POINTS = -6
 
 
 @dataclass(frozen=True)
@@ -50,7 +50,6 @@ class MachineReports:
     zone: int | None = None
     type_ok: bool | None = None
     zone_ok: bool | None = None
-    invalid: bool = False
 
     @property
     def fully_correct(self) -> bool:
@@ -188,12 +187,7 @@ class Exploration2016:
         s = self.scoring
         known = self.reports[team].get(entry.name)
         if machine_team(entry.name) != team:
-            if known is not None:
-                return None
-            self.reports[team][entry.name] = MachineReports(invalid=True)
-            return Judgement(entry.name, ((INVALID_REPORT_POINTS,
-                                           f"report for {entry.name} of the other team"),),
-                             team=team)
+            return None             # the other team's machine: no rule matches it
         rep = known if known is not None else MachineReports()
         self.reports[team][entry.name] = rep
         awards: list[tuple[int, str]] = []

@@ -25,14 +25,15 @@ from rll_bt import rules as R
 from rll_bt.rules import CYAN, MAGENTA, TEAMS, machine_team
 
 from . import events as E
-from . import team_requests
+from . import referee as referee_calls
+from . import slot_events, team_requests
 from .deliveries import Deliveries, PendingDelivery
 from .exploration2016 import ReportEntry
 from .ledger import Ledger, PointsEntry
 from .mockup import Mockup
 from .robots import RobotRegistry
 from .rulesets import rules_for
-from .stations import CapStation, Station, StationConfig, make_station
+from .stations import CapStation, Station, StationConfig, StorageStation, make_station
 from .timing import (
     EXPLORATION,
     INIT,
@@ -47,7 +48,7 @@ from .timing import (
     WAIT_START,
     Timing,
 )
-from .world import ALL_OFF, PUT, SHELF_SLOTS, TableWorld, Workpiece, WorldLost
+from .world import ALL_OFF, TableWorld, Workpiece
 
 log = logging.getLogger("backends.sim.refbox")
 
@@ -98,7 +99,8 @@ class RefboxGame:
         self.exploration = self.rules.make_exploration(self.profile, self.layout,
                                                        self.rng("exploration"), feedback_time)
         self.feedback_until: dict[str, float] = {}  # 2016: machine -> time its feedback ends
-        self.orders = self.rules.make_orders(self.profile, self.rng("orders"), self.timing)
+        self.orders = self.rules.make_orders(self.profile, self.rng("orders"), self.timing,
+                                             self.ring_costs)
         self.deliveries = Deliveries(self)
         self.mockup = Mockup(self) if mockup else None
         self.stations: dict[str, Station] = {
@@ -111,8 +113,10 @@ class RefboxGame:
         for st in self.stations.values():
             st.set_lights(ALL_OFF)
             if isinstance(st, CapStation):
-                for slot in SHELF_SLOTS:
-                    st.spawn_carrier(slot)
+                st.fill_shelf()
+            if isinstance(st, StorageStation):
+                for shelf, slot, base, cap in self.profile.prestored:
+                    st.put_in_storage(shelf, slot, Workpiece(base, (), cap))
         self._last_now = clock.now()
 
     def rng(self, stream: str) -> random.Random:
@@ -341,6 +345,17 @@ class RefboxGame:
         self.events.append(ev)
         log.debug("%s", ev)
 
+    def referee(self, what: str, text: str, *, team: str | None, machine: str | None = None,
+                game_time: float | None = None, **data) -> None:
+        """Report what a referee would penalise (:mod:`.referee`; the score is untouched)."""
+        shown, data = referee_calls.call(self.profile, what, text, team, machine, **data)
+        self.emit(E.REFEREE, shown, team=team, machine=machine, game_time=game_time, **data)
+
+    def tally(self, team: str):
+        """``team``'s stations gone BROKEN by cause and its referee calls
+        (:func:`.referee.tally`)."""
+        return referee_calls.tally(self.events, team)
+
     def station_lights(self, station: Station) -> dict:
         """The tower ``station`` shows now (the rule set's choice)."""
         return self.rules.station_lights(self, station)
@@ -469,20 +484,7 @@ class RefboxGame:
 
     def _drain_slot_events(self) -> None:
         while self._slot_events:
-            ev = self._slot_events.popleft()
-            st = self.stations.get(ev.machine)
-            if st is None:
-                continue
-            try:
-                if ev.kind == PUT:
-                    st.on_put(ev.slot, ev.workpiece)
-                else:
-                    st.on_take(ev.slot, ev.workpiece)
-            except WorldLost:
-                raise
-            except Exception:
-                log.exception("slot event %s failed", ev)
-
+            slot_events.apply(self, self._slot_events.popleft())
 
 
 __all__ = ["RefboxGame", "PendingDelivery", "REFBOX_TEAM", "INIT", "WAIT_START", "RUNNING", "PAUSED", "PRE_GAME",

@@ -36,7 +36,7 @@ big-endian length and a UTF-8 JSON object.
   "cap"}`` (None for none).  A call returns once the world applied it, so a
   base the refbox dispensed is in the world before any robot hears of it.
 - The world pushes (frames without ``id``), in the order they happened:
-  ``{"ev": "put" | "take", "machine", "slot", "wp", "robot": [team, number],
+  ``{"ev": "put" | "take" | "drop", "machine", "slot", "wp", "robot": [team, number],
   "t": world seconds}`` when a robot put a workpiece on a slot or took one
   off (pushed while no refbox is connected wait for the first one), and the
   operator's commands of the simulated game, whose host the world's process
@@ -218,8 +218,10 @@ class RemoteWorld:
                 cmd = {k: v for k, v in msg.items() if k != "ev"}
                 for fn in list(self._commands):
                     fn(cmd)
-            elif msg.get("ev") in ("put", "take"):
-                ev = SlotEvent(msg["ev"], msg["machine"], msg["slot"], decode_workpiece(msg["wp"]))
+            elif msg.get("ev") in ("put", "take", "drop"):
+                robot = msg.get("robot")
+                ev = SlotEvent(msg["ev"], msg["machine"], msg["slot"], decode_workpiece(msg["wp"]),
+                               (str(robot[0]), int(robot[1])) if robot else None)
                 for fn in list(self._listeners):
                     fn(ev)
         return len(pushed)

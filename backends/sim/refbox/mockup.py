@@ -89,7 +89,7 @@ class Mockup:
         """``st`` changed state at its game time ``st.now``."""
         if st.kind not in KINDS:
             return
-        if st.state != PREPARED:
+        if not st.awaits_workpiece():
             self._waiting.pop(st.name, None)
         if previous == DOWN:             # back up: what was pending goes on
             return
@@ -177,7 +177,7 @@ class Mockup:
         return max(choice, key=rank)[0] if choice else None
 
     def _feed(self, st: Station, instruction, wp: Workpiece) -> None:
-        prepared = st.state == PREPARED or (st.state == DOWN and st.prev_state == PREPARED)
+        prepared = st.awaits_workpiece() or (st.state == DOWN and st.prev_state == PREPARED)
         if not prepared or st.instruction is not instruction:
             self._event(st, f"mockup: {st.team} dropped {wp}, {st.name} is no longer prepared",
                         wp, "dropped")

@@ -1,27 +1,27 @@
 """The 2016 order schedule and delivery scoring.
 
-Schedule (eight orders, shapes from the profile, refbox-protocol §4 "Orders"):
+Schedule (eight orders, facts.clp and game.clp of refbox tag 2016-1; shapes
+from the profile, times in seconds of a 900 s production):
 
-- #1 C0 standing order: active from production start, window [0, P].
-- #8 C0 overtime order: active at P, window [P, P + overtime].
-- #2-#7: window length D, window start B and a lead time L (the order
-  becomes active L seconds before its window opens) drawn from the game's
-  random generator per complexity (game seconds of a 900 s production):
+  ===  ====  ========  ==============  ============  ============
+  id   cx    qty       window start    window length lead
+  ===  ====  ========  ==============  ============  ============
+  1    C0    1         0 (standing, the whole production)
+  2    C0    1         U{200..400}     U{60..180}    U{120..240}
+  3    C0    2         U{300..700}     U{60..180}    U{120..240}
+  4    C0    1         U{700..900}     U{60..180}    U{120..240}
+  5    C1    1         U{500..700}     U{90..150}    U{300..500}
+  6    C2    1         U{600..720}     U{120..180}   U{480..780}
+  7    C3    1         U{600..720}     U{120..180}   900
+  8    C0    1         900 (overtime)  300           0
+  ===  ====  ========  ==============  ============  ============
 
-  ====  ==========  ==================  =========
-  cx    D           earliest B          L
-  ====  ==========  ==================  =========
-  C0    120-240     120                 60-150
-  C1    150-270     250                 150-300
-  C2    180-300     350                 240-400
-  C3    200-300     450                 300-450
-  ====  ==========  ==================  =========
-
-  with B uniform in [earliest, P - D] and activation at max(0, B - L).  A
-  shorter production (a fast test game) scales every number by P / 900.
-  All times are whole seconds (the message fields are uint32).
-- Colours: base from BASE_*, cap from CAP_*, C-n rings n distinct ring
-  colours; delivery gate 1-3; quantity from the shape (#3 asks for 2).
+Integer uniform draws (CLIPS ``random``); a window ending after the
+production is shifted back to end at it; the order is announced at
+max(0, start - lead) (so the C3 is known from the first second).  A
+shorter production (a fast test game) scales every time by P / 900.
+Colours: base and cap at random, the rings of a C-n order n distinct colours
+(the first n of a shuffled list); delivery gate U{1..3}.
 
 Delivery (the refbox's orders.clp, by colour, with the 2016 point values):
 the DS consumes a workpiece and looks for an active order with the same
@@ -51,13 +51,18 @@ from rll_bt.rules import BASE_COLORS, CAP_COLORS, CYAN, MAGENTA, RING_COLORS
 
 from .world import Workpiece
 
-#: complexity -> (window length range, earliest window start, lead time range), 900 s game
-WINDOWS_2016 = {
-    0: ((120, 240), 120, (60, 150)),
-    1: ((150, 270), 250, (150, 300)),
-    2: ((180, 300), 350, (240, 400)),
-    3: ((200, 300), 450, (300, 450)),
+#: order id -> (window start range, window length range, lead range), game.clp / facts.clp
+TIMES_2016 = {
+    1: ((0, 0), (900, 900), (900, 900)),
+    2: ((200, 400), (60, 180), (120, 240)),
+    3: ((300, 700), (60, 180), (120, 240)),
+    4: ((700, 900), (60, 180), (120, 240)),
+    5: ((500, 700), (90, 150), (300, 500)),
+    6: ((600, 720), (120, 180), (480, 780)),
+    7: ((600, 720), (120, 180), (900, 900)),
+    8: ((900, 900), (300, 300), (0, 0)),
 }
+NOMINAL_2016 = 900
 
 
 @dataclass
@@ -96,42 +101,28 @@ def schedule_2016(profile, rng: random.Random, timing) -> list[Order]:
     """The game's orders (not yet active), per the module docstring."""
     P = float(timing.production)
     scale = timing.production_scale
-
-    def window(cx: int) -> tuple[int, int, int]:
-        (dlo, dhi), earliest, (llo, lhi) = WINDOWS_2016[cx]
-        dur = rng.uniform(dlo, dhi) * scale
-        lo, hi = earliest * scale, max(earliest * scale, P - dur)
-        begin = min(rng.uniform(lo, hi), max(0.0, P - dur))
-        end = min(P, begin + dur)
-        act = max(0.0, begin - rng.uniform(llo, lhi) * scale)
-        return int(begin), int(math.ceil(end)), int(act)
-    return build_schedule(profile, rng, timing, window)
-
-
-def build_schedule(profile, rng: random.Random, timing, window,
-                   competitive_ids=()) -> list[Order]:
-    """One order per shape of ``profile.orders``: complexity, colours and gate drawn from
-    ``rng``; standing orders span the production, overtime orders the overtime, the others
-    get ``window(complexity)`` -> (begin, end, activate_at) in whole game seconds.  Orders
-    in ``competitive_ids`` are competitive besides those whose shape is."""
-    P = float(timing.production)
     orders = []
     for i, shape in enumerate(profile.orders, start=1):
         cx = rng.choice(shape.complexities)
-        base = rng.choice(BASE_COLORS)
-        cap = rng.choice(CAP_COLORS)
-        rings = tuple(rng.sample(RING_COLORS, cx))
+        (slo, shi), (dlo, dhi), (llo, lhi) = TIMES_2016[i]
+        start = rng.randint(slo, shi)
+        end = start + rng.randint(dlo, dhi)
+        if end > NOMINAL_2016 and not shape.overtime:
+            start, end = start - (end - NOMINAL_2016), NOMINAL_2016
+        activate = max(start - rng.randint(llo, lhi), 0)
         gate = rng.randint(1, 3)
-        if shape.standing:
-            begin, end, act = 0, int(P), 0
-        elif shape.overtime:
-            begin, end, act = int(P), int(math.ceil(P + timing.overtime)), int(P)
+        rings = tuple(rng.sample(RING_COLORS, cx))
+        base, cap = rng.choice(BASE_COLORS), rng.choice(CAP_COLORS)
+        if shape.overtime:
+            begin, end_s, act = int(P), int(math.ceil(P + timing.overtime)), int(P)
+        elif shape.standing:
+            begin, end_s, act = 0, int(P), 0
         else:
-            begin, end, act = window(cx)
+            begin, end_s, act = (int(round(v * scale)) for v in (start, end, activate))
         orders.append(Order(id=i, complexity=cx, base=base, rings=rings, cap=cap,
-                            quantity=shape.quantity, gate=gate, begin=begin, end=end,
+                            quantity=shape.quantity, gate=gate, begin=begin, end=end_s,
                             activate_at=act, standing=shape.standing, overtime=shape.overtime,
-                            competitive=shape.competitive or i in competitive_ids))
+                            competitive=shape.competitive))
     return orders
 
 

@@ -1,31 +1,29 @@
-"""The 2017+ order schedule and delivery by order id (refbox HEAD).
+"""The 2017+ order schedule and delivery by order id (refbox HEAD, game.clp).
 
-Schedule (eleven orders, shapes from the profile, refbox-protocol §4 "Orders"):
+Schedule (eleven orders of quantity 1, times in seconds of a 1200 s
+production):
 
-- #1 and #2: standing orders for the whole production, window [0, P],
-  active from its start; #1 is C0 or C1, #2 is C2 or C3.
-- #3-#10: a random complexity each; window length D, window start B and a
-  lead time L (the order becomes active L seconds before its window opens)
-  drawn per complexity (game seconds of a 1200 s production; our choice,
-  the refbox randomises similarly):
+- Complexities: five times one of {C0, C1} and one of {C2, C3} at random;
+  #1 and #2, standing orders for the whole production (active from its
+  start), take the first pair (#1 C0 or C1, #2 C2 or C3); the other four
+  low and four high ones are shuffled over #3-#10.
+- #3-#10: eight slots; slot k's window starts at U{c-90..c+90} with centre
+  c = 180 + 120 (k - 3); window length C0/C1 U{90..180}, C2/C3 U{150..210};
+  the order is announced ``lead`` s before its window opens, lead C0
+  U{60..120}, C1 U{120..300}, C2 U{300..400}, C3 U{400..500}.  An order that
+  would be announced before the exploration time is moved later (window
+  too) to be announced at it, one announced after 960 s earlier to 960 s;
+  a window ending after the production is shifted back to end at it.
+- #11: C0 overtime order, window [P, P + overtime], competitive; one of
+  #3-#10, at random, is competitive too.
+- Colours: base and cap at random; rings one after another, each different
+  from the one before (ring 3 may equal ring 1).  Redrawn (rings and base of
+  the later order) until a standing order's first ring is a free colour and
+  no two orders with rings share base and first ring.  Gate U{1..3}.
 
-  ====  ==========  ==================  =========
-  cx    D           earliest B          L
-  ====  ==========  ==================  =========
-  C0    150-300     240                 60-150
-  C1    180-330     360                 150-300
-  C2    210-360     480                 240-400
-  C3    240-360     600                 300-450
-  ====  ==========  ==================  =========
-
-  with B uniform in [earliest, P - D].  None becomes active before the
-  exploration time: activation is max(exploration time, B - L), and the
-  window never opens before the activation.  A shorter production scales
-  D, B and L by P / 1200 (the exploration time is not scaled).
-- #11: C0 overtime order, window [P, P + overtime], competitive.
-- One of #3-#10, chosen at random, is competitive as well.
-- Colours: base from BASE_*, cap from CAP_*, C-n rings n distinct colours;
-  delivery gate 1-3; quantity 1.
+All draws are integer uniform (CLIPS ``random``).  A shorter production (a
+fast test game) scales every time by P / 1200, except the exploration time,
+which is the game's.
 
 Delivery: the DS is prepared with an order id (0: consume the workpiece,
 no points) and the gate comes from the order.  The simulated referee
@@ -38,8 +36,9 @@ like orders.clp:
 - the team has delivered the requested quantity already: ``delivery_wrong``;
 - before the window opens: 0 points;
 - within the window: ``delivery_by_complexity`` (C0/C1/C2/C3 20/30/50/100);
-- late: the profile's late deduction (``Profile.delivery_points``), after
-  the grace time ``delivery_too_late`` (5);
+- late: all step points still paid, the delivery points reduced by the
+  profile's graded deduction (``Profile.delivery_points``: by quarters of
+  the window's length late, 18.75 % each, at most 75 %);
 - a competitive order: the first team to deliver it gains
   ``competitive_first`` (+10), the second loses min(its delivery points, 10);
 - plus the product: each ring by the cost of its colour (5/10/20) and the
@@ -50,40 +49,123 @@ from __future__ import annotations
 import math
 import random
 
-from rll_bt.rules import other_team
+from rll_bt.rules import BASE_COLORS, CAP_COLORS, RING_COLORS, other_team
 
-from .orders2016 import DeliveryResult, Order, build_schedule, product_awards
+from .orders2016 import DeliveryResult, Order, product_awards
 from .world import Workpiece
 
-#: complexity -> (window length range, earliest window start, lead time range), 1200 s game
-WINDOWS_2025 = {
-    0: ((150, 300), 240, (60, 150)),
-    1: ((180, 330), 360, (150, 300)),
-    2: ((210, 360), 480, (240, 400)),
-    3: ((240, 360), 600, (300, 450)),
+#: complexity -> (lead range, window length range), globals.clp ORDER-* values
+TIMES_2025 = {
+    0: ((60, 120), (90, 180)),
+    1: ((120, 300), (90, 180)),
+    2: ((300, 400), (150, 210)),
+    3: ((400, 500), (150, 210)),
 }
+NOMINAL_2025 = 1200
+FIRST_CENTRE, CENTRE_STEP, CENTRE_SPREAD = 180, 120, 90   # ORDER-ACTIVATION-DISTANCE/-DEVIATION
+ACTIVATE_LATEST = 960                                      # ORDER-ACTIVATE-LATEST-TIME
 
 
-def schedule_2025(profile, rng: random.Random, timing) -> list[Order]:
+def complexities_2025(rng: random.Random, n_pairs: int = 5) -> list[int]:
+    """Five pairs (one of C0/C1, one of C2/C3): the standing orders' two, then the
+    other eight shuffled."""
+    out = []
+    for _ in range(n_pairs):
+        low, high = [0, 1], [2, 3]
+        rng.shuffle(low)
+        rng.shuffle(high)
+        out += [low[0], high[0]]
+    rest = out[2:]
+    rng.shuffle(rest)
+    return out[:2] + rest
+
+
+def ring_colors_2025(rng: random.Random, complexity: int) -> tuple[str, ...]:
+    """Ring colours as randomize-ring-colors draws them: each differs from the one
+    before it."""
+    rings: list[str] = []
+    for _ in range(complexity):
+        rings.append(rng.choice([c for c in RING_COLORS if not rings or c != rings[-1]]))
+    return tuple(rings)
+
+
+def schedule_2025(profile, rng: random.Random, timing,
+                  ring_costs: dict[str, int] | None = None) -> list[Order]:
     """The game's orders (not yet active), per the module docstring."""
     P = float(timing.production)
     scale = timing.production_scale
-    explore = float(timing.exploration_time)
-    random_ids = [i for i, s in enumerate(profile.orders, start=1)
-                  if not (s.standing or s.overtime)]
-    extra_competitive = (rng.choice(random_ids),) if random_ids else ()
+    explore = float(timing.exploration_time) / scale if scale > 0 else 0.0
+    shapes = list(profile.orders)
+    random_ids = [i for i, s in enumerate(shapes, start=1) if not (s.standing or s.overtime)]
+    cxs = complexities_2025(rng, max(1, (len(random_ids) + 2) // 2))
+    draw = iter(cxs)
+    orders = []
+    slot = 0
+    for i, shape in enumerate(shapes, start=1):
+        if shape.overtime:
+            cx = rng.choice(shape.complexities)
+        else:
+            cx = next(draw)
+        if shape.standing or shape.overtime:
+            start = end = activate = 0
+        else:
+            centre = FIRST_CENTRE + CENTRE_STEP * slot
+            slot += 1
+            (llo, lhi), (dlo, dhi) = TIMES_2025[cx]
+            start = rng.randint(centre - CENTRE_SPREAD, centre + CENTRE_SPREAD)
+            end = start + rng.randint(dlo, dhi)
+            activate = max(start - rng.randint(llo, lhi), 0)
+            if activate < explore:
+                shift = explore - activate
+                activate, start, end = activate + shift, start + shift, end + shift
+            if activate > ACTIVATE_LATEST:
+                shift = activate - ACTIVATE_LATEST
+                activate, start, end = activate - shift, start - shift, end - shift
+            if end > NOMINAL_2025:
+                start, end = start - (end - NOMINAL_2025), NOMINAL_2025
+        gate = rng.randint(1, 3)
+        base = rng.choice(BASE_COLORS)
+        rings = ring_colors_2025(rng, cx)
+        cap = rng.choice(CAP_COLORS)
+        if shape.overtime:
+            begin, end_s, act = int(P), int(math.ceil(P + timing.overtime)), int(P)
+        elif shape.standing:
+            begin, end_s, act = 0, int(P), 0
+        else:
+            begin, end_s, act = (int(round(v * scale)) for v in (start, end, activate))
+        orders.append(Order(id=i, complexity=cx, base=base, rings=rings, cap=cap,
+                            quantity=shape.quantity, gate=gate, begin=begin, end=end_s,
+                            activate_at=act, standing=shape.standing, overtime=shape.overtime,
+                            competitive=shape.competitive))
+    competitive = [o for o in orders if o.id in random_ids and o.quantity == 1]
+    if competitive:
+        rng.choice(competitive).competitive = True
+    _settle_colors(orders, rng, ring_costs or {})
+    return orders
 
-    def window(cx: int) -> tuple[int, int, int]:
-        (dlo, dhi), earliest, (llo, lhi) = WINDOWS_2025[cx]
-        dur = rng.uniform(dlo, dhi) * scale
-        lo = earliest * scale
-        begin = rng.uniform(lo, max(lo, P - dur))
-        act = min(P, max(explore, begin - rng.uniform(llo, lhi) * scale))
-        end = min(P, max(begin, act) + dur)
-        act_s = int(math.ceil(act))
-        begin_s = max(int(begin), act_s)
-        return begin_s, max(int(math.ceil(end)), begin_s), act_s
-    return build_schedule(profile, rng, timing, window, extra_competitive)
+
+def _settle_colors(orders: list[Order], rng: random.Random, ring_costs: dict[str, int]) -> None:
+    """Redraw rings and base until a standing order's first ring is free and no two
+    orders with rings share base and first ring (the later order is redrawn)."""
+    free = {c for c in RING_COLORS if ring_costs.get(c, 0) == 0}
+
+    def conflict() -> Order | None:
+        for o1 in orders:
+            if o1.standing and o1.rings and o1.rings[0] not in free:
+                return o1
+            for o2 in orders:
+                if (o1.id > o2.id and o1.rings and o2.rings and o1.base == o2.base
+                        and o1.rings[0] == o2.rings[0]):
+                    return o1
+        return None
+
+    for _ in range(10000):
+        o = conflict()
+        if o is None:
+            return
+        o.rings = ring_colors_2025(rng, o.complexity)
+        o.base = rng.choice(BASE_COLORS)
+    raise RuntimeError("no order colours satisfy the 2025 constraints")
 
 
 def judge_delivery_2025(profile, orders: list[Order], team: str, wp: Workpiece,
@@ -110,12 +192,13 @@ def judge_delivery_2025(profile, orders: list[Order], team: str, wp: Workpiece,
         return DeliveryResult("too-soon", o.id, ((0, f"delivered item for order {o.id} (too soon, "
                                                      "before its window)"),),
                               f"Order {o.id} delivered by {team} before its window opened")
-    pts = profile.delivery_points(o.complexity, t, o.end)
+    pts = profile.delivery_points(o.complexity, t, o.end, o.begin)
     if t <= o.end:
         how, reason = "in-time", f"delivered item for order {o.id}"
     else:
-        how = "late" if t - o.end <= s.delivery_late_grace else "too-late"
-        reason = f"delivered item for order {o.id} ({t - o.end:.0f} s late)"
+        how = "late"
+        reason = (f"delivered item for order {o.id} ({t - o.end:.0f} s late, "
+                  f"{s.delivery_by_complexity[o.complexity] - pts} deducted)")
     awards = [(pts, reason)]
     if o.competitive:
         if o.delivered[other_team(team)] > o.delivered[team]:

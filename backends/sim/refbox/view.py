@@ -6,12 +6,14 @@ rewrites; :class:`SnapshotView` reads that file back in another process
 (the world's, with ``rll-bt sim --processes``), again whenever the refbox
 rewrote it.  Both answer ``status()``, ``awards()``, ``deliveries()``,
 ``station_states()``, ``light_codes()`` (2016: each station's exploration
-light colours, sorted), ``orders()`` and ``station_log()`` (every station
-state change: ``{"phase", "game_time", "machine", "from", "to", "reason"}``).
+light colours, sorted), ``orders()``, ``station_log()`` (every station
+state change: ``{"phase", "game_time", "machine", "from", "to", "reason",
+"cause"}``) and ``tally(team)`` (stations gone BROKEN by cause, referee calls).
 
 The snapshot: ``{"status": GameStatus fields, "awards": [Award fields],
 "deliveries": [Delivery fields], "stations": {machine: {"state", "light"}},
-"orders": [order fields], "station_log": [...]}`` plus what the writer adds
+"orders": [order fields], "station_log": [...], "tally": {team: {"broken",
+"referee"}}}`` plus what the writer adds
 (the CLI: ``pid``, ``now`` on its monotonic clock, ``link`` counts).
 """
 from __future__ import annotations
@@ -21,9 +23,10 @@ import json
 import os
 from pathlib import Path
 
-from rll_bt.contracts import Award, Delivery, GameStatus
+from rll_bt.contracts import Award, Delivery, GameStatus, Tally
 
 from . import events as E
+from . import referee
 
 TEAMS = ("CYAN", "MAGENTA")
 
@@ -64,8 +67,12 @@ class GameView:
 
     def station_log(self) -> list[dict]:
         return [{"phase": e.phase, "game_time": round(e.game_time, 3), "machine": e.machine,
-                 "from": e.data.get("previous"), "to": e.data.get("state"), "reason": e.data.get("reason")}
+                 "from": e.data.get("previous"), "to": e.data.get("state"), "reason": e.data.get("reason"),
+                 "cause": e.data.get("cause")}
                 for e in self.game.events if e.kind == E.MACHINE]
+
+    def tally(self, team: str) -> Tally:
+        return referee.tally(self.game.events, team)
 
 
 def snapshot(view) -> dict:
@@ -75,7 +82,8 @@ def snapshot(view) -> dict:
             "awards": [dataclasses.asdict(a) for a in view.awards()],
             "deliveries": [dataclasses.asdict(d) for d in view.deliveries()],
             "stations": {m: {"state": s, "light": list(lights.get(m, ()))} for m, s in view.station_states().items()},
-            "orders": view.orders(), "station_log": view.station_log()}
+            "orders": view.orders(), "station_log": view.station_log(),
+            "tally": {t: dataclasses.asdict(view.tally(t)) for t in TEAMS}}
 
 
 def write_snapshot(path: Path, snap: dict) -> None:
@@ -134,3 +142,6 @@ class SnapshotView:
 
     def station_log(self) -> list[dict]:
         return list(self.data().get("station_log", []))
+
+    def tally(self, team: str) -> Tally:
+        return Tally(**self.data().get("tally", {}).get(team, {}))

@@ -23,7 +23,7 @@ from typing import Protocol, runtime_checkable
 
 INPUT, OUTPUT, SLIDE = "input", "output", "slide"
 SHELF_SLOTS = ("shelf0", "shelf1", "shelf2")
-PUT, TAKE = "put", "take"
+PUT, TAKE, DROP = "put", "take", "drop"
 ON, OFF, BLINK = "ON", "OFF", "BLINK"
 LIGHT_COLORS = ("RED", "YELLOW", "GREEN")
 
@@ -75,12 +75,15 @@ def describe(wp) -> Workpiece:
 
 @dataclass(frozen=True)
 class SlotEvent:
-    """A robot ``put`` a workpiece on, or ``take`` one off, ``machine``'s ``slot``."""
+    """A robot ``put`` a workpiece on, or ``take`` one off, ``machine``'s ``slot``, or
+    ``drop`` ped it on the floor (machine and slot None); ``robot`` is (team colour,
+    number) when the world knows who."""
 
     kind: str
-    machine: str
-    slot: str
+    machine: str | None
+    slot: str | None
     workpiece: object = None
+    robot: tuple[str, int] | None = None
 
 
 class WorldLost(RuntimeError):
@@ -169,23 +172,28 @@ class TableWorld:
         self._listeners.append(fn)
 
     # -- the robot's side --------------------------------------------------------
-    def put(self, machine: str, slot: str, wp) -> Workpiece:
-        """A robot puts ``wp`` on ``machine``'s ``slot``; ValueError if it is full."""
+    def put(self, machine: str, slot: str, wp, robot: tuple[str, int] | None = None) -> Workpiece:
+        """A robot (``robot``: (team colour, number)) puts ``wp`` on ``machine``'s ``slot``;
+        ValueError if it is full."""
         if getattr(wp, "id", None) is None:
             self._ids += 1
             wp = replace(describe(wp), id=self._ids)
         wp = self._place(machine, slot, wp)
-        self._notify(SlotEvent(PUT, machine, slot, wp))
+        self._notify(SlotEvent(PUT, machine, slot, wp, robot))
         return wp
 
-    def take(self, machine: str, slot: str):
+    def take(self, machine: str, slot: str, robot: tuple[str, int] | None = None):
         """A robot takes the (first) workpiece off ``machine``'s ``slot``; ValueError if empty."""
         here = self._here(machine, slot)
         if not here:
             raise ValueError(f"nothing on {machine} {slot}")
         wp = here.pop(0)
-        self._notify(SlotEvent(TAKE, machine, slot, wp))
+        self._notify(SlotEvent(TAKE, machine, slot, wp, robot))
         return wp
+
+    def drop(self, wp, robot: tuple[str, int] | None = None) -> None:
+        """A robot lets ``wp`` fall on the floor (it leaves this world)."""
+        self._notify(SlotEvent(DROP, None, None, wp, robot))
 
     def _place(self, machine: str, slot: str, wp):
         here = self._here(machine, slot)

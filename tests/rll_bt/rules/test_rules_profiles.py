@@ -146,3 +146,38 @@ def test_discretise_rotation(prof):
     assert prof.discretise_rotation(-10.0) == 0
     assert prof.discretise_rotation(359.0) == 0
     assert rules.theta_to_rotation(-math.pi / 2) == 270
+
+
+def test_machine_times_are_the_real_machines():
+    """refbox-rules.md: durations.h of the refbox's mock-up stations, measured on the MPS."""
+    t = rules.MPS_TIMES
+    assert (t.base_dispense, t.belt_to_middle, t.belt_to_output) == (1.1, 1.538, 2.656)
+    assert (t.ring_mount, t.cap_operation, t.storage_operation) == (17.308, 17.5, 17.5)
+    assert t.ring == pytest.approx(21.5, abs=0.01) and t.cap == pytest.approx(21.7, abs=0.01)
+    assert t.base == pytest.approx(3.76, abs=0.01)
+    assert [t.delivery(g) for g in (0, 1, 2, 3)] == [3.746, 3.746, 4.746, 3.983]
+    for name in ("rcll2016", "rcll2025"):
+        assert rules.profile(name).machine_times is rules.MPS_TIMES
+
+
+def test_2025_late_delivery_deduction_by_quarters_of_the_window():
+    """orders.clp: ceil(4 * late / L) / 4 of 75 % of the delivery points, at most 75 %."""
+    p = rules.profile("rcll2025")
+    begin, end = 820, 1000                                   # L = 180 s
+    assert [p.delivery_points(3, end + late, end, begin) for late in
+            (0, 1, 45, 46, 90, 91, 135, 136, 180, 500)] == [100, 82, 82, 63, 63, 44, 44, 25, 25, 25]
+    assert p.delivery_points(0, end + 10, end, begin) == 20 - int(0.1875 * 20)
+
+
+def test_production_rules_of_each_profile():
+    p16, p25 = rules.profile("rcll2016"), rules.profile("rcll2025")
+    assert p16.unprepared_input_breaks and not p25.unprepared_input_breaks
+    assert p16.stuck_timeout is None and p25.stuck_timeout == 20.0
+    assert p25.rs_paid_at_prepare and p25.wait_idle_after_delivery and p25.scoring.break_revokes
+    assert (p25.scoring.ss_store, p25.scoring.ss_retrieve) == (-5, -5)
+    assert (p16.down_start, p25.down_start) == (1.0, 180.0)
+    assert sorted((b, c) for _, _, b, c in p25.prestored) == sorted(
+        (b, c) for b in rules.BASE_COLORS for c in rules.CAP_COLORS)
+    assert p25.referee_penalties == {"dropped-workpiece": -10, "obstruction": -20,
+                                     "prepare-without-workpiece": -1}
+    assert p16.referee_penalties == {"obstruction": -20} and not p16.prestored

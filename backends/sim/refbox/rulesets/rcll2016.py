@@ -27,6 +27,9 @@ class Rules2016:
     sends_exploration_info = True       # ExplorationInfo (light codes, zones) on public
     missing_instruction_breaks = True   # a PrepareMachine without instruction breaks the station
     prepare_timeout: float | None = None   # PrepareMachine.sent_at older than this is ignored
+    processing_from_input = True        # PROCESSING once the workpiece is on the input (the PLC)
+    ds_waits_for_window = False         # the DS delivers whenever its workpiece comes
+    slide_counts_while_broken = True    # bases put on a BROKEN RS still score (then are cleared)
 
     # -- phases ------------------------------------------------------------------
     def has_phase(self, phase: str) -> bool:
@@ -95,14 +98,14 @@ class Rules2016:
     def validate_ds(self, game, instr) -> str | None:
         """Why a DS instruction breaks the station, or None: 2016 takes a gate 0-3."""
         if not 0 <= int(instr.gate) <= 3:
-            return f"invalid delivery gate {instr.gate}"
+            return f"with invalid delivery gate {instr.gate}"
         return None
 
     def delivery_gate(self, game, instr) -> int:
         """The gate a prepared DS delivers to: the instructed one (2016)."""
         return int(instr.gate)
 
-    def make_orders(self, profile, rng: random.Random, timing):
+    def make_orders(self, profile, rng: random.Random, timing, ring_costs: dict[str, int]):
         return schedule_2016(profile, rng, timing)
 
     def judge_delivery(self, profile, orders, team, wp, gate, t, ring_costs, order_id=None):
@@ -110,24 +113,25 @@ class Rules2016:
 
     def down_periods(self, profile, rng: random.Random, timing) -> dict[str, tuple[float, float]]:
         """One random RS and one random CS per team go down for a while; the magenta
-        twin of the chosen cyan machine goes down at the same time (mirrored).
-        Length from the profile's ``down_period`` range, start uniform in
-        [``earliest``, 0.9 P - length] with ``earliest`` 0.1 P (2016); lengths
-        scaled with the production length."""
+        twin of the chosen cyan machine goes down at the same time (mirrored), as
+        machines.clp draws it: length U{lo..hi} s of the profile's ``down_period``,
+        start U{first .. P - length} over the whole production (2016: first 1 s).
+        A shorter production scales both with it."""
         P, scale = float(timing.production), timing.production_scale
-        earliest = self.down_earliest(timing)
-        lo, hi = profile.down_period
+        lo, hi = (int(v) for v in profile.down_period)
+        first = self.down_first(profile, timing)
         out = {}
         for kind in ("RS", "CS"):
             names = sorted(m for m in profile.machines(CYAN) if machine_type(m) == kind)
             if not names or P <= 0:
                 continue
             m = rng.choice(names)
-            length = rng.uniform(lo, hi) * scale
-            start = rng.uniform(earliest, max(earliest, 0.9 * P - length))
+            length = rng.randint(lo, hi) * scale
+            span = max(0.0, P - length - first)
+            start = first + rng.randint(0, int(span / scale)) * scale
             out[m] = out[mirror_machine_name(m)] = (start, start + length)
         return out
 
-    def down_earliest(self, timing) -> float:
-        return 0.1 * float(timing.production)
-
+    def down_first(self, profile, timing) -> float:
+        """Earliest start of a down period, game seconds."""
+        return float(profile.down_start) * timing.production_scale

@@ -11,9 +11,12 @@ What changes against :class:`~.rcll2016.Rules2016`:
   its production state with the 2019+ light table;
 - PrepareMachine: ``sent_at`` older than 5 s is ignored; a station not yet
   correctly reported is refused (attention message) until the ground truth
-  is out; one without an instruction is ignored (not broken); one for a
-  station in READY-AT-OUTPUT breaks it; the DS takes an order id (0 =
-  consume only; an unknown id breaks it);
+  is out; one for a station that is not IDLE is ignored (READY-AT-OUTPUT
+  too, since refbox commit 78b464b9); the DS takes an order id (0 =
+  consume only; an unknown id breaks it) and waits for the order's window;
+- a machine is PREPARED until its workpiece reached the middle of the belt
+  (the 20 s rule of the profile's ``stuck_timeout`` counts from the prepare);
+- bases fed into a BROKEN RS are not counted;
 - orders and delivery by order id (:mod:`.orders2025`);
 - down periods (30-60 s) start only after the exploration time.
 """
@@ -24,7 +27,7 @@ import random
 from .. import events as E
 from ..exploration2025 import Exploration2025
 from ..orders2025 import judge_delivery_2025, schedule_2025
-from ..stations import READY_AT_OUTPUT, STATE_LIGHTS_2025
+from ..stations import STATE_LIGHTS_2025
 from ..timing import EXPLORATION, PRODUCTION, RUNNING, SETUP
 from ..world import ALL_OFF
 from .rcll2016 import Rules2016
@@ -35,8 +38,10 @@ PRODUCTION_PREPARE_TIMEOUT = 5.0
 class Rules2025(Rules2016):
     name = "rcll2025"
     sends_exploration_info = False
-    missing_instruction_breaks = False
     prepare_timeout = PRODUCTION_PREPARE_TIMEOUT
+    processing_from_input = False
+    ds_waits_for_window = True
+    slide_counts_while_broken = False
 
     # -- phases ------------------------------------------------------------------
     def has_phase(self, phase: str) -> bool:
@@ -84,17 +89,11 @@ class Rules2025(Rules2016):
         return shown if shown is not None else station.state_lights(STATE_LIGHTS_2025)
 
     # -- production ----------------------------------------------------------------
-    def prepare_busy(self, game, station) -> str:
-        if station.state == READY_AT_OUTPUT:
-            station.break_("prepare received while READY-AT-OUTPUT")
-            return "broken"
-        return super().prepare_busy(game, station)
-
     def validate_ds(self, game, instr) -> str | None:
         if instr.order_id is None:
-            return "prepare without order id"
+            return "without data"
         if instr.order_id != 0 and game.order(instr.order_id) is None:
-            return f"invalid order ID {instr.order_id}"
+            return "with invalid order ID"
         return None
 
     def delivery_gate(self, game, instr) -> int:
@@ -102,11 +101,12 @@ class Rules2025(Rules2016):
         order = game.order(instr.order_id) if instr.order_id else None
         return order.gate if order is not None else 0
 
-    def make_orders(self, profile, rng: random.Random, timing):
-        return schedule_2025(profile, rng, timing)
+    def make_orders(self, profile, rng: random.Random, timing, ring_costs: dict[str, int]):
+        return schedule_2025(profile, rng, timing, ring_costs)
 
     def judge_delivery(self, profile, orders, team, wp, gate, t, ring_costs, order_id=None):
         return judge_delivery_2025(profile, orders, team, wp, order_id, t, ring_costs)
 
-    def down_earliest(self, timing) -> float:
-        return max(float(timing.exploration_time), 0.1 * float(timing.production))
+    def down_first(self, profile, timing) -> float:
+        """After the exploration time (machines.clp: U{EXPLORATION-TIME .. P - length})."""
+        return float(timing.exploration_time)

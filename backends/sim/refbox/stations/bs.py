@@ -1,12 +1,18 @@
-"""The base station (BS): dispenses a base of the instructed colour on the instructed side."""
+"""The base station (BS): dispenses a base of the instructed colour on the instructed side.
+
+Prepared, it dispenses at once (PROCESSING, ``base_dispense``), then the
+belt carries the base to the side (PROCESSED: to the output, or back to the
+input), READY-AT-OUTPUT until a robot takes it.  A side already occupied
+breaks it.
+"""
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from rll_bt.rules import BASE_COLORS
 
-from ..world import Workpiece
-from .base import PROCESSING, Station
+from ..world import INPUT, OUTPUT, Workpiece
+from .base import OPERATION, PROCESSING, Station
 
 
 @dataclass(frozen=True)
@@ -15,27 +21,27 @@ class BSInstruction:
     color: str         # BASE_*
 
 
-
 class BaseStation(Station):
-    kind, duration_key = "BS", "bs_dispense"
+    kind = "BS"
 
     def validate(self, instr) -> str | None:
         if not isinstance(instr, BSInstruction):
-            return "prepare without base station instruction"
+            return "without data"
         if instr.side not in ("INPUT", "OUTPUT"):
-            return f"invalid side {instr.side}"
+            return f"with invalid side {instr.side}"
         if instr.color not in BASE_COLORS:
-            return f"invalid base color {instr.color}"
+            return f"with invalid base color {instr.color}"
         return None
+
+    def wants_input(self) -> bool:
+        return False
 
     def on_prepared(self) -> None:
         # the BS goes straight to dispensing
         self._set_state(PROCESSING, f"dispensing {self.instruction.color}")
-        self.deadline = self.now + self.duration
+        self._step(OPERATION, self.times.base_dispense)
 
     def finish(self) -> None:
-        side = self.instruction.side.lower()         # MachineSide INPUT/OUTPUT -> slot
-        if self.host.world.workpiece_at(self.name, side) is not None:
-            self.break_(f"cannot dispense, {side} is occupied")
-            return
-        self._ready(Workpiece(self.instruction.color), side)
+        side = INPUT if self.instruction.side == "INPUT" else OUTPUT
+        move = self.times.belt_to_output if side == OUTPUT else self.times.belt_to_middle
+        self._processed(Workpiece(self.instruction.color), side, move)

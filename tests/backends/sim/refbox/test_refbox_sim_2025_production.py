@@ -15,8 +15,9 @@ from backends.sim.refbox import (
     Workpiece,
 )
 from backends.sim.refbox.messages import Messages, enum_name
-from rll_bt.rules import CYAN, MAGENTA
+from rll_bt.rules import CYAN, MAGENTA, MPS_TIMES
 
+T = MPS_TIMES
 M25 = Messages("rcll2025")
 GREEN = {"RED": "OFF", "YELLOW": "OFF", "GREEN": "ON"}
 GREEN_BLINK = {"RED": "OFF", "YELLOW": "OFF", "GREEN": "BLINK"}
@@ -45,7 +46,7 @@ def deliver(h, wp, order_id, team=CYAN):
     n = len(h.game.ledger.entries)
     assert h.game.prepare(team, ds, DSInstruction(order_id=order_id), team) == "prepared"
     h.world.put(ds, "input", wp)
-    h.run(8.25)
+    h.run(10)                       # the gate's slot (<= 4.75 s), then WAIT-IDLE for 5 s
     assert h.station(ds).state == "IDLE" and h.world.workpiece_at(ds, "input") is None
     return sum(e.points for e in h.game.ledger.entries[n:]), h.events("delivery")[-1]
 
@@ -76,17 +77,37 @@ def test_ring_steps_score_by_the_colours_cost(harness25):
     assert pts == 50 + 20 + 10 + 10
 
 
-@pytest.mark.parametrize("late,points", [(0, 50), (3, 45), (4, 44), (10, 35), (11, 5), (60, 5)])
-def test_late_delivery_deductions(harness25, late, points):
+@pytest.mark.parametrize("late,points", [(0, 50), (1, 41), (44, 41), (46, 32), (89, 32),
+                                         (91, 22), (134, 22), (136, 13), (600, 13)])
+def test_late_delivery_loses_a_quarter_step_of_75_percent_per_quarter_window(harness25, late,
+                                                                             points):
+    """2025 (orders.clp): late by up to 1/4, 2/4, 3/4 of the window's length (180 s here)
+    costs 18.75 %, 37.5 %, 56.25 % of the delivery points, later 75 %; the step points
+    are paid in full."""
     h = open_game(harness25)
     g = h.game
     h.run(100)
-    o, wp = set_order(g, 5, 2, end=100 + 8 - late)                  # delivered at 108
+    o, wp = set_order(g, 5, 2)
+    t = 100 + T.delivery(o.gate)                                    # delivered then
+    o.end = t - late
+    o.begin = o.end - 180
     pts, ev = deliver(h, wp, 5)
-    assert ev.game_time == 108
+    assert ev.game_time == pytest.approx(t)
     rings = sum((5, 10, 20)[g.ring_costs[c]] for c in o.rings)
     assert pts == points + rings + 10
-    assert ev.data["how"] == ("in-time" if late == 0 else "late" if late <= 10 else "too-late")
+    assert ev.data["how"] == ("in-time" if late == 0 else "late")
+
+
+def test_a_c3_delivered_40_s_late_scores_82_delivery_points(harness25):
+    h = open_game(harness25, seed=3)
+    g = h.game
+    h.run(300)
+    o, wp = set_order(g, 4, 3, rings=g.rs_colors("C-RS1") + g.rs_colors("C-RS2")[:1])
+    t = 300 + T.delivery(o.gate)
+    o.end, o.begin = t - 40, t - 40 - 180
+    _, ev = deliver(h, wp, 4)
+    delivery = [e for e in h.awards(CYAN) if e.reason.startswith("delivered item for order 4")]
+    assert [e.points for e in delivery] == [82] and ev.data["how"] == "late"
 
 
 def test_competitive_order_first_gains_10_second_loses_10(harness25):
@@ -108,7 +129,7 @@ def test_additional_base_scores_2_and_cap_retrieval_scores_2(harness25):
     assert h.award_sum(CYAN) == 2 and h.station("C-RS2").slide_loaded == 1
     assert g.prepare(CYAN, "C-CS1", CSInstruction("RETRIEVE_CAP"), CYAN) == "prepared"
     h.world.put("C-CS1", "input", h.world.take("C-CS1", "shelf0"))
-    h.run(12.25)
+    h.run(22)
     assert h.station("C-CS1").cap_buffer == "CAP_GREY"
     assert [(e.points, e.reason) for e in h.awards(CYAN)][-1] == (2, "retrieved cap at C-CS1")
     assert g.points(CYAN) == 4
@@ -125,30 +146,43 @@ def test_order_id_0_only_consumes_the_workpiece(harness25):
 def test_unknown_order_id_breaks_the_ds(harness25):
     h = open_game(harness25)
     assert h.game.prepare(CYAN, "C-DS", DSInstruction(order_id=99), CYAN) == "broken"
-    assert "invalid order ID 99" in h.station("C-DS").broken_reason
+    assert h.station("C-DS").broken_reason == "Prepare received for C-DS with invalid order ID"
     h.run(30.25)
     assert h.station("C-DS").state == "IDLE"
     assert h.game.prepare(CYAN, "C-DS", DSInstruction(gate=2), CYAN) == "broken"   # no order id
 
 
-def test_wrong_product_inactive_order_too_soon_and_too_many(harness25):
+def test_wrong_product_inactive_order_and_too_many(harness25):
     h = open_game(harness25)
     g = h.game
-    o, wp = set_order(g, 7, 1, begin=500, end=900)
+    o, wp = set_order(g, 7, 1)
     wrong = Workpiece(wp.base, wp.rings, "CAP_BLACK" if wp.cap == "CAP_GREY" else "CAP_GREY")
     pts, ev = deliver(h, wrong, 7)
     assert (pts, ev.data["how"]) == (0, "wrong-product")
     assert any("Incorrect delivery for order 7" in t for t in h.attention(CYAN))
-    pts, ev = deliver(h, wp, 7)
-    assert (pts, ev.data["how"]) == (0, "too-soon")
-    assert o.delivered[CYAN] == 0
     later = next(x for x in g.orders if not x.active and x.id != 11)
+    later.begin = 0
     pts, ev = deliver(h, Workpiece(later.base, later.rings, later.cap), later.id)
     assert (pts, ev.data["how"]) == (0, "no-order")
-    o.begin = 0
     deliver(h, wp, 7)
     pts, ev = deliver(h, wp, 7)
     assert (pts, ev.data["how"]) == (0, "too-many") and o.delivered[CYAN] == 2
+
+
+def test_the_ds_does_not_take_a_product_before_its_window_and_breaks_after_20_s(harness25):
+    """2025: a DS prepared for an order whose window has not opened stays PREPARED with the
+    product on its input; 20 s after the prepare it is BROKEN and the product is lost."""
+    h = open_game(harness25)
+    g = h.game
+    o, wp = set_order(g, 7, 1, begin=500, end=900)
+    assert g.prepare(CYAN, "C-DS", DSInstruction(order_id=7), CYAN) == "prepared"
+    h.world.put("C-DS", "input", wp)
+    h.run(19.75)
+    assert h.station("C-DS").state == "PREPARED" and h.world.workpiece_at("C-DS", "input") == wp
+    h.run(0.5)
+    assert h.station("C-DS").state == "BROKEN" and h.station("C-DS").broken_cause == "timeout"
+    assert h.world.workpiece_at("C-DS", "input") is None and not h.events("delivery")
+    assert o.delivered[CYAN] == 0
 
 
 def test_unconfirmed_deliveries_are_listed_until_the_referee_confirms(harness25):
@@ -159,16 +193,17 @@ def test_unconfirmed_deliveries_are_listed_until_the_referee_confirms(harness25)
     assert pts == 0 and ev.data["how"] == "unconfirmed"
     oi = M25.order_info(g)
     u = next(x for x in oi.orders if x.id == 3).unconfirmed_deliveries
-    assert [(d.id, enum_name(d, "team"), d.delivery_time.sec) for d in u] == [(1, "CYAN", 8)]
+    at = T.delivery(o.gate)
+    assert [(d.id, enum_name(d, "team"), d.delivery_time.sec) for d in u] == [(1, "CYAN", int(at))]
     h.run(20)
     assert not g.pending_deliveries and h.award_sum(CYAN) == 30
-    assert {e.game_time for e in h.awards(CYAN)} == {8}               # scored at delivery time
+    assert {e.game_time for e in h.awards(CYAN)} == {at}              # scored at delivery time
     assert not next(x for x in M25.order_info(g).orders if x.id == 3).unconfirmed_deliveries
 
 
 # -- storage station ----------------------------------------------------------------------
 
-def test_ss_stores_and_retrieves_a_workpiece(harness25):
+def test_ss_stores_and_retrieves_a_workpiece_for_5_points_each(harness25):
     h = open_game(harness25)
     g = h.game
     ss = h.station("C-SS")
@@ -176,18 +211,27 @@ def test_ss_stores_and_retrieves_a_workpiece(harness25):
     assert g.prepare(CYAN, "C-SS", SSInstruction("STORE", 2, 5, "half a C1"), CYAN) == "prepared"
     h.world.put("C-SS", "input", wp)
     h.run(0.25)
-    assert ss.state == "PROCESSING" and h.world.workpiece_at("C-SS", "input") is None
-    h.run(10)
-    assert ss.state == "IDLE" and ss.stored() == {(2, 5): wp}
+    assert ss.state == "PREPARED" and h.world.workpiece_at("C-SS", "input") is None  # to the middle
+    h.run(1.5)
+    assert ss.state == "PROCESSING"
+    h.run(17.5)                                          # 1.54 + 17.5 s: stored
+    assert ss.state == "WAIT-IDLE" and ss.stored()[(2, 5)] == wp
+    assert [(e.points, e.reason) for e in h.awards(CYAN)] == [
+        (-5, "payment for storing (2, 5) at C-SS")]
+    h.run(5)
+    assert ss.state == "IDLE"
     status = next(m for m in M25.machine_info(g, CYAN).machines if m.name == "C-SS").status_ss
     assert len(status) == 48
-    assert [(s.shelf, s.slot, s.description) for s in status if s.is_filled] == \
-        [(2, 5, "half a C1")]
+    assert (2, 5, "half a C1") in [(s.shelf, s.slot, s.description) for s in status if s.is_filled]
     assert g.prepare(CYAN, "C-SS", SSInstruction("RETRIEVE", 2, 5), CYAN) == "prepared"
     assert ss.state == "PROCESSING"                       # nothing to feed
-    h.run(10.25)
+    h.run(17.25)
+    assert ss.state == "PROCESSING"
+    h.run(0.5)
+    assert ss.state == "PROCESSED" and (2, 5) not in ss.stored()
+    h.run(2.5)                                            # 17.5 + 2.66 s: at the output
     assert ss.state == "READY-AT-OUTPUT" and h.world.workpiece_at("C-SS", "output") == wp
-    assert ss.lights == READY and ss.stored() == {}
+    assert ss.lights == READY and h.award_sum(CYAN) == -10
     h.world.take("C-SS", "output")
     h.run(0.25)
     assert ss.state == "WAIT-IDLE" and ss.lights == WAIT_IDLE
@@ -203,13 +247,13 @@ def test_ss_change_info_and_the_instructions_that_break_it(harness25):
     assert g.prepare(CYAN, "C-SS", SSInstruction("CHANGE_INFO", 0, 0, "new"), CYAN) == "done"
     assert ss.state == "IDLE" and ss.place(0, 0).description == "new"
     for instr, why in ((SSInstruction("STORE", 0, 0), "occupied"),
-                       (SSInstruction("RETRIEVE", 1, 1), "empty"),
+                       (SSInstruction("RETRIEVE", 1, 3), "empty"),
                        (SSInstruction("RETRIEVE", 6, 0), "invalid shelf or slot"),
                        (SSInstruction("STORE", 0, 8), "invalid shelf or slot")):
         assert g.prepare(CYAN, "C-SS", instr, CYAN) == "broken"
         assert why in ss.broken_reason
         h.run(30.25)
-        assert ss.state == "IDLE" and ss.stored() == {(0, 0): Workpiece("BASE_RED")}
+        assert ss.state == "IDLE" and ss.stored()[(0, 0)] == Workpiece("BASE_RED")
 
 
 # -- ResetMachine, PrepareMachine rules ---------------------------------------------------
@@ -268,22 +312,25 @@ def test_prepare_sent_more_than_5_s_ago_is_ignored(harness25):
     assert g.prepare(MAGENTA, "M-BS", bs, MAGENTA) == "prepared"          # no sent_at
 
 
-def test_missing_instruction_is_ignored_and_prepare_at_ready_breaks(harness25):
+def test_missing_instruction_breaks_and_prepare_at_ready_is_ignored(harness25):
+    """production-prepare-*: "Prepare received for X without data"; a prepare for a machine
+    that is not IDLE is ignored, READY-AT-OUTPUT too (refbox commit 78b464b9)."""
     h = open_game(harness25)
     g = h.game
-    assert g.prepare(CYAN, "C-RS1", None, CYAN).startswith("ignored")
-    assert h.station("C-RS1").state == "IDLE"
+    assert g.prepare(CYAN, "C-RS1", None, CYAN) == "broken"
+    assert h.station("C-RS1").broken_reason == "Prepare received for C-RS1 without data"
     g.prepare(CYAN, "C-BS", BSInstruction("OUTPUT", "BASE_RED"), CYAN)
-    h.run(5.25)
+    h.run(4)
     assert h.station("C-BS").state == "READY-AT-OUTPUT" and h.station("C-BS").lights == READY
-    assert g.prepare(CYAN, "C-BS", BSInstruction("OUTPUT", "BASE_RED"), CYAN) == "broken"
-    assert h.world.workpiece_at("C-BS", "output") is None                # slots cleared
+    assert g.prepare(CYAN, "C-BS", BSInstruction("OUTPUT", "BASE_RED"), CYAN) == \
+        "ignored: C-BS is READY-AT-OUTPUT"
+    assert h.world.workpiece_at("C-BS", "output") == Workpiece("BASE_RED")
 
 
 def test_prepared_blinks_green_until_fed(harness25):
     h = open_game(harness25)
     g = h.game
-    color = g.rs_colors("C-RS1")[0]
+    color = next(c for c in g.rs_colors("C-RS1") if g.ring_costs[c] == 0)
     assert g.prepare(CYAN, "C-RS1", RSInstruction(color), CYAN) == "prepared"
     h.run(10)
     assert h.station("C-RS1").lights == GREEN_BLINK and h.world.lights("C-RS1") == GREEN_BLINK

@@ -24,7 +24,7 @@ def setup(bus_team):
 
     clock = SimClock()
     timing = Timing.from_profile(profile("rcll2016"), setup=3, exploration=20, production=120)
-    game = RefboxGame("rcll2016", clock, seed=21, team_cyan="Caro", team_magenta="Grips",
+    game = RefboxGame("rcll2016", clock, seed=1, team_cyan="Caro", team_magenta="Grips",
                       timing=timing)
     bus = Bus(clock)
     node = RefboxNode.on_bus(game, bus, keys=KEYS)

@@ -112,7 +112,10 @@ def test_udp_game_against_a_listening_team():
     assert [ln.split("] ")[1].split("  ")[0] for ln in lines if ln.startswith("[")] == [
         "PRE_GAME -> SETUP", "SETUP -> EXPLORATION", "EXPLORATION -> PRODUCTION",
         "PRODUCTION -> POST_GAME"]
-    assert lines[-1].startswith("final score: Caro 0 : 0 Grips (POST_GAME")
+    final = next(i for i, ln in enumerate(lines) if ln.startswith("final score:"))
+    assert lines[final].startswith("final score: Caro 0 : 0 Grips (POST_GAME")
+    assert lines[final + 1:] == ["Caro (CYAN): stations broken 0; referee calls 0",
+                                 "Grips (MAGENTA): stations broken 0; referee calls 0"]
 
 
 def test_udp_2025_game_explores_inside_production():

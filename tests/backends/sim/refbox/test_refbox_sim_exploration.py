@@ -55,13 +55,17 @@ def test_only_the_first_value_per_machine_counts(harness):
     assert g.exploration.reported(CYAN) == ["C-RS2"]
 
 
-def test_report_for_the_other_teams_machine_costs_once(harness):
+def test_report_for_the_other_teams_machine_scores_nothing_in_2016(harness):
+    """The 2016 refbox defines -6 for it, but only commented-out rules use it."""
     h = harness().exploration()
     g = h.game
     t, z = _truth(g, "M-BS")
-    assert g.machine_report(CYAN, [ReportEntry("M-BS", t, z)], CYAN) == -6
     assert g.machine_report(CYAN, [ReportEntry("M-BS", t, z)], CYAN) == 0
+    assert g.machine_report(CYAN, [ReportEntry("M-BS", "WRONG", 3)], CYAN) == 0
+    assert g.ledger.entries == [] and not h.events("report")
     assert g.exploration.state(MAGENTA, "M-BS") is None
+    # the real report of M-BS by its own team still counts in full afterwards
+    assert g.machine_report(MAGENTA, [ReportEntry("M-BS", t, z)], MAGENTA) == 8
 
 
 def test_unknown_names_are_ignored(harness):

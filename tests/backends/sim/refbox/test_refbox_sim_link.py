@@ -202,7 +202,7 @@ def test_a_refbox_game_over_the_link_on_the_pybullet_world():
         robot.gripper.command("open", now=world.time)
         run(3)
         assert g.stations["C-RS1"].state == "PROCESSING"      # and the put
-        run(16)
+        run(20)
         wp = world.workpiece_at("C-RS1", "output")
         assert (wp.base, wp.rings) == ("BASE_RED", (color,))
         assert world.lights("C-RS1") == {"RED": "OFF", "YELLOW": "ON", "GREEN": "OFF"}

@@ -1,6 +1,8 @@
 """Mockup mode: production without robots, a team playing by PrepareMachine alone."""
 from __future__ import annotations
 
+import pytest
+
 from backends.sim.refbox import (
     BSInstruction,
     CSInstruction,
@@ -109,16 +111,17 @@ def test_wrong_instructions_still_break_stations(harness):
     assert not [e for e in h.awards(CYAN) if e.reason.startswith("added additional")]
     # a valid prepare whose workpiece is not fit waits for one, like a real station
     assert g.prepare(CYAN, "C-CS2", CSInstruction("RETRIEVE_CAP"), CYAN) == "prepared"
-    h.run(40)
+    h.run(42)        # carrier fed at 10, cap retrieved at 31.7, taken at 36.7, IDLE at 41.7
     assert g.prepare(CYAN, "C-CS2", CSInstruction("MOUNT_CAP"), CYAN) == "prepared"
     assert g.prepare(CYAN, "C-BS", BSInstruction("OUTPUT", "BASE_RED"), CYAN) == "prepared"
-    h.run(45)        # base taken at 50, fed at 60, capped at 72, taken at 77
+    h.run(46)        # base taken at 50.8, fed at 60.8, capped at 82.5, taken at 87.5
     color = g.rs_colors("C-RS2")[0]
     assert g.prepare(CYAN, "C-RS2", RSInstruction(color), CYAN) == "prepared"
     assert h.station("C-RS2").slide_loaded == g.ring_costs[color]
     h.run(10.25)     # the capped product is not fit for a ring: the RS keeps waiting
     assert h.station("C-RS2").state == "PREPARED"
-    assert g.mockup.held[CYAN] == {"C-CS2": (Workpiece("BASE_RED", (), "CAP_BLACK"), 77.0)}
+    (wp, since), = g.mockup.held[CYAN].values()
+    assert wp == Workpiece("BASE_RED", (), "CAP_BLACK") and since == pytest.approx(87.45)
 
 
 def test_products_are_taken_and_a_broken_station_drops_its_workpiece(harness):
@@ -130,7 +133,7 @@ def test_products_are_taken_and_a_broken_station_drops_its_workpiece(harness):
     h.run(5)
     assert h.world.workpiece_at("C-BS", "input") is None
     assert h.station("C-BS").state == "WAIT-IDLE"
-    assert g.mockup.held[CYAN] == {"C-BS": (Workpiece("BASE_SILVER"), 10.0)}
+    assert g.mockup.held[CYAN] == {"C-BS": (Workpiece("BASE_SILVER"), pytest.approx(7.638))}
     color = g.rs_colors("C-RS1")[0]
     assert g.prepare(CYAN, "C-RS1", RSInstruction(color), CYAN) == "prepared"
     assert g.mockup.held[CYAN] == {}            # on its way, arriving 10 s later
@@ -144,21 +147,22 @@ def test_products_are_taken_and_a_broken_station_drops_its_workpiece(harness):
 def test_2025_retrieved_cap_and_delivery_by_order_id(harness25):
     h = harness25(exploration=0, mockup=True).production()
     g = h.game
-    order = next(o for o in g.orders if o.complexity == 0 and o.active)
+    order = g.order(1)                        # standing: its window is open
+    order.complexity, order.rings = 0, ()
     cs = cs_with(g, order.cap)
     assert g.prepare(CYAN, cs, CSInstruction("RETRIEVE_CAP"), CYAN) == "prepared"
     assert g.prepare(CYAN, "C-BS", BSInstruction("OUTPUT", order.base), CYAN) == "prepared"
-    h.run(32.25)     # carrier fed at 10, cap retrieved at 22; carrier discarded at 27
+    h.run(42)        # base taken at 8.8; carrier fed at 10, cap retrieved and discarded at 36.7
     assert g.prepare(CYAN, cs, CSInstruction("MOUNT_CAP"), CYAN) == "prepared"
-    h.run(27)        # base fed at 42.25, capped at 54.25, taken at 59.25
+    h.run(37)        # base fed at 52, capped at 73.7, taken at 78.7
     assert g.prepare(CYAN, "C-DS", DSInstruction(order_id=order.id), CYAN) == "prepared"
-    h.run(20)
+    h.run(20)        # fed at 89, within the 20 s of the prepare
     delivery, = h.events("delivery")
     assert delivery.data["workpiece"] == Workpiece(order.base, (), order.cap)
     assert delivery.data["how"] == "in-time"
     assert h.award_sum(CYAN) == 2 + 10 + g.profile.scoring.delivery_by_complexity[0]
     assert [e.data["what"] for e in h.events("workpiece") if e.data.get("mockup")] == \
-        ["fed", "taken", "discarded", "carried", "fed", "taken", "carried", "fed"]
+        ["taken", "fed", "discarded", "carried", "fed", "taken", "carried", "fed"]
 
 
 def test_mockup_off_leaves_stations_to_robots(harness):

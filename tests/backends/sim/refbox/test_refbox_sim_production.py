@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from backends.sim.refbox import BSInstruction, CSInstruction, DSInstruction, RSInstruction, StationConfig, Workpiece
-from rll_bt.rules import CYAN, MAGENTA
+from backends.sim.refbox import BSInstruction, CSInstruction, DSInstruction, RSInstruction, Workpiece
+from rll_bt.rules import CYAN, MAGENTA, MPS_TIMES
+
+T = MPS_TIMES        # the real machines' times
 
 GREEN = {"RED": "OFF", "YELLOW": "OFF", "GREEN": "ON"}
 GREEN_BLINK = {"RED": "OFF", "YELLOW": "OFF", "GREEN": "BLINK"}
@@ -31,7 +33,7 @@ def deliver(h, wp, gate, team=CYAN):
     n = len(h.game.ledger.entries)
     assert h.game.prepare(team, ds, DSInstruction(gate), team) == "prepared"
     h.world.put(ds, "input", wp)
-    h.run(8.25)
+    h.run(5.0)
     assert h.station(ds).state == "IDLE" and h.world.workpiece_at(ds, "input") is None
     return (sum(e.points for e in h.game.ledger.entries[n:]), h.events("delivery")[-1])
 
@@ -44,9 +46,12 @@ def test_bs_dispenses_base_and_runs_the_state_machine_with_lights(harness):
     assert h.station("C-BS").lights == GREEN and h.station("C-BS").state == "IDLE"
     assert g.prepare(CYAN, "C-BS", BSInstruction("OUTPUT", "BASE_RED"), CYAN) == "prepared"
     assert (h.station("C-BS").state, h.station("C-BS").lights) == ("PROCESSING", BUSY)
-    h.run(4.75)
-    assert h.station("C-BS").state == "PROCESSING" and h.world.workpiece_at("C-BS", "output") is None
-    h.run(0.25)
+    h.run(1.0)                                              # dispensing: 1.1 s
+    assert h.station("C-BS").state == "PROCESSING"
+    h.run(2.5)                                              # the belt to the output: 2.656 s
+    assert (h.station("C-BS").state, h.station("C-BS").lights) == ("PROCESSED", BUSY)
+    assert h.world.workpiece_at("C-BS", "output") is None
+    h.run(0.5)                                              # 3.756 s in all
     assert (h.station("C-BS").state, h.station("C-BS").lights) == ("READY-AT-OUTPUT", READY)
     assert h.world.workpiece_at("C-BS", "output") == Workpiece("BASE_RED")
     assert h.world.lights("C-BS") == READY
@@ -55,8 +60,8 @@ def test_bs_dispenses_base_and_runs_the_state_machine_with_lights(harness):
     assert (h.station("C-BS").state, h.station("C-BS").lights) == ("WAIT-IDLE", WAIT_IDLE)
     h.run(5)
     assert (h.station("C-BS").state, h.station("C-BS").lights) == ("IDLE", GREEN)
-    assert states(h, "C-BS")[1:] == ["PREPARED", "PROCESSING", "READY-AT-OUTPUT", "WAIT-IDLE",
-                                     "IDLE"]
+    assert states(h, "C-BS")[1:] == ["PREPARED", "PROCESSING", "PROCESSED", "READY-AT-OUTPUT",
+                                     "WAIT-IDLE", "IDLE"]
 
 
 def test_bs_input_side(harness):
@@ -79,11 +84,11 @@ def test_prepared_blinks_green_for_3_s_and_waits_for_a_workpiece(harness):
     assert h.station("C-DS").state == "PREPARED"
 
 
-def test_prepared_timeout_breaks_when_configured(harness):
-    h = harness(config=StationConfig(prepared_timeout=10.0)).production()
-    h.game.prepare(CYAN, "C-DS", DSInstruction(2), CYAN)
-    h.run(10.25)
-    assert h.station("C-DS").state == "BROKEN"
+def test_2016_has_no_timeout_for_a_prepared_machine(harness):
+    h = harness().production()
+    h.game.prepare(CYAN, "C-RS1", RSInstruction(rs_color(h.game, "C-RS1", cost=0)), CYAN)
+    h.run(120)
+    assert h.station("C-RS1").state == "PREPARED"
 
 
 def test_rs_mounts_a_free_ring(harness):
@@ -95,7 +100,13 @@ def test_rs_mounts_a_free_ring(harness):
     h.run(0.25)
     assert (h.station("C-RS1").state, h.station("C-RS1").lights) == ("PROCESSING", BUSY)
     assert h.world.workpiece_at("C-RS1", "input") is None
-    h.run(15)
+    h.run(18.5)                                   # the belt (1.54 s), then mounting (17.31 s)
+    assert h.station("C-RS1").state == "PROCESSING"
+    h.run(0.25)
+    assert h.station("C-RS1").state == "PROCESSED"
+    h.run(2.5)                                    # the belt to the output (2.66 s): 21.50 s
+    assert h.station("C-RS1").state == "PROCESSED"
+    h.run(0.25)
     assert h.station("C-RS1").state == "READY-AT-OUTPUT"
     assert h.world.workpiece_at("C-RS1", "output") == Workpiece("BASE_BLACK", (color,))
 
@@ -112,7 +123,7 @@ def test_additional_bases_score_2_each_and_are_consumed_by_a_costly_ring(harness
     assert h.award_sum(CYAN) == 6
     g.prepare(CYAN, rs, RSInstruction(color), CYAN)
     h.world.put(rs, "input", Workpiece("BASE_RED"))
-    h.run(15.25)
+    h.run(22)
     assert h.world.workpiece_at(rs, "output") == Workpiece("BASE_RED", (color,))
     assert h.station(rs).slide_loaded == 1
 
@@ -133,10 +144,10 @@ def test_cs_retrieves_a_cap_then_mounts_it(harness):
     carrier = h.world.take("C-CS1", "shelf0")
     assert carrier.cap == "CAP_GREY"
     h.run(0.25)
-    assert h.world.workpiece_at("C-CS1", "shelf0") is not None            # refilled
+    assert h.world.workpiece_at("C-CS1", "shelf0") is None     # refilled only once empty
     assert g.prepare(CYAN, "C-CS1", CSInstruction("RETRIEVE_CAP"), CYAN) == "prepared"
     h.world.put("C-CS1", "input", carrier)
-    h.run(12.25)
+    h.run(22)
     assert h.world.workpiece_at("C-CS1", "output") == Workpiece(carrier.base)
     assert h.station("C-CS1").cap_buffer == "CAP_GREY"
     h.world.take("C-CS1", "output")
@@ -144,7 +155,7 @@ def test_cs_retrieves_a_cap_then_mounts_it(harness):
     assert h.station("C-CS1").state == "IDLE"
     assert g.prepare(CYAN, "C-CS1", CSInstruction("MOUNT_CAP"), CYAN) == "prepared"
     h.world.put("C-CS1", "input", Workpiece("BASE_BLACK", ("RING_BLUE",)))
-    h.run(12.25)
+    h.run(22)
     assert h.world.workpiece_at("C-CS1", "output") == Workpiece("BASE_BLACK", ("RING_BLUE",),
                                                                 "CAP_GREY")
     assert h.station("C-CS1").cap_buffer is None
@@ -183,7 +194,7 @@ def test_cs_operation_against_the_buffer_breaks(harness):
     h = harness().production()
     g = h.game
     assert g.prepare(CYAN, "C-CS2", CSInstruction("MOUNT_CAP"), CYAN) == "broken"
-    assert any("without a buffered cap" in a for a in h.attention(CYAN))
+    assert "Prepare received for C-CS2: cannot mount without cap" in h.attention(CYAN)
     h.station("C-CS1").cap_buffer = "CAP_GREY"
     assert g.prepare(CYAN, "C-CS1", CSInstruction("RETRIEVE_CAP"), CYAN) == "broken"
     assert any("already holding" in a for a in h.attention(CYAN))
@@ -264,9 +275,13 @@ def test_down_period_shows_red_and_delays_processing(harness):
     assert g.prepare(CYAN, "C-RS1", RSInstruction(color), CYAN).startswith("ignored")
     h.run(20)
     assert (st.state, st.lights) == ("PROCESSING", BUSY)           # back, 20 s later
-    h.run(9.5)
-    assert st.state == "PROCESSING"                               # 15 s + 20 s down
-    h.run(0.5)
+    h.run(13.5)
+    assert st.state == "PROCESSING"                               # 1.5 + 17.3 s + 20 s down
+    h.run(0.25)
+    assert st.state == "PROCESSED"
+    h.run(2.5)
+    assert st.state == "PROCESSED"
+    h.run(0.25)
     assert st.state == "READY-AT-OUTPUT"
 
 
@@ -296,7 +311,7 @@ def test_delivery_in_window_scores_20_plus_cap(harness):
 def test_late_delivery_within_10_s_reduced(harness, late, expected):
     h = harness().production()
     o = _open_order(h.game, 0)
-    o.end = 8 - late                     # deliver() finishes at production time 8.0
+    o.end = T.delivery(o.gate) - late    # deliver() finishes after the gate's slot time
     pts, ev = deliver(h, _product(o), o.gate)
     assert pts == expected + 10
     assert ev.data["how"] == ("in-time" if late == 0 else "late")
@@ -365,7 +380,9 @@ def test_magenta_delivery_counts_for_magenta(harness):
 def test_orders_activate_over_production_time(harness):
     h = harness(seed=3, production=120).production()
     g = h.game
-    assert [o.id for o in g.active_orders()] == [1]
+    at_start = [o.id for o in g.active_orders()]
+    assert 1 in at_start and 7 in at_start             # the standing order and the C3
+    assert at_start == [o.id for o in g.orders if o.activate_at == 0 and not o.overtime]
     h.run(119)
     assert [o.id for o in g.active_orders()] == list(range(1, 8))      # #8 waits for overtime
     acts = {e.data["order"]: e.game_time for e in h.events("order")}

@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from backends.sim.refbox import parse_phase_lengths
-from backends.sim.refbox.orders2016 import WINDOWS_2016
+from backends.sim.refbox.orders2016 import TIMES_2016
 from rll_bt.rules import CYAN, MAGENTA, machine_team, mirror_machine_name, profile
 
 P16 = profile("rcll2016")
@@ -82,9 +82,10 @@ def test_order_schedule_shapes_and_windows(harness):
     assert (orders[0].begin, orders[0].end, orders[0].activate_at) == (0, 900, 0)
     assert (orders[7].begin, orders[7].end, orders[7].activate_at) == (900, 1200, 900)
     for o in orders[1:7]:
-        (dlo, dhi), earliest, _lead = WINDOWS_2016[o.complexity]
-        assert dlo - 1 <= o.end - o.begin <= dhi + 1
-        assert o.begin >= min(earliest, 900 - (o.end - o.begin)) - 1 and o.end <= 900
+        (slo, shi), (dlo, dhi), (llo, lhi) = TIMES_2016[o.id]
+        assert dlo <= o.end - o.begin <= dhi
+        assert o.end <= 900 and (slo <= o.begin <= shi or o.end == 900)
+        assert o.activate_at == max(0, o.begin - (o.begin - o.activate_at))
         assert 0 <= o.activate_at <= o.begin
         assert len(set(o.rings)) == o.complexity and 1 <= o.gate <= 3
         assert o.base.startswith("BASE_") and o.cap.startswith("CAP_")
@@ -112,7 +113,8 @@ def test_down_periods_one_rs_one_cs_per_team_mirrored(harness):
     for m, period in down.items():
         assert down[mirror_machine_name(m)] == period
         start, end = period
-        assert 30 <= end - start <= 120 and start >= 90 and end <= 900
+        assert 30 <= end - start <= 120 and start >= 1 and end <= 900
+        assert start == int(start) and end == int(end)
 
 
 def test_phase_flow_timing_and_points_snapshot(harness):

@@ -86,7 +86,7 @@ def test_one_module_per_rule_set_and_per_station_type():
     assert {p.stem for p in (PKG / "rulesets").glob("*.py")} == {"__init__", "rcll2016",
                                                                   "rcll2025"}
     assert {p.stem for p in (PKG / "stations").glob("*.py")} == {
-        "__init__", "base", "bs", "rs", "cs", "ds", "ss"}
+        "__init__", "base", "lights", "bs", "rs", "cs", "ds", "ss"}
 
 
 def test_no_module_over_500_lines():

@@ -41,7 +41,7 @@ def test_game_on_the_pybullet_world(world):
     robot.gripper.command("open", now=world.time)
     world.run(3, callback=lambda t: g.tick())
     assert g.stations["C-RS1"].state == "PROCESSING"
-    world.run(16, callback=lambda t: g.tick())
+    world.run(20, callback=lambda t: g.tick())
     wp = world.workpiece_at("C-RS1", "output")
     assert (wp.base, wp.rings) == ("BASE_RED", (color,))
     assert world.lights("C-RS1") == {"RED": "OFF", "YELLOW": "ON", "GREEN": "OFF"}
@@ -156,10 +156,11 @@ def test_2025_storage_station_on_the_pybullet_world():
         robot.gripper.command("open", now=world.time)
         world.run(3, callback=lambda t: g.tick())
         assert world.workpiece_at("C-SS", "input") is None          # taken into the shelf
-        world.run(10, callback=lambda t: g.tick())
+        world.run(17, callback=lambda t: g.tick())
         assert g.stations["C-SS"].stored()[(1, 2)].base == "BASE_SILVER"
+        world.run(5, callback=lambda t: g.tick())                    # WAIT-IDLE
         g.prepare("CYAN", "C-SS", SSInstruction("RETRIEVE", 1, 2), "CYAN")
-        world.run(10.5, callback=lambda t: g.tick())
+        world.run(20.5, callback=lambda t: g.tick())
         assert world.workpiece_at("C-SS", "output").base == "BASE_SILVER"
         assert world.lights("C-SS") == {"RED": "OFF", "YELLOW": "ON", "GREEN": "BLINK"}
     finally:
