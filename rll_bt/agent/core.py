@@ -30,6 +30,7 @@ from .observations import ObservationFeed
 from .pose import PoseReader
 from .refbox import RefboxLink
 from .runner import Outcome, TaskRun, default_trees_dir, load_task_tree
+from .stations import StationStates
 from .tasks import InvalidTask, agent_task, task_kind, task_params
 
 log = logging.getLogger("rll_bt.agent")
@@ -69,6 +70,7 @@ class RobotAgent:
         self.feed = ObservationFeed(self.profile, clock, config.robot_id)
         self.services: dict[str, Any] = services if services is not None else {}
         self.services.setdefault("observations", self.feed)
+        self.stations = self.services.setdefault("refbox_stations", StationStates())
         self.services.setdefault("profile", self.profile)
         if start_pose is not None:
             self.services.setdefault("start_pose", start_pose)
@@ -284,6 +286,8 @@ class RobotAgent:
             if rec.msg.DESCRIPTOR.name == "GameState":
                 self.gate.on_game_state(rec.msg)
                 self._follow_color()
+            elif rec.msg.DESCRIPTOR.name == "MachineInfo":
+                self.stations.update(rec.msg, self.clock.now())
 
     def color(self) -> str | None:
         """Our team colour: as configured, else as the refbox (or the team server) says."""

@@ -2,7 +2,9 @@
 (registered through the ``rll_bt.nodes`` entry point ``agent``).
 
 - ``drop_workpiece``: let go of the held workpiece where the robot stands
-  (a discard without a station).
+  (a discard without a station);
+- ``wait_station``: wait until the refbox shows a station in a state (a
+  station PREPARED before its workpiece goes on the input).
 """
 from __future__ import annotations
 
@@ -44,3 +46,36 @@ class DropWorkpiece(Node):
             write_error(self._bb, "PUT_FAILED", "the workpiece is still in the gripper after opening", self.name)
             return Status.FAILURE
         return Status.SUCCESS
+
+
+@node_type("wait_station")
+class WaitStation(Node):
+    """Wait until the refbox reports ``machine`` in one of ``states`` (comma separated;
+    MachineInfo on the team channel, the agent's ``refbox_stations`` service): a
+    robot puts a workpiece on a station's input only once it is PREPARED for it.
+    MACHINE_BROKEN when the station is BROKEN or DOWN, TIMEOUT after ``timeout``
+    seconds.  Without any MachineInfo at all (no refbox: a bench run) it succeeds
+    at once."""
+    machine = Input(str, "station, e.g. C-RS1")
+    states = Input(str, "states to wait for, comma separated", default="PREPARED")
+    timeout = Input(float, "seconds", default=90.0)
+
+    def initialise(self) -> None:
+        self._until = self.ctx.clock.now() + max(0.0, float(self.timeout))
+
+    def update(self) -> Status:
+        view = self.ctx.services.get("refbox_stations")
+        if view is None or not view.heard:
+            return Status.SUCCESS
+        state = view.state(self.machine)
+        wanted = {s.strip().upper() for s in str(self.states).split(",") if s.strip()}
+        if state in wanted:
+            return Status.SUCCESS
+        if state in ("BROKEN", "DOWN"):
+            write_error(self._bb, "MACHINE_BROKEN", f"{self.machine} is {state}", self.name)
+            return Status.FAILURE
+        if self.ctx.clock.now() >= self._until:
+            write_error(self._bb, "TIMEOUT", f"{self.machine} stayed {state}, never "
+                        f"{'/'.join(sorted(wanted))}", self.name)
+            return Status.FAILURE
+        return Status.RUNNING

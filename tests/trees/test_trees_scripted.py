@@ -211,3 +211,47 @@ def test_a_discard_without_a_station_never_drives():
     assert outcome(res) == ("SUCCEEDED", "NONE") and not res.HasField("holding")
     assert skills_called() == []
     assert all(d[1] == "stop" for d in rig.drives()), rig.drives()
+
+
+def _machine_info(**states):
+    from types import SimpleNamespace
+    return SimpleNamespace(machines=[SimpleNamespace(name=n.replace("_", "-"), state=s)
+                                     for n, s in states.items()])
+
+
+@pytest.mark.parametrize("kind, fields, machine", [
+    ("mount_ring", {"machine": "C-RS2", "ring_color": 1}, "C-RS2"),
+    ("mount_cap", {"machine": "C-CS1"}, "C-CS1"),
+    ("retrieve_cap", {"machine": "C-CS2", "shelf_slot": 1}, "C-CS2"),
+    ("put_workpiece", {"machine": "C-CS1", "side": SIDE("INPUT")}, "C-CS1"),
+])
+def test_a_feed_waits_docked_until_the_refbox_shows_the_station_prepared(kind, fields, machine):
+    """Never a workpiece on a station that is not PREPARED for it: the robot docks, then
+    puts only once MachineInfo shows the station PREPARED."""
+    rig = make(holding=kind != "retrieve_cap")
+    rig.agent.stations.update(_machine_info(**{machine.replace("-", "_"): "IDLE"}), rig.clock.now())
+    rig.server.next = getattr(rig.server, "next", 0) + 1
+    tid = rig.server.next
+    rig.server.task(tid, kind, **fields)
+    rig.until(lambda: calls("approach_station") and rig.clock.now() > 30, seconds=60, what="waiting docked")
+    assert not [v for k, v in CALLS if k == "put"]              # docked, not fed
+    rig.agent.stations.update(_machine_info(**{machine.replace("-", "_"): "PREPARED"}), rig.clock.now())
+    rig.until(lambda: [r for r in rig.server.results(tid) if r.status != TM.TaskResult.RUNNING],
+              seconds=60, what="fed")
+    res = [r for r in rig.server.results(tid) if r.status != TM.TaskResult.RUNNING][-1]
+    assert outcome(res) == ("SUCCEEDED", "NONE") and [v for k, v in CALLS if k == "put"]
+
+
+def test_a_delivery_takes_a_ds_waiting_for_its_window_or_delivering():
+    rig = make(holding=True)
+    rig.agent.stations.update(_machine_info(C_DS="PROCESSING"), rig.clock.now())
+    assert outcome(run(rig, "deliver", machine="C-DS", order_id=3)) == ("SUCCEEDED", "NONE")
+
+
+@pytest.mark.parametrize("state, code", [("IDLE", "TIMEOUT"), ("BROKEN", "MACHINE_BROKEN")])
+def test_a_station_never_prepared_ends_the_feed_without_putting(state, code):
+    rig = make(holding=True)
+    rig.agent.stations.update(_machine_info(C_RS1=state), rig.clock.now())
+    res = run(rig, "mount_ring", seconds=300, machine="C-RS1", ring_color=1)
+    assert outcome(res)[1] == code and not [v for k, v in CALLS if k == "put"]
+    assert rig.backend.holding()

@@ -79,6 +79,22 @@ def test_beacons_every_second_on_the_team_channel(bus_rig):
     assert refbox.magenta.receive() == []                              # never on the other team's channel
 
 
+def test_the_stations_states_of_machine_info_reach_the_trees(bus_rig):
+    """MachineInfo on the team channel: the agent keeps each station's state for its trees
+    (the ``refbox_stations`` service a feed waits on)."""
+    rig, refbox, srv = bus_rig()
+    rig.run(2.0)
+    mi = refbox.ms.MachineInfo(team_color=refbox.ms.Team.Value("CYAN"))
+    for name, state in (("C-RS1", "PREPARED"), ("C-DS", "IDLE")):
+        m = mi.machines.add()
+        m.name, m.type, m.state = name, name[2:4], state
+    refbox.cyan.send(mi)
+    rig.run(0.5)
+    view = rig.agent.services["refbox_stations"]
+    assert view.heard and (view.state("C-RS1"), view.state("C-DS")) == ("PREPARED", "IDLE")
+    assert view.state("C-CS1") is None
+
+
 def test_beacon_pose_follows_the_robot(bus_rig):
     rig, refbox, srv = bus_rig(require_game=False)
     rig.agent.pose.start = None
