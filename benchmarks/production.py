@@ -5,12 +5,16 @@ perception, Algorithm 1 exploration, SETUP shortened to 10 s): one with the
 team server's HTN planning (several products at once, orders chosen by
 simulating the plan), one with the greedy baseline (one order at a time,
 the plannable one with the earliest deadline; ``rll-bt sim --baseline``).
-Measured per game: production points, orders delivered, total score.
+Measured per game: production points, orders delivered, total score, our
+stations that went BROKEN (by the refbox's cause) and the referee calls the
+refbox leaves to a human referee (reported, not scored).  The simulated
+refbox plays the real refbox's rules (docs/refbox.md).
 
     .venv/bin/python benchmarks/production.py [--profile rcll2016|rcll2025] [--seeds 20]
                                               [--jobs 2] [--per-seed] [--json FILE]
 
-Aim: at least 100 production points per game and at least 1.5x the baseline.
+Aims (issue 17): a mean of at least 300 production points, no game under 150,
+at least 1.5x the baseline, and no station of ours BROKEN in any game.
 """
 from __future__ import annotations
 
@@ -48,7 +52,8 @@ def main(argv=None) -> int:
     def done(i, row):
         g = games[i]
         what = row.get("error") or (f"{row['points']['production']} production pts, "
-                                    f"{row['orders_delivered']} orders")
+                                    f"{row['orders_delivered']} orders, "
+                                    f"{broken(row)} stations broken")
         print(f"  [{time.perf_counter() - t0:6.0f} s] {'baseline' if g.baseline else 'htn':8} seed {g.seed:3d}: "
               f"{what}", file=sys.stderr, flush=True)
 
@@ -60,6 +65,15 @@ def main(argv=None) -> int:
     return 0 if all("error" not in r for r in rows) else 1
 
 
+def broken(row: dict) -> int:
+    """Our stations that went BROKEN in the game."""
+    return int(row.get("stations_broken", {}).get("total", 0))
+
+
+def calls(row: dict) -> int:
+    return sum(c.get("count", 0) for c in row.get("referee", {}).get("calls", {}).values())
+
+
 def render(profile, seeds, games, rows, wall, per_seed=False) -> str:
     by = {name: [r for g, r in zip(games, rows) if g.baseline == base and "error" not in r]
           for name, base in VARIANTS.items()}
@@ -68,17 +82,19 @@ def render(profile, seeds, games, rows, wall, per_seed=False) -> str:
              f"oracle perception; {wall:.0f} s wall" + (f"; {errors} games failed" if errors else ""),
              "",
              f"{'team server':12} {'games':>5} {'mean prod pts':>14} {'median':>7} {'min':>5} {'max':>5} "
-             f"{'>=100 pts':>10} {'orders/game':>12} {'mean score':>11}",
-             f"{'-' * 12} {'-' * 5} {'-' * 14} {'-' * 7} {'-' * 5} {'-' * 5} {'-' * 10} {'-' * 12} {'-' * 11}"]
+             f"{'>=150 pts':>10} {'orders/game':>12} {'mean score':>11} {'broken':>7} {'referee':>8}",
+             f"{'-' * 12} {'-' * 5} {'-' * 14} {'-' * 7} {'-' * 5} {'-' * 5} {'-' * 10} {'-' * 12} {'-' * 11} "
+             f"{'-' * 7} {'-' * 8}"]
     means = {}
     for name, rs in by.items():
         pts = [r["points"]["production"] for r in rs]
         means[name] = mean(pts)
-        hundred = sum(1 for p in pts if p >= 100)
+        bar = sum(1 for p in pts if p >= 150)
         lines.append(f"{name:12} {len(rs):5d} {fmt(mean(pts)):>14} {fmt(median(pts), '.0f'):>7} "
                      f"{fmt(min(pts) if pts else None, 'd'):>5} {fmt(max(pts) if pts else None, 'd'):>5} "
-                     f"{hundred:>4}/{len(rs):<5} {fmt(mean(r['orders_delivered'] for r in rs), '.2f'):>12} "
-                     f"{fmt(mean(r['points']['total'] for r in rs)):>11}")
+                     f"{bar:>4}/{len(rs):<5} {fmt(mean(r['orders_delivered'] for r in rs), '.2f'):>12} "
+                     f"{fmt(mean(r['points']['total'] for r in rs)):>11} {sum(broken(r) for r in rs):>7d} "
+                     f"{sum(calls(r) for r in rs):>8d}")
     seen = {d.get("how") for rs in by.values() for r in rs for d in r.get("deliveries", ())}
     hows = [h for h in JUDGEMENTS if h in seen] + sorted(h for h in seen - set(JUDGEMENTS) if h)
     lines += ["", "deliveries per game, by the refbox's judgement:",
@@ -88,12 +104,26 @@ def render(profile, seeds, games, rows, wall, per_seed=False) -> str:
                   for h in hows]
         lines.append(f"{name:12} " + " ".join(f"{fmt(c / len(rs) if rs else None, '.2f'):>13}"
                                                for c in counts))
+    causes: dict[str, dict[str, int]] = {}
+    refs: dict[str, dict[str, int]] = {}
+    for name, rs in by.items():
+        for r in rs:
+            for k, v in r.get("stations_broken", {}).get("by_cause", {}).items():
+                causes.setdefault(name, {})[k] = causes.get(name, {}).get(k, 0) + v
+            for k, v in r.get("referee", {}).get("calls", {}).items():
+                refs.setdefault(name, {})[k] = refs.get(name, {}).get(k, 0) + v.get("count", 0)
+    lines += ["", "our stations BROKEN (all games, by cause) and referee calls (reported, not scored):"]
+    for name in by:
+        lines.append(f"{name:12} broken: " + (", ".join(f"{k} {v}" for k, v in sorted(
+            causes.get(name, {}).items())) or "none") + "; referee: " + (", ".join(
+            f"{k} {v}" for k, v in sorted(refs.get(name, {}).items())) or "none"))
     if means.get("baseline"):
         lines += ["", f"HTN / baseline (mean production points): {means['htn'] / means['baseline']:.2f}x"]
     elif means.get("htn") is not None:
         lines += ["", "HTN / baseline: the baseline scored no production points"]
     if per_seed:
-        lines += ["", f"{'seed':>4} {'htn pts':>8} {'orders':>7} {'baseline pts':>13} {'orders':>7}"]
+        lines += ["", f"{'seed':>4} {'htn pts':>8} {'orders':>7} {'broken':>7} {'baseline pts':>13} "
+                      f"{'orders':>7} {'broken':>7}"]
         table = {}
         for g, r in zip(games, rows):
             table.setdefault(g.seed, {})["baseline" if g.baseline else "htn"] = r
@@ -102,10 +132,11 @@ def render(profile, seeds, games, rows, wall, per_seed=False) -> str:
             for name in VARIANTS:
                 r = table.get(seed, {}).get(name, {})
                 if "error" in r or not r:
-                    cells.append(f"{'error':>8} {'':>7}")
+                    cells.append(f"{'error':>8} {'':>7} {'':>7}")
                 else:
-                    cells.append(f"{r['points']['production']:8d} {r['orders_delivered']:7d}")
-            lines.append(f"{seed:4d} {cells[0]} {cells[1].rjust(21)}")
+                    cells.append(f"{r['points']['production']:8d} {r['orders_delivered']:7d} "
+                                 f"{broken(r):7d}")
+            lines.append(f"{seed:4d} {cells[0]} {cells[1].rjust(29)}")
     return "\n".join(lines)
 
 
