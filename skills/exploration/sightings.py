@@ -47,7 +47,7 @@ class SightingCollector:
             if owner is not None:
                 self.lights.setdefault(owner[0], Counter())[light.state] += 1
                 updated.add(owner[0])
-        for machine in updated:
+        for machine in sorted(updated):      # a set: its order changes with the hash seed
             obs = self.observation(machine, dets.stamp)
             if obs is None:
                 continue

@@ -89,7 +89,7 @@ class PerceptionService:
             self._filter(key).add(dets.stamp, int(light.state))
             if owner is not None:
                 updated.add(key)
-        for machine in updated:
+        for machine in sorted(updated):      # a set: its order changes with the hash seed
             self.last_seen[machine] = dets.stamp
             if self.sink is not None:
                 obs = self.observation(machine)
