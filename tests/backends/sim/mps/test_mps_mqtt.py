@@ -50,9 +50,13 @@ class FakeRefbox:
                         f"{machine} {leaf} {payload}")
 
     def step(self, machine, payload, *, wp=False):
-        """Send a step command, wait for its IDLE (and WP), return the feedback seen."""
+        """Send a step command, wait for its BUSY and the IDLE after it (and WP), return
+        the feedback seen (an IDLE republished on a reconnect does not end the step)."""
         mark = self.send(machine, payload)
-        self.wait(mark, machine, "Status", "IDLE")
+        self.wait(mark, machine, "Status", "BUSY")
+        busy = mark + next(i for i, (m, leaf, p) in enumerate(self.msgs[mark:])
+                           if (m, leaf, p) == (machine, "Status", "BUSY"))
+        self.wait(busy, machine, "Status", "IDLE")
         if wp:
             self.wait(mark, machine, "WP-Sensor", "WP")
         return self.since(mark, machine)
