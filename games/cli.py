@@ -78,6 +78,12 @@ def register(cli) -> None:
     g.add_argument("--until", default="end", choices=UNTIL, help="stop after exploration or play to the end")
     g.add_argument("--setup", type=_seconds, default=10.0, metavar="S",
                    help="SETUP phase length in game seconds (default 10; the rules' 300 s change nothing here)")
+    g.add_argument("--game", type=Path, metavar="FILE",
+                   help="play a stored game: its field, orders, ring colours and costs and down periods "
+                        "(JSON written by --save-game, or the first game of a refbox archive of game "
+                        "reports such as rcll100.gz); the seed still fixes the rest (noise, 2016 light codes)")
+    g.add_argument("--save-game", type=Path, metavar="FILE",
+                   help="write this game's field, orders, ring setup and down periods to FILE (JSON) for --game")
     g.add_argument("--exploration", type=_seconds, metavar="S", help="exploration length (default: the rules')")
     g.add_argument("--production", type=_seconds, metavar="S", help="PRODUCTION length (default: the rules')")
     g = gp.add_argument_group("running")
@@ -139,6 +145,8 @@ def register(cli) -> None:
 
 def options_from(args):
     from .options import GameOptions
+    if args.game is not None and not args.game.is_file():
+        raise UserError("no such file", where=f"--game {args.game}")
     if args.out is not None:
         try:
             args.out.mkdir(parents=True, exist_ok=True)
@@ -152,7 +160,8 @@ def options_from(args):
                            exploration=args.exploration, production=args.production, dt=args.dt,
                            hz=args.hz, laser_rate=args.laser_rate, localisation=args.localisation,
                            baseline=args.baseline, record=args.record, live=args.live,
-                           record_camera=args.record_camera, view=args.view, speed=args.speed)
+                           record_camera=args.record_camera, view=args.view, speed=args.speed,
+                           game=args.game, save_game=args.save_game)
     except ValueError as exc:
         raise UserError(str(exc)) from None
 

@@ -67,7 +67,7 @@ class LockstepGame:
         self.sim = sim_factory(profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key,
                                perception=o.perception, gui=o.gui, phases=o.phases(),
                                world_step=o.world_step, robot_options={"laser_rate": o.laser_rate},
-                               refbox="here")
+                               refbox="here", **o.stored())
         self.world, self.refbox = self.sim.world, self.sim.refbox
         try:
             self._wire(o, ts_factory)

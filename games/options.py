@@ -70,6 +70,8 @@ class GameOptions:
     view: int | None = None            # port of the live page (games.view; 0: any free)
     speed: float | None = None         # game seconds per wall second; 0: as fast as possible;
                                        # None: real time when watched (gui, live, view), else as fast as possible
+    game: Path | None = None           # a stored game to play (its field, orders, ring setup, down periods)
+    save_game: Path | None = None      # write the game in that form at its start
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -100,8 +102,9 @@ class GameOptions:
                 raise ValueError(f"{name} must be >= 0 seconds, not {v}")
         if self.speed is not None and not self.speed >= 0:
             raise ValueError(f"speed must be >= 0 (0: as fast as possible), not {self.speed}")
-        if self.out is not None:
-            self.out = Path(self.out)
+        for name in ("out", "game", "save_game"):
+            if getattr(self, name) is not None:
+                setattr(self, name, Path(getattr(self, name)))
 
     @property
     def pace(self) -> float:
@@ -113,6 +116,10 @@ class GameOptions:
     @property
     def rules(self):
         return rules.profile(self.profile)
+
+    def stored(self) -> dict:
+        """The stored-game arguments of the simulator's factory."""
+        return {"stored_game": self.game, "save_game": self.save_game}
 
     def phases(self) -> dict[str, float]:
         """The phase-length overrides for the simulator (game seconds)."""

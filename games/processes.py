@@ -109,7 +109,7 @@ class ProcessGame:
         self.sim = load_simulator(o.simulator)(
             profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key, perception=o.perception,
             gui=o.gui, phases=o.phases(), world_step=o.world_step, robot_options={"laser_rate": o.laser_rate},
-            refbox="process")
+            refbox="process", **o.stored())
         self.world, self.refbox = self.sim.world, self.sim.refbox
         self.clock = self.world.clock
         self.time_map = WallToSim()

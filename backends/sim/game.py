@@ -50,8 +50,8 @@ class PyBulletWorld(World):
     :class:`~backends.sim.robot.RobotConfig` fields for every robot."""
 
     def __init__(self, profile: str = "rcll2016", seed: int = 0, *, perception: str = "oracle", gui: bool = False,
-                 world_step: float = 0.05, robot_options: dict | None = None):
-        self.pybullet = Physics(profile, seed, perception=perception, gui=gui, time_step=world_step)
+                 world_step: float = 0.05, robot_options: dict | None = None, layout=None):
+        self.pybullet = Physics(profile, seed, perception=perception, gui=gui, time_step=world_step, layout=layout)
         self.profile = self.pybullet.profile
         self.clock = self.pybullet.clock
         self.seed = int(seed)
@@ -123,12 +123,18 @@ class RefboxHere(_ViewOfWorld, InProcessRefbox):
     """The simulated refbox in this process on the world's clock.  ``team_name``/``key``:
     the team playing cyan; ``phases``: phase lengths in game seconds ({"setup": 10, ...})."""
 
-    def __init__(self, world: PyBulletWorld, *, team_name: str, key: str, phases: dict | None = None):
+    def __init__(self, world: PyBulletWorld, *, team_name: str, key: str, phases: dict | None = None,
+                 stored=None, save_game: str | None = None):
+        from .refbox.stored_game import play_stored, store_game
         self.world = world
         self.team_name, self.key = team_name, key
         timing = Timing.from_profile(world.profile, **{k: float(v) for k, v in (phases or {}).items()})
         self.game = RefboxGame(world.profile, world.clock, world.pybullet, seed=world.seed, team_cyan=team_name,
                                timing=timing)
+        if stored is not None:
+            play_stored(self.game, stored)
+        if save_game is not None:
+            store_game(self.game, name=stored.name if stored is not None else "").save(save_game)
         self.view = GameView(self.game)
         self.node: RefboxNode | None = None
 
@@ -158,11 +164,13 @@ class RefboxOverLink(_ViewOfWorld, RefboxProcess):
     world's stations (a :class:`~.refbox.link.StationServer`) and reads its
     snapshot.  ``team_name``, ``key`` and ``phases`` as for :class:`RefboxHere`."""
 
-    def __init__(self, world: PyBulletWorld, *, team_name: str, key: str, phases: dict | None = None):
+    def __init__(self, world: PyBulletWorld, *, team_name: str, key: str, phases: dict | None = None,
+                 stored=None, save_game: str | None = None, stored_file: str | None = None):
         from .refbox.link import StationServer
         self.world = world
         self.team_name, self.key = team_name, key
         self.phases = {k: float(v) for k, v in (phases or {}).items()}
+        self.stored_file, self.save_game = stored_file, save_game
         self.link = StationServer(world.pybullet)
         self.view = SnapshotView(None)
 
@@ -179,6 +187,10 @@ class RefboxOverLink(_ViewOfWorld, RefboxProcess):
             args += ["--phase-lengths", ",".join(f"{k}={v!r}" for k, v in self.phases.items())]
         if message_log is not None:
             args += ["--message-log", str(message_log)]
+        if self.stored_file is not None:
+            args += ["--game", str(self.stored_file)]
+        if self.save_game is not None:
+            args += ["--save-game", str(self.save_game)]
         return args
 
     def ready(self) -> bool:
@@ -203,20 +215,47 @@ class RefboxOverLink(_ViewOfWorld, RefboxProcess):
         self.link.close()
 
 
+def load_stored(path: str | Path, profile: str):
+    """The stored game at ``path`` for a world of ``profile``; a
+    :class:`~rll_bt.errors.UserError` naming the file when it cannot be read
+    or plays another profile."""
+    from rll_bt.errors import UserError
+
+    from .stored import StoredGameError, load_game
+    try:
+        stored = load_game(str(path))
+    except StoredGameError as exc:
+        raise UserError(str(exc), where="--game") from None
+    if stored.profile != profile:
+        raise UserError(f"the stored game is {stored.profile}, the game plays {profile}", where="--game",
+                        hint=f"add --profile {stored.profile}")
+    return stored
+
+
 @offers(perception=PERCEPTION_MODES)
 def open_game(profile: str = "rcll2016", seed: int = 0, *, team_name: str, key: str, perception: str = "oracle",
               gui: bool = False, phases: dict | None = None, world_step: float = 0.05,
-              robot_options: dict | None = None, refbox: str = "here") -> Simulation:
+              robot_options: dict | None = None, refbox: str = "here", stored_game: str | Path | None = None,
+              save_game: str | Path | None = None) -> Simulation:
     """Entry point ``rll_bt.simulators: pybullet``: a :class:`PyBulletWorld` and
     its refbox (``refbox``: "here" or "process", see the module doc);
-    publishes its perception modes (``choices["perception"]``)."""
+    publishes its perception modes (``choices["perception"]``).
+    ``stored_game``: a stored game's file (:mod:`.stored`) whose field the
+    world takes and whose orders, ring setup and down periods the refbox
+    plays; ``save_game``: where the refbox writes its game as one."""
     if refbox not in REFBOX_MODES:
         raise ValueError(f"refbox must be one of {', '.join(REFBOX_MODES)}, not {refbox!r}")
+    stored = load_stored(stored_game, profile) if stored_game is not None else None
     world = PyBulletWorld(profile, seed, perception=perception, gui=gui, world_step=world_step,
-                          robot_options=robot_options)
+                          robot_options=robot_options, layout=stored.layout(seed) if stored is not None else None)
+    save = str(save_game) if save_game is not None else None
     try:
-        kind = RefboxHere if refbox == "here" else RefboxOverLink
-        return Simulation(world, kind(world, team_name=team_name, key=key, phases=phases))
+        if refbox == "here":
+            made = RefboxHere(world, team_name=team_name, key=key, phases=phases, stored=stored, save_game=save)
+        else:
+            made = RefboxOverLink(world, team_name=team_name, key=key, phases=phases, save_game=save,
+                                  stored_file=str(Path(stored_game).resolve()) if stored_game is not None else None)
+        return Simulation(world, made)
     except BaseException:
         world.close()
         raise

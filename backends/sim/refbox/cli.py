@@ -87,6 +87,13 @@ def register(cli) -> None:
                         "virtual robot and its output emptied after a while, so production "
                         "works without robots; auto (default): on when the world has no robots "
                         "(its own world never has; a remote one says)")
+    p.add_argument("--game", metavar="FILE",
+                   help="play a stored game: its field, orders, ring colours and costs and down periods "
+                        "(rll-bt JSON from --save-game, or the first game of a refbox archive of game "
+                        "reports); a remote world must stand on its field")
+    p.add_argument("--save-game", metavar="FILE",
+                   help="write the game's field, orders, ring setup and down periods to FILE (JSON) "
+                        "at the start, for --game")
     p.add_argument("--quit-after-game", action="store_true",
                    help="exit once the game reaches POST_GAME")
     p.add_argument("--snapshot", metavar="FILE",
@@ -197,11 +204,28 @@ def _score(game) -> str:
     return f"{c} {game.points('CYAN')} : {game.points('MAGENTA')} {m}"
 
 
-def _open_world(args, prof):
-    """The refbox's world: PyBullet, a table, or a remote world's stations."""
+def _stored(args, prof):
+    """The stored game of ``--game`` (None without), checked against the profile."""
+    if not args.game:
+        return None
+    from ..stored import StoredGameError, load_game
+    try:
+        stored = load_game(args.game)
+    except StoredGameError as exc:
+        raise UserError(str(exc), where="--game") from None
+    if stored.profile != prof.name:
+        raise UserError(f"the stored game is {stored.profile}, not {prof.name}", where="--game",
+                        hint=f"add --profile {stored.profile}")
+    return stored
+
+
+def _open_world(args, prof, stored=None):
+    """The refbox's world: PyBullet, a table, or a remote world's stations
+    (on the field of ``stored`` when given)."""
     from .world import TableWorld, WorldLost
+    layout = stored.layout(args.seed) if stored is not None else None
     if args.world == "table":
-        return TableWorld.generated(prof, args.seed)
+        return TableWorld(layout) if layout is not None else TableWorld.generated(prof, args.seed)
     if args.world.startswith("remote:"):
         from .link import RemoteWorld
         try:
@@ -214,7 +238,7 @@ def _open_world(args, prof):
         return world
     try:
         from backends.sim.world import World
-        return World(prof, seed=args.seed)
+        return World(prof, seed=args.seed, layout=layout)
     except Exception as exc:
         raise Unavailable(f"cannot build the PyBullet world: {exc}",
                           hint="use --world table to run without PyBullet") from None
@@ -250,15 +274,20 @@ def cmd_sim(args) -> int:
     if not args.snapshot_period > 0:
         raise UserError(f"must be a positive number, not {args.snapshot_period}", where="--snapshot-period")
     clock = WallClock()
-    world = _open_world(args, prof)
+    stored = _stored(args, prof)
+    world = _open_world(args, prof, stored)
     remote = args.world.startswith("remote:")
     try:
         game = RefboxGame(prof, clock, world, seed=args.seed, team_cyan=args.team_cyan,
                           team_magenta=args.team_magenta, timing=timing, config=StationConfig(),
                           mockup=mockup_wanted(args.mockup, world))
+        _stored_game(game, stored, args)
     except WorldLost as exc:
         _close(world)
         raise Unavailable(str(exc), where="--world") from None
+    except UserError:
+        _close(world)
+        raise
     try:
         node = RefboxNode.on_udp(game, host=args.host, layout=lay, keys=keys,
                                  stream_port=-1 if args.no_stream else lay.stream,
@@ -366,6 +395,21 @@ def cmd_sim(args) -> int:
     if lost is not None:
         raise Unavailable(f"{lost}; the refbox stops", where="--world")
     return 0
+
+
+def _stored_game(game, stored, args) -> None:
+    """``--game``: the game plays the stored one; ``--save-game``: it is written."""
+    from .stored_game import play_stored, store_game
+    if stored is not None:
+        try:
+            play_stored(game, stored)
+        except ValueError as exc:
+            raise UserError(str(exc), where="--game") from None
+    if args.save_game:
+        try:
+            store_game(game, name=stored.name if stored is not None else "").save(args.save_game)
+        except OSError as exc:
+            raise UserError(f"cannot write the stored game: {exc}", where="--save-game") from None
 
 
 def _close(world) -> None:

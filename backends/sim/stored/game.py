@@ -3,8 +3,10 @@
 :class:`StoredGame` holds what the refbox draws at random for a game and a
 team's result depends on: where each machine stands (zone and rotation),
 the orders (complexity, colours, quantity, delivery window, gate,
-activation time, competitive), the ring colours' costs, each ring
-station's two colours, and the machines' down periods.  It is saved as JSON
+activation time, competitive, standing or overtime), the ring colours'
+costs, each ring station's two colours, and the machines' down periods
+(production game seconds), and where a layout put a machine off its zone's
+centre (2016), its exact centre (``poses``).  It is saved as JSON
 (:meth:`StoredGame.save`, :func:`load_game`) and read from the refbox's own
 game reports (:meth:`StoredGame.from_report`, :func:`read_refbox_games`),
 and gives the world its field (:meth:`StoredGame.layout`).
@@ -34,6 +36,8 @@ class StoredOrder:
     gate: int
     activate_at: int = 0
     competitive: bool = False
+    standing: bool = False                # open for the whole production (2016's #1, 2025's #1 and #2)
+    overtime: bool = False                # only in overtime
 
 
 @dataclass(frozen=True)
@@ -45,13 +49,16 @@ class StoredGame:
     ring_colors: dict[str, tuple[str, str]] = field(default_factory=dict)   # RS -> its two colours
     down_periods: dict[str, tuple[float, float]] = field(default_factory=dict)
     name: str = ""
+    poses: dict[str, tuple[float, float]] = field(default_factory=dict)    # machine -> centre x, y (m)
 
     # -- JSON ----------------------------------------------------------------------
     def to_dict(self) -> dict:
         d = asdict(self)
-        d["machines"] = {m: {"zone": z, "rotation": r} for m, (z, r) in sorted(self.machines.items())}
+        # machines in their field's order (a world iterates its stations in it)
+        d["machines"] = {m: {"zone": z, "rotation": r} for m, (z, r) in self.machines.items()}
         d["ring_colors"] = {m: list(c) for m, c in sorted(self.ring_colors.items())}
         d["down_periods"] = {m: list(p) for m, p in sorted(self.down_periods.items())}
+        d["poses"] = {m: list(p) for m, p in sorted(self.poses.items())}
         for o in d["orders"]:
             o["rings"], o["delivery"] = list(o["rings"]), list(o["delivery"])
         return {"format": FORMAT, "version": VERSION, **d}
@@ -69,12 +76,14 @@ class StoredGame:
                 orders=tuple(StoredOrder(int(o["id"]), str(o["complexity"]), str(o["base"]),
                                          tuple(map(str, o["rings"])), str(o["cap"]), int(o["quantity"]),
                                          (int(o["delivery"][0]), int(o["delivery"][1])), int(o["gate"]),
-                                         int(o.get("activate_at", 0)), bool(o.get("competitive", False)))
+                                         int(o.get("activate_at", 0)), bool(o.get("competitive", False)),
+                                         bool(o.get("standing", False)), bool(o.get("overtime", False)))
                              for o in d.get("orders", ())),
                 ring_costs={str(k): int(v) for k, v in d.get("ring_costs", {}).items()},
                 ring_colors={str(m): (str(c[0]), str(c[1])) for m, c in d.get("ring_colors", {}).items()},
                 down_periods={str(m): (float(p[0]), float(p[1])) for m, p in d.get("down_periods", {}).items()},
-                name=str(d.get("name", "")))
+                name=str(d.get("name", "")),
+                poses={str(m): (float(p[0]), float(p[1])) for m, p in d.get("poses", {}).items()})
         except (KeyError, TypeError, ValueError, IndexError, AttributeError) as e:
             raise StoredGameError(f"{where}: malformed ({type(e).__name__}: {e})") from None
         game.check()
@@ -102,6 +111,12 @@ class StoredGame:
             if prof.rotation_step_deg and rot % prof.rotation_step_deg:
                 raise StoredGameError(f"stored game: {m} rotation {rot} is not a multiple of "
                                       f"{prof.rotation_step_deg}")
+        for m, (x, y) in self.poses.items():
+            if m not in self.machines:
+                raise StoredGameError(f"stored game: a pose for {m}, which has no zone")
+            if prof.zone_at(x, y) != prof.zone_number(self.machines[m][0]):
+                raise StoredGameError(f"stored game: {m} at ({x:.2f}, {y:.2f}) is not in its zone "
+                                      f"{self.machines[m][0]}")
         for o in self.orders:
             if o.base not in BASE_COLORS or o.cap not in CAP_COLORS or any(r not in RING_COLORS for r in o.rings):
                 raise StoredGameError(f"stored game: order {o.id} has an unknown colour")
@@ -110,14 +125,15 @@ class StoredGame:
 
     def layout(self, seed: int | None = None):
         """The world's :class:`~backends.sim.layout.FieldLayout` of this field:
-        every machine at its zone's centre, turned by its rotation."""
+        every machine at its stored pose, else at its zone's centre, turned by
+        its rotation."""
         from rll_bt import rules
 
         from ..layout import FieldLayout
         prof = rules.profile(self.profile)
         machines = {}
-        for m, (zone, rot) in sorted(self.machines.items()):
-            x, y = prof.zone_centre(prof.zone_number(zone))
+        for m, (zone, rot) in self.machines.items():
+            x, y = self.poses.get(m) or prof.zone_centre(prof.zone_number(zone))
             machines[m] = {"zone": prof.zone_number(zone), "rotation": rot % 360, "x": x, "y": y}
         return FieldLayout.from_dict({"profile": prof.name, "seed": seed, "machines": machines})
 
@@ -154,11 +170,21 @@ class StoredGame:
                 dp = m.get("down-period", [-1.0, -1.0])
                 if dp and dp[0] >= 0:
                     downs[m["name"]] = (float(dp[0]), float(dp[1]))
+            # a report has no standing or overtime flag: the production it was played with
+            # ends where its orders open from the start end; those stand, one opening at its
+            # end is the overtime order
+            windows = [(int(o["delivery-period"][0]), int(o["delivery-period"][1])) for o in report.get("orders", ())]
+            production = max((e for b, e in windows if b == 0), default=None)
+            if production is None:
+                from rll_bt import rules
+                production = int(rules.profile(profile).phases.production)
             orders = tuple(StoredOrder(
                 int(o["id"]), str(o["complexity"]), str(o["base-color"]), tuple(o.get("ring-colors", ())),
                 str(o["cap-color"]), int(o["quantity-requested"]),
                 (int(o["delivery-period"][0]), int(o["delivery-period"][1])), int(o["delivery-gate"]),
-                int(o.get("activate-at", 0)), str(o.get("competitive", "FALSE")).upper() == "TRUE")
+                int(o.get("activate-at", 0)), str(o.get("competitive", "FALSE")).upper() == "TRUE",
+                standing=int(o["delivery-period"][0]) == 0 and int(o["delivery-period"][1]) >= production,
+                overtime=int(o["delivery-period"][0]) >= production)
                 for o in report.get("orders", ()))
             costs = {str(r["color"]): int(r["req-bases"]) for r in report.get("ring-specs", ())}
         except (KeyError, TypeError, ValueError, IndexError) as e:
