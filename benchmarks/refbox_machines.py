@@ -189,7 +189,10 @@ def main(argv=None) -> int:
     ap.add_argument("--speed", type=float, default=1.0, help="station durations times this (default 1)")
     ap.add_argument("--port-offset", type=int, default=0,
                     help="move every refbox port by N (TCP 4444+N ...), to run beside another refbox")
+    ap.add_argument("--response-delay", type=float, default=None, metavar="MS",
+                    help="OPC-UA: hold each write's response this long (default: the server's own)")
     args = ap.parse_args(argv)
+    started = time.monotonic()
     from backends.sim import World
     from backends.sim.mps import Broker, Durations, MachineHall, MqttMachines
     from backends.sim.stored import StoredGame
@@ -209,8 +212,10 @@ def main(argv=None) -> int:
         opcua_ports = {m: p + args.port_offset for m, p in default_ports(CYAN_STATIONS).items()}
         world = World("rcll2025", seed=args.seed)
         hall = MachineHall(world, CYAN_STATIONS, durations=Durations().scaled(args.speed))
-        served = OpcuaMachines(hall, ports=opcua_ports,
+        delay = {} if args.response_delay is None else {"response_delay": args.response_delay / 1000.0}
+        served = OpcuaMachines(hall, ports=opcua_ports, **delay,
                                progress=lambda line: print(line, file=sys.stderr)).start()
+        args.response_delay = served.response_delay * 1000.0
         wt = WorldThread(world, hall)
     cfg = os.path.join(run_dir, "check.yaml")
     with open(cfg, "w") as f:
@@ -278,7 +283,26 @@ def main(argv=None) -> int:
         print(f"{step:34} {'yes' if ok else 'NO':3} {secs:6.1f}  {text}")
     print(f"cyan points: {team.points if team else '?'}; {args.wire} refusals: "
           f"{len(served.errors) if served else '?'}")
+    if args.wire == "opcua":
+        minutes = (time.monotonic() - started) / 60.0
+        timeouts = _timeouts(run_dir)
+        print(f"refbox OPC-UA client: {sum(timeouts.values())} requests timed out in {minutes:.1f} min "
+              f"({', '.join(f'{m} {n}' for m, n in sorted(timeouts.items())) or 'none'}; "
+              f"server response delay {args.response_delay:g} ms)")
     return 0 if results and all(ok for _, ok, _, _ in results) else 1
+
+
+def _timeouts(run_dir: str) -> dict[str, int]:
+    """Per station: how often the refbox's OPC-UA client logged a request timed out
+    (``mps/<NAME>.log`` in its run directory)."""
+    out = {}
+    mps = os.path.join(run_dir, "mps")
+    for name in sorted(os.listdir(mps)) if os.path.isdir(mps) else ():
+        with open(os.path.join(mps, name), errors="replace") as f:
+            n = f.read().count("timed out")
+        if n:
+            out[name.rsplit(".", 1)[0]] = n
+    return out
 
 
 def _wait_log(path: str, text: str, timeout: float) -> None:

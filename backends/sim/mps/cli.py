@@ -42,6 +42,9 @@ def register(cli) -> None:
     p.add_argument("--device", choices=("plc", "codesys"), default="plc",
                    help="OPC-UA node names: the Festo PLC's (connection: plc) or CODESYS's "
                         "(connection: plc_simulation) (default: %(default)s)")
+    p.add_argument("--opcua-response-delay", type=float, default=20.0, metavar="MS",
+                   help="hold each OPC-UA read and write answer this long, so the refbox's freeopcua "
+                        "client cannot miss it (see docs/league.md; default: %(default)s ms, 0: at once)")
     p.add_argument("--rate", type=float, default=1.0,
                    help="world seconds per wall second (default: %(default)s)")
     p.add_argument("--duration", type=float, metavar="S", help="stop after S world seconds")
@@ -114,8 +117,11 @@ def run_stations(args) -> int:
                 raise Unavailable(str(exc)) from None
             print(f"stations on MQTT {host}:{port}: {', '.join(hall.machines)}", file=sys.stderr)
         if args.opcua:
+            if not 0 <= args.opcua_response_delay <= 1000:
+                raise UserError(f"must be 0..1000 ms, not {args.opcua_response_delay}", where="--opcua-response-delay")
             served = OpcuaMachines(hall, args.opcua_host, base_port=args.opcua_base_port, device=args.device,
-                                   progress=lambda line: print(line, file=sys.stderr, flush=True))
+                                   progress=lambda line: print(line, file=sys.stderr, flush=True),
+                                   response_delay=args.opcua_response_delay / 1000.0)
             try:
                 opened.append(served.start())
             except OSError as exc:

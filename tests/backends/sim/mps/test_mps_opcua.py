@@ -184,6 +184,19 @@ def test_delivery_and_storage_over_opcua(rig):
     assert (4, 3) in running.hall["C-SS"].storage and (4, 1) not in running.hall["C-SS"].storage
 
 
+def test_answers_are_held_so_the_refbox_client_is_waiting_for_them(rig):
+    # freeopcua's client loses an answer that arrives before it waits for it (a lost wake-up,
+    # then "Response timed out" and a reconnect): every read and write answer is held 20 ms
+    import time
+    _running, served, plcs = rig
+    assert served.response_delay == pytest.approx(0.02)
+    node = plcs["C-BS"].reg["Basic", "Error"]
+    for op in (lambda: node.write_value(ua.Variant(0, ua.VariantType.Byte)), node.read_value):
+        t0 = time.monotonic()
+        op()
+        assert time.monotonic() - t0 >= 0.02
+
+
 def test_a_write_that_is_no_command_is_refused(rig):
     _running, served, plcs = rig
     n = len(served.errors)
