@@ -80,3 +80,60 @@ class SimClock:
         with self._cond:
             while self._t < deadline:
                 self._cond.wait(timeout=1.0)
+
+
+class SyncedClock:
+    """A clock that follows another's time as it is told (a simulation's
+    SimTimeSync), the way the refbox's ``time-sync`` does.
+
+    :meth:`sync` gives the other clock's time ``t``, its speed
+    (``rate``: its seconds per second of ``base``) and whether it is
+    ``paused``.  Between two syncs the time runs on from the last one at
+    that rate on ``base`` (the refbox's ``estimate-time``), or stands still
+    while paused; before the first it runs with ``base``.  Only differences
+    of the synced time count: the first sync does not jump (``now()`` is
+    the synced time plus the offset it had then).  It never goes back: a
+    sync behind the estimate holds the time until it catches up.
+    ``epoch()`` is ``base``'s."""
+
+    def __init__(self, base: Clock | None = None, start: float = 0.0):
+        self.base = base or WallClock()
+        self._t0, self._b0 = float(start), self.base.now()
+        self._rate, self._paused = 1.0, False
+        self._floor = float(start)
+        self._offset = 0.0
+        self.synced = False
+        self._lock = threading.Lock()
+
+    def sync(self, t: float, rate: float = 1.0, paused: bool = False) -> None:
+        with self._lock:
+            here = self._estimate()
+            self._floor = max(self._floor, here)
+            if not self.synced:
+                self._offset = here - float(t)
+            self._t0, self._b0 = float(t) + self._offset, self.base.now()
+            self._rate, self._paused = max(0.0, float(rate)), bool(paused)
+            self.synced = True
+
+    def _estimate(self) -> float:
+        if self._paused:
+            return self._t0
+        return self._t0 + (self.base.now() - self._b0) * self._rate
+
+    def now(self) -> float:
+        with self._lock:
+            t = self._estimate()
+            if t < self._floor:
+                return self._floor
+            self._floor = t
+            return t
+
+    @property
+    def paused(self) -> bool:
+        return self._paused
+
+    def epoch(self) -> float:
+        return self.base.epoch()
+
+    def sleep(self, seconds: float) -> None:
+        self.base.sleep(seconds)

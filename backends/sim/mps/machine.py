@@ -157,7 +157,9 @@ class MpsMachine:
         if self._job is not None or not self._queue:
             return
         cmd = self._queue.popleft()
-        waits = cmd.action == "MOVE_CONVEYOR" and not self._has_workpiece()
+        # a belt move and a delivery wait for a workpiece (the PLC's input sensor)
+        waits = ((cmd.action == "MOVE_CONVEYOR" and not self._has_workpiece())
+                 or (cmd.action == "DELIVER" and self._at("input") is None))
         self._job = _Job(cmd, now, None if waits else now + self._duration(cmd))
         self._set("busy", True, now)
         if cmd.action == "MOVE_CONVEYOR" and not waits:
@@ -246,6 +248,7 @@ class MpsMachine:
             wp = self.world.spawn_workpiece(self.name, "input", BASES[args[0]])
             self.at_mid = True
             self._seen_input = wp.id
+            self._set("barcode", wp.id, now)           # the scanner reads the new base
             self._record(now, f"base {wp.id} {wp.base} dispensed", workpiece=wp)
         elif a == "CAP_ACTION":
             self._cap(args[0], now)
@@ -347,6 +350,7 @@ class MpsMachine:
         wp = self.world.spawn_workpiece(self.name, "input", product.base, product.rings, product.cap)
         self.at_mid = True
         self._seen_input = wp.id
+        self._set("barcode", wp.id, now)               # the scanner reads the retrieved product
         self._record(now, f"workpiece {wp.id} retrieved from {where}", workpiece=wp)
 
 

@@ -81,7 +81,13 @@ def register(cli) -> None:
     p.add_argument("--world", type=_world_choice, default="bullet", metavar="WORLD",
                    help="bullet: a headless PyBullet world (default); table: in memory only; "
                         "remote:HOST:PORT: the stations of a world in another process, over the "
-                        "station link (rll-bt sim --processes)")
+                        "station link (rll-bt sim --processes); mqtt:HOST:PORT: the stations are "
+                        "machines on the refbox's MQTT topics behind this broker, driven as the "
+                        "real refbox drives them (rll-bt sim --refbox external serves them)")
+    p.add_argument("--time-sync", action="store_true",
+                   help="the game's clock follows the SimTimeSync a simulation sends on the TCP stream "
+                        "(the real refbox's llsfrb/simulation/time-sync): paused while it is paused, "
+                        "at its speed in between")
     p.add_argument("--mockup", choices=("auto", "on", "off"), default="auto",
                    help="mockup stations: a prepared station is fed the team's product by a "
                         "virtual robot and its output emptied after a while, so production "
@@ -108,9 +114,9 @@ def register(cli) -> None:
 
 def _world_choice(text: str) -> str:
     import argparse
-    if text in ("bullet", "table") or text.startswith("remote:"):
+    if text in ("bullet", "table") or text.startswith(("remote:", "mqtt:")):
         return text
-    raise argparse.ArgumentTypeError(f"expected bullet, table or remote:HOST:PORT, not {text!r}")
+    raise argparse.ArgumentTypeError(f"expected bullet, table, remote:HOST:PORT or mqtt:HOST:PORT, not {text!r}")
 
 
 def _settings(args):
@@ -226,6 +232,21 @@ def _open_world(args, prof, stored=None):
     layout = stored.layout(args.seed) if stored is not None else None
     if args.world == "table":
         return TableWorld(layout) if layout is not None else TableWorld.generated(prof, args.seed)
+    if args.world.startswith("mqtt:"):
+        from rll_bt.comm.jsonlink import parse_address
+
+        from .machines import MachineWorld
+        try:
+            host, port = parse_address(args.world[len("mqtt:"):], "the broker's address")
+        except ValueError as exc:
+            raise UserError(str(exc), where="--world") from None
+        if layout is None:
+            layout = TableWorld.generated(prof, args.seed).layout
+        try:
+            return MachineWorld(layout, host, port)
+        except ConnectionError as exc:
+            raise Unavailable(str(exc), where="--world",
+                              hint="start the broker first (e.g. rll-bt sim stations --broker amqtt)") from None
     if args.world.startswith("remote:"):
         from .link import RemoteWorld
         try:
@@ -262,7 +283,7 @@ def _message_log(path, game):
 
 
 def cmd_sim(args) -> int:
-    from rll_bt.clock import WallClock
+    from rll_bt.clock import SyncedClock, WallClock
 
     from .game import RefboxGame
     from .node import RefboxNode
@@ -273,15 +294,22 @@ def cmd_sim(args) -> int:
     lay = _layout(args)
     if not args.snapshot_period > 0:
         raise UserError(f"must be a positive number, not {args.snapshot_period}", where="--snapshot-period")
-    clock = WallClock()
+    clock = SyncedClock(WallClock()) if args.time_sync else WallClock()
     stored = _stored(args, prof)
     world = _open_world(args, prof, stored)
     remote = args.world.startswith("remote:")
+    machines = args.world.startswith("mqtt:")
     try:
+        config = StationConfig()
+        if machines:
+            from .machines import machine_config
+            config = machine_config(base=config)
         game = RefboxGame(prof, clock, world, seed=args.seed, team_cyan=args.team_cyan,
-                          team_magenta=args.team_magenta, timing=timing, config=StationConfig(),
-                          mockup=mockup_wanted(args.mockup, world))
+                          team_magenta=args.team_magenta, timing=timing, config=config,
+                          mockup=args.mockup == "on" if machines else mockup_wanted(args.mockup, world))
         _stored_game(game, stored, args)
+        if machines:
+            world.attach(game)
     except WorldLost as exc:
         _close(world)
         raise Unavailable(str(exc), where="--world") from None
@@ -336,6 +364,8 @@ def cmd_sim(args) -> int:
             f"magenta {pp('magenta')}"
           + ("" if args.no_stream else f"; TCP stream {lay.stream}")
           + (f"; stations of the world at {world.address} (station link)" if remote else "")
+          + (f"; stations are MQTT machines behind the broker at {world.address}" if machines else "")
+          + ("; the clock follows SimTimeSync" if args.time_sync else "")
           + f"; mockup stations {'on' if game.mockup else 'off'}", file=out, flush=True)
     if args.start == "now":
         game.start()
@@ -348,7 +378,7 @@ def cmd_sim(args) -> int:
     next_snap = start
     try:
         while not stop:
-            if remote:
+            if remote or machines:
                 world.pump()
             node.step()
             now = clock.now()

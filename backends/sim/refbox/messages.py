@@ -173,12 +173,18 @@ class Messages:
         return ri
 
     def machine_info(self, game, team: str | None):
-        """MachineInfo of ``team``'s machines (all machines for None)."""
+        """MachineInfo of ``team``'s machines; for None every machine with what the
+        refbox tells its controllers only (net.clp's restricted info): where each
+        stands, zone and rotation, from the start."""
         mi = self.new("MachineInfo")
         if team is not None:
             set_enum(mi, "team_color", team)
         for name in game.profile.machines(team):
-            self._machine(mi.machines.add(), game, name)
+            m = mi.machines.add()
+            if team is None and has_field(m, "rotation"):
+                pl = game.layout[name]
+                m.zone, m.rotation = pl.zone, int(pl.rotation_deg) % 360
+            self._machine(m, game, name)
         if team is not None:
             _fit_storage_notes(mi)
         return mi

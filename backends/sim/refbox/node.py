@@ -26,7 +26,7 @@ OrderInfo           public + stream    PRODUCTION: 0.5 s x10, then 2 s; the burs
 MachineInfo         cyan, magenta      PRODUCTION: 0.5 s x30, then 2 s, and at once
                                        when a machine of that team changes state or
                                        (2025) a report or the ground truth reveals one
-MachineInfo (all)   stream             0.25 s
+MachineInfo (all)   stream             0.25 s (with every zone and rotation)
 RingInfo            cyan + magenta     PRODUCTION: 2 s
 AttentionMessage    team's channel     when the game raises one (always on stream)
 ==================  =================  ===========================================
@@ -35,7 +35,8 @@ Accepted: BeaconSignal (any channel), MachineReport, PrepareMachine and
 ResetMachine (2025) on a team channel (the team colour must match the
 channel) or the stream,
 SetGameState, SetGamePhase and SetTeamName on the stream (and on public with
-``control_via_public``, the refbox's ``control-via-broadcast``).  Anything
+``control_via_public``, the refbox's ``control-via-broadcast``); SimTimeSync
+on the stream when the game's clock follows it (``time-sync``).  Anything
 else is counted in :attr:`ignored` and dropped; a message that makes the
 game raise is logged and dropped, never fatal.
 """
@@ -280,6 +281,15 @@ class RefboxNode:
 
     def _on_SetGamePhase(self, msg, rec, label, team) -> bool:
         return self._control(label, enum_name(msg, "phase"), self.game.set_phase)
+
+    def _on_SimTimeSync(self, msg, rec, label, team) -> bool:
+        """A simulation's time (``time-sync``): the game's clock follows it when it can
+        (a :class:`~rll_bt.clock.SyncedClock`); taken on the stream only."""
+        sync = getattr(self.clock, "sync", None)
+        if label != STREAM or sync is None:
+            return False
+        sync(msg.sim_time.sec + msg.sim_time.nsec / 1e9, msg.real_time_factor, msg.paused)
+        return True
 
     def _on_SetTeamName(self, msg, rec, label, team) -> bool:
         return self._control(label, enum_name(msg, "team_color"),
