@@ -12,12 +12,16 @@ import pytest
 from backends.sim.mps import Broker, MqttMachines
 from tests.support.mps_world import RunningWorld, wait_for
 
+#: s a step may take on a loaded machine (a step is ~1 world s; the world runs at 4x when it can)
+STEP_TIMEOUT = 60.0
+
 
 class FakeRefbox:
     """An MQTT client that publishes commands and records feedback, as the
     refbox's per-station clients do (QoS 2, MQTT 3.1.1)."""
 
-    def __init__(self, host, port):
+    def __init__(self, host, port, running):
+        self.running = running                              # the world, for the station's own state
         self.msgs: list[tuple[str, str, str]] = []        # (machine, topic leaf, payload)
         self._lock = threading.Lock()
         self.c = paho.Client(paho.CallbackAPIVersion.VERSION2, client_id="Refbox_test",
@@ -45,18 +49,24 @@ class FakeRefbox:
         with self._lock:
             return [(leaf, p) for m, leaf, p in self.msgs[mark:] if m == machine]
 
-    def wait(self, mark, machine, leaf, payload, timeout=20.0):
+    def wait(self, mark, machine, leaf, payload, timeout=STEP_TIMEOUT):
         return wait_for(lambda: (leaf, payload) in self.since(mark, machine), timeout,
                         f"{machine} {leaf} {payload}")
 
     def step(self, machine, payload, *, wp=False):
-        """Send a step command, wait for its BUSY and the IDLE after it (and WP), return
-        the feedback seen (an IDLE republished on a reconnect does not end the step)."""
+        """Send a step command and return the feedback seen since: the step is over when
+        the world's station has taken the command and is idle again (its own truth, read on
+        the world's thread), and its BUSY and the IDLE it sent after have both arrived
+        (and WP, with ``wp``).  Neither a stale IDLE (a duplicate, a reconnect) nor an
+        IDLE that overtook its BUSY in the broker can end the step early or hang it."""
+        station = self.running.hall[machine]
+        taken = self.running.call(lambda: len(station.records))
         mark = self.send(machine, payload)
+        wait_for(lambda: self.running.call(lambda: not station.busy and any(
+            r.text.startswith(f"command {payload.split()[0]}") for r in station.records[taken:])),
+            STEP_TIMEOUT, f"{machine} done with {payload}")
         self.wait(mark, machine, "Status", "BUSY")
-        busy = mark + next(i for i, (m, leaf, p) in enumerate(self.msgs[mark:])
-                           if (m, leaf, p) == (machine, "Status", "BUSY"))
-        self.wait(busy, machine, "Status", "IDLE")
+        self.wait(mark, machine, "Status", "IDLE")
         if wp:
             self.wait(mark, machine, "WP-Sensor", "WP")
         return self.since(mark, machine)
@@ -71,7 +81,7 @@ def rig():
     broker = Broker("amqtt")
     running = RunningWorld().start()
     served = MqttMachines(running.hall, broker.host, broker.port).start()
-    refbox = FakeRefbox(broker.host, broker.port)
+    refbox = FakeRefbox(broker.host, broker.port, running)
     yield running, served, refbox
     refbox.close()
     served.stop()
@@ -97,10 +107,10 @@ def test_lights_follow_the_three_light_commands(rig):
     for payload in ("LIGHT RED ON", "LIGHT YELLOW BLINK", "LIGHT GREEN OFF"):
         refbox.send("C-CS2", payload)
     wait_for(lambda: running.call(lambda: running.world.lights("C-CS2"))
-             == {"RED": "ON", "YELLOW": "BLINK", "GREEN": "OFF"}, what="C-CS2 lights")
+             == {"RED": "ON", "YELLOW": "BLINK", "GREEN": "OFF"}, STEP_TIMEOUT, "C-CS2 lights")
     refbox.send("M-DS", "LIGHT GREEN ON")
     wait_for(lambda: running.call(lambda: running.world.lights("M-DS"))["GREEN"] == "ON",
-             what="M-DS green")
+             STEP_TIMEOUT, "M-DS green")
 
 
 def test_base_station_dispenses_and_the_belt_brings_the_base_out(rig):
@@ -109,7 +119,8 @@ def test_base_station_dispenses_and_the_belt_brings_the_base_out(rig):
     assert ("Status", "BUSY") in seen
     assert at(running, "C-BS", "output") is None
     seen = refbox.step("C-BS", "MOVE_CONVEYOR TO_OUTPUT OUT", wp=True)
-    assert seen.index(("WP-Sensor", "WP")) < seen.index(("Status", "IDLE"))
+    last_idle = len(seen) - 1 - seen[::-1].index(("Status", "IDLE"))
+    assert seen.index(("WP-Sensor", "WP")) < last_idle          # the refbox hears WP before IDLE
     wp = at(running, "C-BS", "output")
     assert wp is not None and wp.base == "BASE_RED" and wp.rings == () and wp.cap is None
     mark = len(refbox.msgs)
@@ -202,7 +213,7 @@ def test_bad_commands_are_refused_and_the_station_keeps_working(rig):
     refbox.send("C-BS", "LIGHT PINK ON")
     refbox.send("C-BS", "EXPLODE")
     refbox.send("C-XX", "RESET")
-    wait_for(lambda: len(served.errors) >= n + 3, what="three refusals")
+    wait_for(lambda: len(served.errors) >= n + 3, STEP_TIMEOUT, "three refusals")
     assert any("PINK" in e for e in served.errors[n:])
     refbox.step("C-BS", "GET_BASE BLACK")
     refbox.step("C-BS", "MOVE_CONVEYOR TO_OUTPUT OUT", wp=True)
@@ -219,4 +230,4 @@ def test_conveyor_waits_for_the_robots_workpiece(rig):
     put(running, "C-CS2", "input", "BASE_RED", cap="CAP_BLACK")     # the robot arrives
     refbox.wait(mark, "C-CS2", "Status", "IDLE")
     refbox.send("C-CS2", "RESET")                      # the referee clears the belt
-    wait_for(lambda: at(running, "C-CS2", "input") is None, what="belt cleared")
+    wait_for(lambda: at(running, "C-CS2", "input") is None, STEP_TIMEOUT, "belt cleared")
