@@ -39,10 +39,12 @@ def reachable(host: str, port: int, timeout: float = 0.2) -> bool:
 
 
 class Broker:
-    """A running broker: ``host``, ``port``, ``kind``; :meth:`stop` ends it."""
+    """A running broker: ``host``, ``port``, ``kind``; :meth:`stop` ends it.  It waits up
+    to ``timeout`` s for the broker to listen (amqtt's start takes 15 s and more on a
+    loaded 2-core machine; a broker that exits fails at once)."""
 
     def __init__(self, kind: str = "auto", host: str = "127.0.0.1", port: int | None = None,
-                 timeout: float = 15.0):
+                 timeout: float = 60.0):
         if kind == "auto":
             kind = "mosquitto" if shutil.which("mosquitto") else "amqtt"
         if kind not in ("amqtt", "mosquitto"):
@@ -59,7 +61,8 @@ class Broker:
         while not reachable(host, self.port):
             if self.proc.poll() is not None or time.monotonic() > deadline:
                 self.stop()
-                raise BrokerError(f"{kind} did not start on {host}:{self.port}: {self.log()[-800:]}")
+                raise BrokerError(f"{kind} did not start on {host}:{self.port} within {timeout:g} s: "
+                                  f"{self.log()[-800:]}")
             time.sleep(0.05)
 
     def _command(self) -> list[str]:

@@ -33,7 +33,7 @@ class FakeRefbox:
         self.c.loop_start()
         self.c.subscribe([("MPS/+/Status", 2), ("MPS/+/WP-Sensor", 2), ("MPS/+/SlideCount", 2),
                           ("MPS/+/Barcode", 2)])
-        assert subscribed.wait(10)
+        assert subscribed.wait(60)
 
     def _on_message(self, client, userdata, msg):
         _, machine, leaf = msg.topic.split("/")
@@ -80,7 +80,7 @@ class FakeRefbox:
 def rig():
     broker = Broker("amqtt")
     running = RunningWorld().start()
-    served = MqttMachines(running.hall, broker.host, broker.port).start()
+    served = MqttMachines(running.hall, broker.host, broker.port).start(timeout=60.0)
     refbox = FakeRefbox(broker.host, broker.port, running)
     yield running, served, refbox
     refbox.close()

@@ -24,7 +24,7 @@ from tests.support.mps_world import FAST, RunningWorld, wait_for
 def rig():
     broker = Broker("amqtt")
     running = RunningWorld(seed=5, rate=4.0).start()
-    served = MqttMachines(running.hall, broker.host, broker.port).start()
+    served = MqttMachines(running.hall, broker.host, broker.port).start(timeout=60.0)
     world = MachineWorld(running.world.layout, broker.host, broker.port)
     game = RefboxGame("rcll2025", WallClock(), world, seed=5, team_cyan="Caro",
                       timing=Timing.from_profile(profile("rcll2025"), setup=1.0, exploration=0.0),
