@@ -85,7 +85,7 @@ class FakeRefboxPlc:
 def rig():
     running = RunningWorld(rate=2.0, machines=MACHINES).start()
     ports = {m: free_port() for m in MACHINES}
-    served = OpcuaMachines(running.hall, ports=ports).start()
+    served = OpcuaMachines(running.hall, ports=ports).start(timeout=600.0)   # 55 s for 5 servers at load 40
     plcs = {m: FakeRefboxPlc(ports[m]) for m in MACHINES}
     yield running, served, plcs
     for plc in plcs.values():
