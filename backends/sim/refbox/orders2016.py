@@ -97,9 +97,24 @@ class Order:
                 f"gate {self.gate} [{self.begin}, {self.end}] from {self.activate_at}")
 
 
+def placed_order(oid: int, shape, timing, scale: float, window: tuple[float, float, float], **product) -> Order:
+    """The order of a drawn shape, its (start, end, activate) window placed in the game's production.
+
+    An overtime order opens when production ends and lasts the overtime; a standing one spans the whole
+    production from the start; any other has its drawn window scaled to this production's length."""
+    P = float(timing.production)
+    if shape.overtime:
+        begin, end, act = int(P), int(math.ceil(P + timing.overtime)), int(P)
+    elif shape.standing:
+        begin, end, act = 0, int(P), 0
+    else:
+        begin, end, act = (int(round(v * scale)) for v in window)
+    return Order(id=oid, quantity=shape.quantity, begin=begin, end=end, activate_at=act,
+                 standing=shape.standing, overtime=shape.overtime, competitive=shape.competitive, **product)
+
+
 def schedule_2016(profile, rng: random.Random, timing) -> list[Order]:
     """The game's orders (not yet active), per the module docstring."""
-    P = float(timing.production)
     scale = timing.production_scale
     orders = []
     for i, shape in enumerate(profile.orders, start=1):
@@ -113,16 +128,8 @@ def schedule_2016(profile, rng: random.Random, timing) -> list[Order]:
         gate = rng.randint(1, 3)
         rings = tuple(rng.sample(RING_COLORS, cx))
         base, cap = rng.choice(BASE_COLORS), rng.choice(CAP_COLORS)
-        if shape.overtime:
-            begin, end_s, act = int(P), int(math.ceil(P + timing.overtime)), int(P)
-        elif shape.standing:
-            begin, end_s, act = 0, int(P), 0
-        else:
-            begin, end_s, act = (int(round(v * scale)) for v in (start, end, activate))
-        orders.append(Order(id=i, complexity=cx, base=base, rings=rings, cap=cap,
-                            quantity=shape.quantity, gate=gate, begin=begin, end=end_s,
-                            activate_at=act, standing=shape.standing, overtime=shape.overtime,
-                            competitive=shape.competitive))
+        orders.append(placed_order(i, shape, timing, scale, (start, end, activate),
+                                   complexity=cx, base=base, rings=rings, cap=cap, gate=gate))
     return orders
 
 

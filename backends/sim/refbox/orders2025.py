@@ -46,12 +46,11 @@ like orders.clp:
 """
 from __future__ import annotations
 
-import math
 import random
 
 from rll_bt.rules import BASE_COLORS, CAP_COLORS, RING_COLORS, other_team
 
-from .orders2016 import DeliveryResult, Order, product_awards
+from .orders2016 import DeliveryResult, Order, placed_order, product_awards
 from .world import Workpiece
 
 #: complexity -> (lead range, window length range), globals.clp ORDER-* values
@@ -92,7 +91,6 @@ def ring_colors_2025(rng: random.Random, complexity: int) -> tuple[str, ...]:
 def schedule_2025(profile, rng: random.Random, timing,
                   ring_costs: dict[str, int] | None = None) -> list[Order]:
     """The game's orders (not yet active), per the module docstring."""
-    P = float(timing.production)
     scale = timing.production_scale
     explore = float(timing.exploration_time) / scale if scale > 0 else 0.0
     shapes = list(profile.orders)
@@ -127,16 +125,8 @@ def schedule_2025(profile, rng: random.Random, timing,
         base = rng.choice(BASE_COLORS)
         rings = ring_colors_2025(rng, cx)
         cap = rng.choice(CAP_COLORS)
-        if shape.overtime:
-            begin, end_s, act = int(P), int(math.ceil(P + timing.overtime)), int(P)
-        elif shape.standing:
-            begin, end_s, act = 0, int(P), 0
-        else:
-            begin, end_s, act = (int(round(v * scale)) for v in (start, end, activate))
-        orders.append(Order(id=i, complexity=cx, base=base, rings=rings, cap=cap,
-                            quantity=shape.quantity, gate=gate, begin=begin, end=end_s,
-                            activate_at=act, standing=shape.standing, overtime=shape.overtime,
-                            competitive=shape.competitive))
+        orders.append(placed_order(i, shape, timing, scale, (start, end, activate),
+                                   complexity=cx, base=base, rings=rings, cap=cap, gate=gate))
     competitive = [o for o in orders if o.id in random_ids and o.quantity == 1]
     if competitive:
         rng.choice(competitive).competitive = True
