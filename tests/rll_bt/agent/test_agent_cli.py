@@ -26,6 +26,22 @@ def base_args(port, trees, *extra):
             "--teamserver", f"127.0.0.1:{port}", "--no-refbox", "--trees", str(trees), "-q", *extra]
 
 
+def serve_one_task(srv, server_t, within: float = 10.0):
+    """Wait for the agent's hello, give it task 3 (get a workpiece at the BS) and wait for its result;
+    returns the hellos heard."""
+    deadline = time.monotonic() + within
+    while not srv.of("RobotHello") and time.monotonic() < deadline:
+        server_t.wait(0.05)
+        srv.pump()
+    hello = srv.of("RobotHello")
+    if hello:
+        srv.task(3, "get_workpiece", robot=2, machine="C-BS")
+    while hello and not srv.results(3, "SUCCEEDED") and time.monotonic() < deadline:
+        server_t.wait(0.05)
+        srv.pump()
+    return hello
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -106,16 +122,8 @@ def test_runs_a_task_from_a_team_server_over_tcp(trees):
     th = threading.Thread(target=lambda: rc.setdefault("rc", main(base_args(server_t.port, trees, "--seconds", "4"))))
     th.start()
     try:
-        deadline = time.monotonic() + 10
-        while not srv.of("RobotHello") and time.monotonic() < deadline:
-            server_t.wait(0.05)
-            srv.pump()
-        hello = srv.of("RobotHello")
+        hello = serve_one_task(srv, server_t)
         assert hello and hello[0].robot_id == 2 and hello[0].restarted is True
-        srv.task(3, "get_workpiece", robot=2, machine="C-BS")
-        while not srv.results(3, "SUCCEEDED") and time.monotonic() < deadline:
-            server_t.wait(0.05)
-            srv.pump()
         assert srv.results(3, "SUCCEEDED")
     finally:
         th.join(timeout=15)
@@ -137,14 +145,7 @@ def test_record_holds_the_robots_trees_and_both_directions_of_its_link(trees, tm
                                                                              "--record", str(rec)))))
     th.start()
     try:
-        deadline = time.monotonic() + 10
-        while not srv.of("RobotHello") and time.monotonic() < deadline:
-            server_t.wait(0.05)
-            srv.pump()
-        srv.task(3, "get_workpiece", robot=2, machine="C-BS")
-        while not srv.results(3, "SUCCEEDED") and time.monotonic() < deadline:
-            server_t.wait(0.05)
-            srv.pump()
+        serve_one_task(srv, server_t)
     finally:
         th.join(timeout=15)
         server_t.close()
