@@ -47,6 +47,7 @@ import threading
 from dataclasses import replace
 
 from rll_bt.rules import machine_type
+from rll_bt.rules.machines import MachineTimes
 
 from . import events as E
 from .stations import StationConfig
@@ -62,16 +63,17 @@ MARGIN = 0.5
 
 
 def machine_config(durations=None, margin: float = MARGIN, base: StationConfig | None = None) -> StationConfig:
-    """Station processing times that cover the machines' steps (belts, operation)."""
+    """Station times that cover the machines' steps: the machines' own durations
+    (:class:`~backends.sim.mps.Durations`), each operation ``margin`` s longer
+    (its feedback's way through the broker)."""
     from backends.sim.mps.machine import Durations
     d = durations or Durations()
     base = base or StationConfig()
-    return replace(base,
-                   bs_dispense=d.base_dispense + max(d.belt_mid_to_out, d.belt_in_to_mid) + margin,
-                   rs_mount=d.belt_in_to_mid + d.ring + d.belt_mid_to_out + margin,
-                   cs_process=d.belt_in_to_mid + d.cap + d.belt_mid_to_out + margin,
-                   ds_deliver=max(d.deliver) + margin,
-                   ss_process=d.belt_in_to_mid + d.storage + d.belt_mid_to_out + margin)
+    times = MachineTimes(base_dispense=d.base_dispense + margin, belt_to_middle=d.belt_in_to_mid,
+                         belt_to_output=d.belt_mid_to_out + margin, ring_mount=d.ring + margin,
+                         cap_operation=d.cap + margin, storage_operation=d.storage + margin,
+                         delivery_slots=tuple(t + margin for t in d.deliver), minimum=d.min_operation)
+    return replace(base, times=times)
 
 
 class MachineWorld:

@@ -117,7 +117,8 @@ def test_cap_retrieved_mounted_and_delivered(rig):
     assert product.cap == "CAP_GREY"
     # the refbox knows what the workpiece became by its barcode when it reaches the DS
     game.prepare("CYAN", "C-DS", DSInstruction(order_id=0))
-    run_until(world, game, lambda: state(game, "C-DS") == "PREPARED", what="DS prepared")
+    # order 0's window is open: PREPARED and at once PROCESSING, waiting for the workpiece
+    run_until(world, game, lambda: state(game, "C-DS") in ("PREPARED", "PROCESSING"), what="DS prepared")
     in_world(running, lambda w: w.store.put(product, "C-DS", "input"))      # the same workpiece, its barcode
     run_until(world, game, lambda: any(e.kind == "delivery" for e in game.events), what="delivered")
     delivery = next(e for e in game.events if e.kind == "delivery")
