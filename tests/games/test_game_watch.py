@@ -176,7 +176,8 @@ def test_replay_draws_the_same_report(played, tmp_path, capsys):
     (tmp_path / "game").mkdir()
     game_pngs = draw_all(opts.rules, result, tmp_path / "game")
     replay_pngs = redraw(rep, tmp_path / "replay")
-    for a, b in zip(game_pngs, replay_pngs):
+    assert [p.name for p in replay_pngs] == [p.name for p in game_pngs] and len(game_pngs) == 3
+    for a, b in zip(game_pngs, replay_pngs, strict=True):
         assert a.read_bytes() == b.read_bytes(), a.name
     assert main(["replay", str(out / "game.mcap"), "--out", str(tmp_path / "cli")]) == 0
     text = capsys.readouterr().out

@@ -24,7 +24,7 @@ from rll_bt.tree.btcpp.mapping import text_to_value, value_to_text
 from rll_bt.tree.ports import Key, Unknown
 from tests.support import TREES
 
-SHIPPED = sorted(TREES.glob("*.yaml")) + sorted((TREES / "common").glob("*.yaml"))
+SHIPPED = sorted(TREES.glob("*.yaml")) + sorted(p for p in TREES.rglob("*.yaml") if p.parent != TREES)
 DATA = Path(__file__).parent / "data"
 
 
@@ -74,6 +74,13 @@ def test_every_shipped_tree_round_trips(path, tmp_path):
     assert meaning(after, tmp_path) == meaning(before, path.parent)
     # and a second trip writes the same XML
     assert export_xml([back]).replace(' _file="', "") == xml.replace(' _file="', "")
+
+
+def test_the_shipped_trees_are_all_there():
+    """SHIPPED finds every tree of the package (task trees and the subtrees in every folder)."""
+    names = {p.relative_to(TREES).as_posix() for p in SHIPPED}
+    assert len(SHIPPED) == len(names) >= 19
+    assert {"deliver.yaml", "explore_zone.yaml", "common/grab_at.yaml"} <= names
 
 
 def test_all_task_trees_in_one_document(tmp_path):
