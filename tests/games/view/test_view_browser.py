@@ -2,8 +2,8 @@
 ``make browser``) over its DevTools protocol opens ``rll-bt sim --view``'s
 page during a short game and sees the robots move and the score change,
 the stations, the orders and the running branch of the trees; then plays
-the game's recording back with ``rll-bt view``.  Screenshots are kept in the
-test's output directory (their paths are printed)."""
+the game's recording back with ``rll-bt view``.  Screenshots are kept in
+``test-output/browser/`` (``tests.support.OUTPUT``; their paths are printed)."""
 from __future__ import annotations
 
 import json
@@ -18,6 +18,7 @@ from pathlib import Path
 import pytest
 
 from games import GameOptions, LockstepGame
+from tests.support import OUTPUT
 from tests.support.browser import Browser
 
 pytestmark = pytest.mark.slow          # plays a game to its end
@@ -29,11 +30,18 @@ SCORE = "document.querySelector('#score').textContent"
 #: waits are for events (the page shows something); the time limits only end a test that would hang,
 #: generous for a loaded 2-core machine
 LONG = 300.0
+KEEP = OUTPUT / "browser"
 
 
 def moved(before: list, after: list) -> list[str]:
     old = {r: (x, y) for r, x, y in before}
     return [r for r, x, y in after if r in old and abs(x - old[r][0]) + abs(y - old[r][1]) > 0.3]
+
+
+def _ctrl_c_stops() -> None:
+    """In the child: Ctrl-C as in a terminal (a test run started in the background of a shell
+    inherits SIGINT ignored, and Python then never raises KeyboardInterrupt)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def _lines(stream, out: queue.Queue) -> None:
@@ -42,6 +50,9 @@ def _lines(stream, out: queue.Queue) -> None:
 
 
 def test_the_live_page_follows_a_game_and_replays_it(tmp_path):
+    KEEP.mkdir(parents=True, exist_ok=True)
+    for old in KEEP.glob("*.png"):
+        old.unlink()
     opts = GameOptions(seed=2, robots=2, setup=1.0, exploration=20.0, production=25.0, strategy="oracle",
                        view=0, record=tmp_path / "game.mcap", speed=0)
     game = LockstepGame(opts)
@@ -82,7 +93,7 @@ def test_the_live_page_follows_a_game_and_replays_it(tmp_path):
             page.wait_for("document.querySelectorAll('#orders tbody tr').length > 0", timeout=LONG,
                           between=playing_on("an order"))
             assert page.eval("document.querySelectorAll('#orders tbody .window .span').length") > 0
-            shot = page.screenshot(tmp_path / "live-view.png")
+            shot = page.screenshot(KEEP / "live-view.png")
             print(f"\nscreenshot of the live page: {shot}")
             assert shot.stat().st_size > 20_000
             result = game.run()
@@ -95,7 +106,7 @@ def test_the_live_page_follows_a_game_and_replays_it(tmp_path):
     # to the first second, reads where the robots are and presses play
     view = subprocess.Popen([RLL_BT, "view", str(tmp_path / "game.mcap"), "--port", "0", "--speed", "20",
                              "--paused"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            stdin=subprocess.DEVNULL)
+                            stdin=subprocess.DEVNULL, preexec_fn=_ctrl_c_stops)
     lines: queue.Queue = queue.Queue()
     threading.Thread(target=_lines, args=(view.stderr, lines), daemon=True).start()
     try:
@@ -119,9 +130,14 @@ def test_the_live_page_follows_a_game_and_replays_it(tmp_path):
             page.wait_for("document.querySelector('#result').textContent.includes('game over')", timeout=LONG)
             assert set(moved(first, page.eval(ROBOTS))) == {"robot-1", "robot-2"}, first
             assert page.eval(SCORE) == str(final)
-            shot = page.screenshot(tmp_path / "replay-view.png")
+            shot = page.screenshot(KEEP / "replay-view.png")
             print(f"screenshot of the replay: {shot}")
     finally:
         view.send_signal(signal.SIGINT)                   # Ctrl-C
-        rc = view.wait(60)
+        try:
+            rc = view.wait(60)
+        finally:
+            if view.poll() is None:
+                view.kill()
+                view.wait()
     assert rc == 130, "".join(said)
