@@ -18,13 +18,16 @@ For every seed two games of the 2016 rules, three robots:
 Printed: points (exploration, production, total) of both, the hardware
 game's share of the sim game's points, collisions, and per robot of the
 hardware game the serial poll rate, laser scans and camera frames per
-second and the base's watchdog stops.  The aim (issue 18): within 10 % of
+second, the base's watchdog stops and how often the emulator's thread was
+late (a read more than 100 ms after the one before: the world process is
+busy).  The aim (issue 18): within 10 % of
 the sim backend's points on every seed, 0 watchdog stops.  A hardware game
 takes its real length (about 20 minutes for a whole 2016 game).
 """
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import tempfile
 import time
@@ -65,6 +68,10 @@ def main(argv=None) -> int:
         sim = play(GameOptions(processes=args.against == "processes", perception=args.perception, **common),
                    out / f"seed{seed}-sim")
         rows.append((seed, hw, sim))
+        (out / f"seed{seed}.json").write_text(json.dumps({"seed": seed, "hardware": hw, "sim": sim},
+                                                         indent=1, default=str))
+        print(f"seed {seed}: hardware {hw['points']['total']} points, sim {sim['points']['total']}; "
+              f"kept in {out / f'seed{seed}.json'}", file=sys.stderr, flush=True)
     print(f"hardware games (rll-bt sim --hardware emulated, laser {args.laser}) beside the sim backend "
           f"({args.against}, perception {args.perception}); rcll2016, 3 robots; {time.monotonic() - t0:.0f} s wall")
     print()
@@ -79,13 +86,15 @@ def main(argv=None) -> int:
               f"{hw['points']['exploration']:8d} {hw['points']['production']:8d} {h_tot:8d} {ratio:7.2f} "
               f"{sim['collisions']:8d} {hw['collisions']:7d}")
     print()
-    print(f"{'seed':>4} {'robot':>7} {'serial polls/s':>14} {'scans/s':>8} {'frames/s':>9} {'watchdog stops':>15}")
+    print(f"{'seed':>4} {'robot':>7} {'serial polls/s':>14} {'scans/s':>8} {'frames/s':>9} {'watchdog stops':>15} "
+          f"{'emu stalls':>10} {'longest s':>9}")
     stops = 0
     for seed, hw, _ in rows:
         for name, h in sorted(hw.get("hardware_stats", {}).items()):
             stops += h["watchdog_motion_stops"]
             print(f"{seed:4d} {name:>7} {h['serial_polls_per_s']:14.1f} {h['scans_per_s']:8.2f} "
-                  f"{h['frames_per_s']:9.2f} {h['watchdog_motion_stops']:15d}")
+                  f"{h['frames_per_s']:9.2f} {h['watchdog_motion_stops']:15d} "
+                  f"{h.get('emulator_stalls', 0):10d} {h.get('longest_stall_s', 0.0):9.3f}")
     print()
     print(f"within 10 % of the sim backend's points on every seed: {'yes' if within else 'NO'}; "
           f"watchdog stops while moving: {stops}")

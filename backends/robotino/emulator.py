@@ -37,6 +37,7 @@ from rll_bt.clock import Clock, WallClock
 from .arduino import GripperFirmware
 from .faults import Faults, FaultStream
 from .firmware import BaseFirmware
+from .framing import HEAD
 
 log = logging.getLogger(__name__)
 
@@ -150,6 +151,32 @@ class _Endpoint:
         return self.queue[0][0] if self.queue else None
 
 
+def arrival_times(data: bytes, last: float | None, now: float, spacing: float):
+    """When the bytes of ``data``, read at ``now`` after a read at ``last``,
+    reached the device: ``(time, chunk)``, one chunk per frame (split at each
+    frame head).
+
+    A microcontroller takes each byte as it arrives; the emulator's thread
+    takes them when it is scheduled.  When it was late (a loaded machine, a
+    busy interpreter) several frames wait in the pty together, and reading
+    them all at ``now`` would count the delay against the host (a watchdog
+    trip for a host that kept polling).  The frames are taken as arrived as
+    late as possible: the last one now, each one before it ``spacing``
+    earlier (the host's shortest poll cycle), never before ``last``.  A host
+    that really went quiet and then sent one frame still trips the watchdog.
+    """
+    heads = [i for i, b in enumerate(data) if b == HEAD]
+    if not heads or heads[0] != 0:
+        heads.insert(0, 0)
+    chunks = [data[a:b] for a, b in zip(heads, heads[1:] + [len(data)])]
+    k = len(chunks)
+    for i, chunk in enumerate(chunks):
+        when = now - (k - 1 - i) * spacing
+        if last is not None:
+            when = max(when, last)
+        yield when, chunk
+
+
 class RobotinoEmulator:
     """Base firmware (and optionally the gripper sketch) behind ptys.
 
@@ -160,7 +187,8 @@ class RobotinoEmulator:
     def __init__(self, *, gripper: bool = False, faults: Faults | None = None,
                  link_dir: str | None = None, clock: Clock | None = None,
                  firmware: BaseFirmware | None = None,
-                 gripper_firmware: GripperFirmware | None = None, idle_period: float = 0.005):
+                 gripper_firmware: GripperFirmware | None = None, idle_period: float = 0.005,
+                 host_spacing: float = 0.005):
         self.clock = clock or WallClock()
         self.faults = faults or Faults()
         self._own_dir = link_dir is None
@@ -178,6 +206,13 @@ class RobotinoEmulator:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._next_close = None
+        #: frames found waiting together are taken as sent this far apart (the
+        #: host's shortest poll cycle), ending now: see :func:`arrival_times`
+        self.host_spacing = host_spacing
+        self._last_read: float | None = None
+        self.stall_threshold = 0.1
+        self.stalls = 0                 # reads more than stall_threshold after the one before
+        self.longest_stall = 0.0
 
     # -- public ------------------------------------------------------------
     @property
@@ -279,7 +314,8 @@ class RobotinoEmulator:
                    "watchdog_motion_stops": fw.watchdog_motion_stops,
                    "corrupted": self._base.rx.corrupted + self._base.tx.corrupted,
                    "dropped": self._base.rx.dropped + self._base.tx.dropped,
-                   "connects": self._base.connects}
+                   "connects": self._base.connects,
+                   "emulator_stalls": self.stalls, "longest_stall_s": round(self.longest_stall, 3)}
             if self._grip is not None:
                 out["gripper_connects"] = self._grip.connects
             return out
@@ -312,6 +348,10 @@ class RobotinoEmulator:
         events = poller.poll(timeout_ms)
         now = self.clock.now()
         with self.lock:
+            last, self._last_read = self._last_read, now
+            if last is not None and now - last > self.stall_threshold:
+                self.stalls += 1
+                self.longest_stall = max(self.longest_stall, now - last)
             for fd, ev in events:
                 ep = fds[fd]
                 if ev & select.POLLHUP and not ev & select.POLLIN:
@@ -320,7 +360,12 @@ class RobotinoEmulator:
                 data = ep.pty.read()
                 if data:
                     ep.bytes_in += len(data)
-                    self._deliver(ep, ep.rx.apply(data), now)
+                    data = ep.rx.apply(data)
+                    if ep is self._base:
+                        for when, chunk in arrival_times(data, last, now, self.host_spacing):
+                            self._deliver(ep, chunk, when)
+                    else:
+                        self._deliver(ep, data, now)
             self.firmware.advance(now)
             if not self.silent:
                 reply = self.firmware.take_reply()

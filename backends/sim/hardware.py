@@ -237,7 +237,8 @@ class WorldHardware:
                                   "watchdog_motion_stops": s["watchdog_motion_stops"],
                                   "scans_sent": laser.scans_sent if laser else 0, "scans_computed": rig.scans,
                                   "frames_rendered": rig.frames,
-                                  "frames_sent": rig.rig.camera_server.frames_sent if rig.rig.camera_server else 0}
+                                  "frames_sent": rig.rig.camera_server.frames_sent if rig.rig.camera_server else 0,
+                                  "emulator_stalls": s["emulator_stalls"], "longest_stall_s": s["longest_stall_s"]}
         return out
 
     def stop(self) -> None:

@@ -159,3 +159,29 @@ def test_charger_info_and_version_on_demand():
     assert names == ["Bumper", "ChargerInfo", "ChargerInfo", "ChargerVersion", "PowerSourceReadings",
                      "PowerButton"]
     assert tags[3] == T.ChargerVersion(1, 1, 2, 3)
+
+
+def test_frames_that_waited_for_a_late_emulator_thread_do_not_trip_the_watchdog():
+    """The emulator's thread read the pty 600 ms late: the host's polls of that
+    time (every 5 ms) were waiting there together.  A microcontroller took each
+    as it came, so they must not count as a host gone quiet; a host that was
+    quiet and sent one frame at the end still trips the watchdog."""
+    from backends.robotino.emulator import arrival_times
+
+    def feed(fw, data, last, now):
+        for when, chunk in arrival_times(data, last, now, 0.005):
+            fw.receive(chunk, when)
+        fw.advance(now)
+
+    live = BaseFirmware()
+    live.receive(frame_of(T.SetMotorSpeed(0, 1200)), 0.1)
+    polls = b"".join(frame_of(T.SetMotorSpeed(0, 1200), T.GetAllMotorReadings()) for _ in range(120))
+    feed(live, polls[:7] , 0.1, 0.1)                       # a frame split across reads is whole again
+    feed(live, polls[7:], 0.1, 0.7)
+    assert live.watchdog_trips == 0 and live.motors[0].setpoint == 1200
+    assert live.rx_counter == 121
+
+    quiet = BaseFirmware()
+    quiet.receive(frame_of(T.SetMotorSpeed(0, 1200)), 0.1)
+    feed(quiet, frame_of(T.SetMotorSpeed(0, 1200)), 0.1, 0.7)
+    assert quiet.watchdog_trips == 1 and quiet.watchdog_motion_stops == 1

@@ -61,9 +61,16 @@ def test_velocity_gives_kinematic_setpoints_odometry_and_no_watchdog_stop(emu, r
     assert emu.setpoints()[:3] == expected_setpoints(*v)
     received = [rpm for _, motor, rpm in emu.received_setpoints() if motor == 0]
     nonzero = [r for r in received if r]
-    assert abs(nonzero[0]) < abs(expected_setpoints(*v)[0]) / 4      # ramped, not a jump
-    assert len(received) > 200                                        # sent every cycle
-    assert emu.watchdog_trips == 0
+    # ramped, not a jump: the host's ramp (0.8 m/s^2, at most 0.1 s a cycle however late the cycle) needs at
+    # least three cycles to 0.2 m/s, so the set-points pass through values below the final one
+    assert abs(nonzero[0]) < abs(expected_setpoints(*v)[0]) and len(set(nonzero)) >= 3
+    # sent in every poll from the first on (the robot is still moving): however few polls a loaded machine ran
+    frames = [T.decode_tags(p) for _, p in emu.firmware.rx_log]
+    first = next(i for i, tags in enumerate(frames) if any(isinstance(t, T.SetMotorSpeed) for t in tags))
+    driving = frames[first:]
+    assert len(driving) > 20
+    assert all(sum(isinstance(t, T.SetMotorSpeed) for t in tags) == 3 for tags in driving)
+    assert emu.watchdog_trips == 0, (emu.stats(), max(robot._base.cycle_periods()), emu.firmware.watchdog_trip_times)
     odo, truth = robot.odometry(), emu.ground_truth()
     assert odo.pose.x == pytest.approx(truth[0], abs=0.01)
     assert odo.pose.y == pytest.approx(truth[1], abs=0.01)
@@ -71,7 +78,7 @@ def test_velocity_gives_kinematic_setpoints_odometry_and_no_watchdog_stop(emu, r
     assert odo.vx == pytest.approx(0.2, abs=0.02) and odo.omega == pytest.approx(0.4, abs=0.05)
     assert truth[0] > 0.2
     stats = robot.link_stats()
-    assert stats.frames > 200 and stats.checksum_errors == 0 and stats.link_losses == 0
+    assert stats.frames > 20 and stats.checksum_errors == 0 and stats.link_losses == 0
 
 
 def test_deadman_stops_the_robot_when_commands_stop(emu, robot, wait_for):
