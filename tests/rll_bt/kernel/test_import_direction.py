@@ -13,7 +13,8 @@ clock, errors, plug-in discovery and contracts they share) import nothing of
 the agent runtime, game orchestration or the command line.
 
 Anywhere: no import circles between modules, counting the imports inside
-functions too (a deferred import that closes a circle is still a circle).
+functions too (a deferred import that closes a circle is still a circle); and
+no module over 500 lines, in the packages, the benchmarks and the tests.
 """
 from __future__ import annotations
 
@@ -181,7 +182,27 @@ def test_no_import_circles_anywhere():
     assert not found, "import circles:\n" + "\n".join(describe(g, graph) for g in found)
 
 
+MAX_LINES = 500
+
+
+def long_modules(root: Path = ROOT, folders=PACKAGES + ("benchmarks", "tests")) -> dict[str, int]:
+    """Source files over MAX_LINES lines: relative path -> lines."""
+    return {str(p.relative_to(root)): n for folder in folders for p in sorted((root / folder).rglob("*.py"))
+            if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_LINES}
+
+
+def test_no_module_over_500_lines_anywhere():
+    assert long_modules() == {}
+
+
 # -- the checker itself --------------------------------------------------------------------------
+def test_long_modules_counts_lines(tmp_path):
+    (tmp_path / "pkg" / "sub").mkdir(parents=True)
+    (tmp_path / "pkg" / "ok.py").write_text("x = 1\n" * MAX_LINES)
+    (tmp_path / "pkg" / "sub" / "big.py").write_text("x = 1\n" * (MAX_LINES + 1))
+    assert long_modules(tmp_path, ("pkg",)) == {str(Path("pkg/sub/big.py")): MAX_LINES + 1}
+
+
 def test_checker_reads_every_kind_of_import(tmp_path):
     f = tmp_path / "m.py"
     f.write_text("def f():\n    import backends.sim\n    from teamserver import x\n"
