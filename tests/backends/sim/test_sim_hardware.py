@@ -5,6 +5,7 @@ the world's renders, its gripper moves the world's gripper."""
 import math
 import threading
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -17,12 +18,16 @@ from rll_bt.backend import Pose2D, open_backend
 class Running:
     """The world stepped on the wall clock in a thread of its own (as the game
     process does), the devices synced after each step; ``lock`` holds it
-    while a test reads PyBullet itself."""
+    while a test reads PyBullet itself.  A loop that came late (a loaded
+    machine) catches up in steps of at most 50 ms, each followed by a sync,
+    so the world's time keeps to the wall clock the host and the emulators
+    live on."""
 
     def __init__(self, world, hw):
         self.world, self.hw = world, hw
         self.lock = threading.Lock()
         self._stop = threading.Event()
+        self.longest_gap = 0.0              # the longest wall time between two syncs (reset by a test)
         self._thread = threading.Thread(target=self._loop, daemon=True)
         self._thread.start()
 
@@ -30,11 +35,17 @@ class Running:
         last = time.monotonic()
         while not self._stop.is_set():
             with self.lock:
-                now = time.monotonic()
-                dt = min(now - last, 0.1)
-                if dt >= 0.01:
-                    self.world.step(dt)
-                    last = now
+                lag = time.monotonic() - last
+                self.longest_gap = max(self.longest_gap, lag)
+                if lag > 1.0:                       # more than the world can catch up: let it go
+                    last += lag - 1.0
+                    lag = 1.0
+                while lag >= 0.01 and not self._stop.is_set():
+                    h = min(lag, 0.05)
+                    self.world.step(h)
+                    self.hw.sync()
+                    last += h
+                    lag -= h
                 self.hw.sync()
             time.sleep(0.005)
 
@@ -90,24 +101,43 @@ def test_scans_decode_to_the_ranges_the_world_computes(rigged):
     assert scan.mount.x == pytest.approx(robot.config.geometry.laser_mount[0])
 
 
-def test_the_base_drives_the_worlds_robot_and_the_camera_shows_the_worlds_view(rigged):
-    world, hw, rig, backend, running = rigged
-    robot = world.robots[("CYAN", 1)]
-    start = robot.pose
-    odo0 = backend.odometry().pose
-    end = time.monotonic() + 1.5
+def drive_episode(world, rig, backend, running, seconds=1.5):
+    """Drive ahead at 0.2 m/s for ``seconds``, stop, let it settle.  Returns the
+    world's motion, the host's odometry, the watchdog stops of the episode and
+    the longest time the real-time chain went without its cycle (the base not
+    hearing the host, or the world not stepped): what a loaded machine took."""
+    robot, emu = world.robots[("CYAN", 1)], rig.rig.base
+    start, odo0 = robot.pose, backend.odometry().pose
+    stops0, t0 = emu.stats()["watchdog_motion_stops"], time.monotonic()
+    running.longest_gap = 0.0
+    end = t0 + seconds
     while time.monotonic() < end:
         backend.drive(0.2, 0.0, 0.0)
         running.run(0.05)
     backend.stop()
     running.run(0.8)
-    moved = robot.pose.relative_to(start)
-    odo = backend.odometry().pose.relative_to(odo0)
-    assert 0.15 < moved.x < 0.4 and abs(moved.y) < 0.03
-    # the host's odometry, integrated from the wheel speeds it polls, follows the world's motion (a world
-    # stepped late on a loaded machine moves the robot on its last wheel speeds a little longer)
-    assert odo.x == pytest.approx(moved.x, abs=0.08)
-    assert hw.stats()["CYAN/1"]["watchdog_motion_stops"] == 0
+    heard = [t for t, _ in list(emu.firmware.rx_log) if t >= t0]
+    silence = max(np.diff(heard), default=math.inf) if len(heard) > 1 else math.inf
+    return SimpleNamespace(moved=robot.pose.relative_to(start), odo=backend.odometry().pose.relative_to(odo0),
+                           stops=emu.stats()["watchdog_motion_stops"] - stops0,
+                           starved=max(silence, running.longest_gap))
+
+
+def test_the_base_drives_the_worlds_robot_and_the_camera_shows_the_worlds_view(rigged):
+    world, hw, rig, backend, running = rigged
+    robot = world.robots[("CYAN", 1)]
+    # a real-time property: an episode in which the machine left the base without the host's polls, or the
+    # world without steps, for 250 ms or more (near the watchdog's 300 ms) tests the machine, not the code, and
+    # is driven again (at most three times; the last one is asserted whatever it was)
+    for _ in range(3):
+        ep = drive_episode(world, rig, backend, running)
+        if ep.starved < 0.25:
+            break
+    moved, odo = ep.moved, ep.odo
+    assert 0.15 < moved.x < 0.4 and abs(moved.y) < 0.03, ep
+    # the host's odometry, integrated from the wheel speeds it polls, follows the world's motion
+    assert odo.x == pytest.approx(moved.x, abs=0.08), ep
+    assert ep.stops == 0, ep
     frame = backend.camera_image()
     assert frame.image.shape == (240, 320, 3) and abs(frame.stamp - time.monotonic()) < 1.5
     assert frame.intrinsics.fx == pytest.approx(160 / math.tan(robot.config.camera_hfov / 2), rel=1e-3)
@@ -117,15 +147,15 @@ def test_the_base_drives_the_worlds_robot_and_the_camera_shows_the_worlds_view(r
 def test_the_gripper_moves_the_worlds_gripper_and_holding_comes_from_the_world(rigged):
     world, hw, rig, backend, running = rigged
     robot = world.robots[("CYAN", 1)]
-    assert running.run(3.0, until=lambda: backend.gripper_status().state.value == "idle")
+    assert running.run(30.0, until=lambda: backend.gripper_status().state.value == "idle")
     backend.gripper_move(0.05, 0.02, 0.4)
-    assert running.run(10.0, until=lambda: np.allclose(robot.gripper.position, (0.05, 0.02, 0.4), atol=0.002)
+    assert running.run(30.0, until=lambda: np.allclose(robot.gripper.position, (0.05, 0.02, 0.4), atol=0.002)
                        and backend.gripper_status().state.value == "idle")
     assert np.allclose(backend.gripper_status().position, (0.05, 0.02, 0.4), atol=0.002)
     assert backend.holding() is False
     running.stop()                          # what the world says is in the jaws reaches the host
     robot.holding = 1                       # (no such workpiece: the world is not stepped any more)
-    end = time.monotonic() + 5.0
+    end = time.monotonic() + 30.0
     while backend.holding() is not True and time.monotonic() < end:
         hw.sync()
         time.sleep(0.02)
