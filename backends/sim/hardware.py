@@ -142,8 +142,11 @@ class WorldRig:
     def config(self, **faults) -> dict:
         """The robot configuration.  Fault timing is looser than a real
         robot's (laser 1 s, camera 3 s): the world that feeds the devices
-        shares the machine with the agents, and may fall behind a moment."""
-        cfg = self.rig.config(**{"stale": 1.0, "camera_stale": 3.0, **faults})
+        shares the machine with the agents, and may fall behind a moment.
+        An agent waits up to 30 s for each device's first reading (not 5 s):
+        three agents coming up at once on a loaded machine had one give up
+        on its camera's first frame and end the game before it began."""
+        cfg = self.rig.config(**{"stale": 1.0, "camera_stale": 3.0, "startup_wait": 30.0, **faults})
         cfg["gripper"]["origin"] = list(GRIPPER_ORIGIN)
         if "camera" in cfg:
             cfg["camera"]["timeout"] = 3.0
