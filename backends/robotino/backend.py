@@ -79,6 +79,8 @@ class RobotinoBackend(Backend):
             for key in ("cycle_time", "emergency_bumper"):
                 if key in cfg.base:
                     base_options.setdefault(key, cfg.base[key])
+            if "startup_wait" in cfg.faults:        # the base's first reading is its answer to the handshake
+                base_options.setdefault("handshake_timeout", max(cfg.startup_wait, 0.1))
             if cfg.gripper:
                 gripper_device = gripper_device or cfg.gripper["device"]
                 holding_sensor = holding_sensor or cfg.gripper.get("holding_sensor")

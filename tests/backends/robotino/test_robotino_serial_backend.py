@@ -1,5 +1,6 @@
 """The real serial backend driving the firmware emulator through a pty."""
 import math
+import threading
 import time
 from types import SimpleNamespace
 
@@ -235,3 +236,16 @@ def test_write_error_closes_and_reopens_the_port(emu, robot, wait_for):
     assert stats.write_errors == 1 and stats.link_losses == 1
     frames = stats.frames
     assert wait_for(lambda: robot.link_stats().frames > frames + 5, 1.0)
+
+
+def test_startup_wait_of_the_robot_config_is_how_long_the_base_may_take_to_answer(emu):
+    cfg = {"name": "r", "base": {"type": "robotino3", "device": emu.device}}
+    emu.set_silent(True)                                # a base that does not answer (yet)
+    with pytest.raises(BackendUnavailable, match="within 1 s"):
+        RobotinoBackend(robot_config=cfg)               # the handshake's own 1 s
+    threading.Timer(3.0, emu.set_silent, (False,)).start()        # ... answers after 3 s
+    backend = RobotinoBackend(robot_config=dict(cfg, faults={"startup_wait": 20.0}))
+    try:
+        assert backend.versions == ("3.0.0", "1.2.3")
+    finally:
+        backend.close()
