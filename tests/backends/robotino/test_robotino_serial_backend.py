@@ -66,7 +66,9 @@ def test_velocity_gives_kinematic_setpoints_odometry_and_no_watchdog_stop(emu, r
     # least three cycles to 0.2 m/s, so the set-points pass through values below the final one
     assert abs(nonzero[0]) < abs(expected_setpoints(*v)[0]) and len(set(nonzero)) >= 3
     # sent in every poll from the first on (the robot is still moving): however few polls a loaded machine ran
-    frames = [T.decode_tags(p) for _, p in emu.firmware.rx_log]
+    with emu.lock:                                  # the emulator's thread appends to the log
+        log = list(emu.firmware.rx_log)
+    frames = [T.decode_tags(p) for _, p in log]
     first = next(i for i, tags in enumerate(frames) if any(isinstance(t, T.SetMotorSpeed) for t in tags))
     driving = frames[first:]
     assert len(driving) > 20

@@ -136,7 +136,8 @@ def drive_episode(world, rig, backend, running, seconds=1.5):
     running.run(0.8)
     if lost:
         fresh(running, lambda: backend.drive(0.0, 0.0, 0.0))
-    heard = [t for t, _ in list(emu.firmware.rx_log) if t >= t0]
+    with emu.lock:                                  # the emulator's thread appends to the log
+        heard = [t for t, _ in emu.firmware.rx_log if t >= t0]
     silence = max(np.diff(heard), default=math.inf) if len(heard) > 1 else math.inf
     return SimpleNamespace(moved=robot.pose.relative_to(start), odo=backend.odometry().pose.relative_to(odo0),
                            stops=emu.stats()["watchdog_motion_stops"] - stops0,
