@@ -19,9 +19,10 @@ from collections import OrderedDict, deque
 from typing import Any
 
 from .. import msgs, rules
-from ..backend import Backend, BackendError, Capability, Pose2D
+from ..backend import Backend, BackendError, Pose2D
 from ..clock import Clock
 from ..comm import CONNECTED, DISCONNECTED
+from . import robotstate
 from .config import AgentConfig
 from .errorcodes import error_code
 from .gamestate import GameGate
@@ -355,18 +356,7 @@ class RobotAgent:
         return r
 
     def _holding(self) -> bool | None:
-        if self.backend is None or not (self._caps() & Capability.GRIPPER):
-            return None
-        try:
-            return self.backend.holding()
-        except BackendError:
-            return None
-
-    def _caps(self) -> Capability:
-        try:
-            return self.backend.capabilities if self.backend is not None else Capability.NONE
-        except Exception:
-            return Capability.NONE
+        return robotstate.holding(self.backend)
 
     def state(self) -> str:
         """The RobotStatus state: FAULT, STOPPED, RECOVERING, BUSY or IDLE."""
@@ -397,14 +387,7 @@ class RobotAgent:
             st.current_task_id = task_id
         if self._holding():
             st.holding.SetInParent()
-        if self._caps() & Capability.BATTERY:
-            try:
-                bat = self.backend.battery()
-                st.battery_voltage = bat.voltage
-                if bat.soc is not None:
-                    st.battery_fraction = bat.soc
-            except BackendError:
-                pass
+        robotstate.fill_battery(st, self.backend)
         if self.link.send(st):
             self._status_sig = sig
             self._next_status = self.clock.now() + c.status_period
