@@ -28,7 +28,7 @@ and the refbox about tasks through one
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from rll_bt import rules
@@ -110,6 +110,9 @@ class TeamServer:
         self.refbox_link = refbox
         self.agents = agents
         self.config = config or ServerConfig()
+        if self.config.dispatch.stuck_timeout is None and self.profile.stuck_timeout is not None:
+            self.config = replace(self.config, dispatch=replace(
+                self.config.dispatch, stuck_timeout=self.profile.stuck_timeout))
         self.kb = KnowledgeBase.load(self.profile, Store(state))
         self.refbox = RefboxClient(self.kb, team_name, clock=clock)
         self.link = AgentLink(self.kb, clock)

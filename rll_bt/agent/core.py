@@ -371,7 +371,8 @@ class RobotAgent:
     def _send_status(self, force: bool = False) -> None:
         state = self.state()
         task_id = self.run.task_id if self.run is not None else None
-        sig = (state, task_id)
+        waiting = getattr(self.stations, "waiting", None) if task_id is not None else None
+        sig = (state, task_id, waiting)
         if not force and sig == self._status_sig and self.clock.now() < self._next_status:
             return
         if not self.connected:
@@ -388,6 +389,8 @@ class RobotAgent:
         if self._holding():
             st.holding.SetInParent()
         robotstate.fill_battery(st, self.backend)
+        if waiting:
+            st.waiting_at = waiting
         if self.link.send(st):
             self._status_sig = sig
             self._next_status = self.clock.now() + c.status_period

@@ -55,13 +55,19 @@ class WaitStation(Node):
     robot puts a workpiece on a station's input only once it is PREPARED for it.
     MACHINE_BROKEN when the station is BROKEN or DOWN, TIMEOUT after ``timeout``
     seconds.  Without any MachineInfo at all (no refbox: a bench run) it succeeds
-    at once."""
+    at once.  While it waits the service's ``waiting`` names the station (the
+    RobotStatus's ``waiting_at``: a team server prepares a 2025 station only then)."""
     machine = Input(str, "station, e.g. C-RS1")
     states = Input(str, "states to wait for, comma separated", default="PREPARED")
     timeout = Input(float, "seconds", default=90.0)
 
     def initialise(self) -> None:
         self._until = self.ctx.clock.now() + max(0.0, float(self.timeout))
+
+    def terminate(self, new_status: Status) -> None:
+        view = self.ctx.services.get("refbox_stations")
+        if view is not None and getattr(view, "waiting", None) == self.machine:
+            view.waiting = None
 
     def update(self) -> Status:
         view = self.ctx.services.get("refbox_stations")
@@ -71,6 +77,7 @@ class WaitStation(Node):
         wanted = {s.strip().upper() for s in str(self.states).split(",") if s.strip()}
         if state in wanted:
             return Status.SUCCESS
+        view.waiting = self.machine
         if state in ("BROKEN", "DOWN"):
             write_error(self._bb, "MACHINE_BROKEN", f"{self.machine} is {state}", self.name)
             return Status.FAILURE

@@ -13,11 +13,15 @@ from __future__ import annotations
 class StationStates:
     """``state(name)``: the station's last reported state, None before any MachineInfo
     named it; ``since(name)``: the clock time it entered that state (as heard);
-    ``heard``: whether any MachineInfo arrived at all."""
+    ``heard``: whether any MachineInfo arrived at all.  ``waiting``: the station the
+    robot waits at, docked, for its prepare (the ``wait_station`` node sets it; the
+    agent's RobotStatus says it as ``waiting_at``, so that a team server can prepare
+    the station just then), None otherwise."""
 
     def __init__(self):
         self._states: dict[str, tuple[str, float]] = {}
         self.heard = False
+        self.waiting: str | None = None
 
     def update(self, msg, now: float) -> list[str]:
         """Take one MachineInfo; returns the stations whose state changed."""

@@ -13,6 +13,10 @@ class DispatchConfig:
     prepare_lead: float = 3.0
     retrieve_lead: float = 12.0     # ... a storage station's RETRIEVE this many seconds away
     prepare_retry: float = 6.0
+    # the rules' limit on a PREPARED machine waiting for its workpiece (2025: 20 s; None:
+    # none, 2016): a feed's station is then prepared only once its robot waits there,
+    # docked (the robot's ``waiting_at``)
+    stuck_timeout: float | None = None
     speed: float = 0.5
     max_attempts: int = 3
     deliver_early: float = 60.0     # at most this long before the window a delivery starts

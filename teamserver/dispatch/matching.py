@@ -55,6 +55,7 @@ class Matcher:
             if t.carry:
                 r = idle.get(t.holder) if t.holder is not None else None
                 if r is not None and self.locks.free_for(t):
+                    self.slides.discard_to(t, r, self._travel)
                     self.fleet.assign(t, r)
                     assigned.append(t)
                     del idle[r.number]
@@ -89,6 +90,9 @@ class Matcher:
             self.fleet.assign(t, r)
             assigned.append(t)
         return assigned
+
+    def _travel(self, robot: M.Robot, machine: str) -> float:
+        return travel(robot, self.world.positions().get(machine))
 
     def _slack(self, task: M.Task, game_time: float | None) -> float:
         """Game seconds until the end of the window of ``task``'s order (0 for work

@@ -5,9 +5,17 @@ PrepareMachine is sent for an assigned task once its robot is within
 away (``retrieve_lead`` for a storage station's RETRIEVE, which takes that
 long to bring the workpiece out), the station is IDLE and the game
 RUNNING; resent after ``prepare_retry`` seconds if the station did not
-leave IDLE.  A station already PREPARED with the task's very instruction is
-adopted (:mod:`teamserver.production.feeding`); a DS is prepared only
-inside the order's window.
+leave IDLE.  Under rules that break a machine left PREPARED too long (2025:
+its workpiece must reach the middle of the belt within 20 s of the
+prepare) a feed's station is prepared only once its robot says it waits
+there, docked (RobotStatus ``waiting_at``, the trees' ``wait_station``):
+a robot near the station may still need more than 20 s to dock (another
+robot at the slide, a re-approach), and a RetrieveCap's robot first takes
+the carrier from the shelf.  Either way the robot puts its workpiece only once the refbox
+shows the station prepared (the trees' ``wait_station``).  A station
+already PREPARED with the task's very instruction is adopted
+(:mod:`teamserver.production.feeding`); a DS is prepared only inside the
+order's window.
 """
 from __future__ import annotations
 
@@ -16,7 +24,7 @@ import logging
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
 from ..links.tasks import TaskLink
-from ..production.feeding import FeedMonitor
+from ..production.feeding import FeedMonitor, is_feed
 from ..production.world import PlanningWorld
 from .config import DispatchConfig
 from .fleet import travel
@@ -74,7 +82,10 @@ class Preparer:
             if robot is None:
                 continue
             pos = positions.get(t.prepare["machine"])
-            if robot.pose is not None and pos is not None:
+            if self.config.stuck_timeout is not None and is_feed(t):
+                if not self._at_station(t, robot, pos):
+                    continue
+            elif robot.pose is not None and pos is not None:
                 d = travel(robot, pos)
                 lead = self.config.retrieve_lead if t.prepare.get("ss", {}).get(
                     "operation") == "RETRIEVE" else self.config.prepare_lead
@@ -89,6 +100,10 @@ class Preparer:
                 self.feeds.late_sent(t)
                 sent.append(t)
         return sent
+
+    def _at_station(self, task: M.Task, robot: M.Robot, pos) -> bool:
+        """The feed's robot waits docked at its station for the prepare."""
+        return robot.waiting_at == task.prepare["machine"]
 
     def _send(self, task: M.Task, now: float) -> None:
         task.prepared_at = now

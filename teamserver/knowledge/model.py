@@ -101,6 +101,8 @@ class Robot(Record):
     task_id: int | None = None
     last_heartbeat: float = 0.0
     holding: str | None = None          # workpiece id in the gripper ("?" if unknown)
+    gripper: bool = False               # the robot's own word: its gripper holds something
+    waiting_at: str | None = None       # ... docked at this station, waiting for its prepare
     peer: Any = None                    # transport address (not meaningful after a restart)
     state: str = "IDLE"                 # the agent's own RobotStatus.State
     _tuples = ("pose",)
@@ -148,7 +150,8 @@ class Station(Record):
     since: float = 0.0                  # server time of the last state change
     fed_at: float = 0.0                 # server time it last took a workpiece (left PREPARED)
     shelf: tuple[str, ...] = ()         # a storage station's filled places ("shelf,slot")
-    _tuples = ("ring_colors", "shelf")
+    stored: tuple[str, ...] = ()        # ... with their descriptions ("shelf,slot=BASE_RED CAP_GREY")
+    _tuples = ("ring_colors", "shelf", "stored")
 
 
 @dataclass

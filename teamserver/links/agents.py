@@ -82,6 +82,8 @@ class AgentLink:
         back = self.seen(r)
         if m.HasField("pose"):
             r.pose = (m.pose.x, m.pose.y, m.pose.theta)
+        r.gripper = m.HasField("holding")
+        r.waiting_at = m.waiting_at if m.HasField("waiting_at") else None
         r.state = self.ms.enum("RobotStatus.State").Name(m.state)
         self.kb.save_robot(r)
         return r, back
@@ -158,6 +160,7 @@ class AgentLink:
             msg.discard.SetInParent()
             if p.get("machine"):
                 msg.discard.machine = p["machine"]
+                msg.discard.side = ms.enum("MachineSide").Value(p.get("side", M.INPUT))
         elif t.kind == M.GO_TO:
             msg.go_to.target.x, msg.go_to.target.y = float(p["x"]), float(p["y"])
             msg.go_to.target.theta = float(p.get("theta", 0.0))
@@ -167,8 +170,9 @@ class AgentLink:
             raise ValueError(f"no team-protocol task for {t.kind!r}")
         return msg
 
-    def cancel_msg(self, t: M.Task, reason: str):
-        return self.ms.CancelTask(task_id=t.id, robot_id=int(t.robot or 0), reason=reason)
+    def cancel_msg(self, t: M.Task, reason: str, robot: int | None = None):
+        number = t.robot if robot is None else robot
+        return self.ms.CancelTask(task_id=t.id, robot_id=int(number or 0), reason=reason)
 
     def heartbeat_msg(self, number: int):
         self.hb_seq += 1

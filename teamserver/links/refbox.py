@@ -182,6 +182,8 @@ class RefboxClient:
                 st.rotation = int(m.rotation)
             if "status_ss" in m.DESCRIPTOR.fields_by_name and m.status_ss:
                 st.shelf = tuple(f"{p.shelf},{p.slot}" for p in m.status_ss if p.is_filled)
+                st.stored = tuple(f"{p.shelf},{p.slot}={p.description}" for p in m.status_ss
+                                  if p.is_filled and p.HasField("description"))
             if old is not None and old.state != st.state:
                 st.since = now
                 if st.state in FED_STATES or (old.state == "PREPARED" and st.state in (

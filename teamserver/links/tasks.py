@@ -34,15 +34,16 @@ class TaskLink:
         self.refbox = refbox
         self.to_robot = to_robot
         self.to_refbox = to_refbox
-        self.queue: list[tuple] = []     # (TASK, task), (CANCEL, task, reason), (PREPARE, task)
+        self.queue: list[tuple] = []     # (TASK, task), (CANCEL, task, reason, robot), (PREPARE, task)
 
     def send(self, task: M.Task) -> None:
         """Give ``task`` to its robot (``task.robot``)."""
         self.queue.append((TASK, task))
 
     def cancel(self, task: M.Task, reason: str) -> None:
-        """Tell ``task``'s robot to stop it."""
-        self.queue.append((CANCEL, task, reason))
+        """Tell ``task``'s robot to stop it (the robot it has now: the dispatcher may
+        put the task back in the pool before the queue is flushed)."""
+        self.queue.append((CANCEL, task, reason, task.robot))
 
     def prepare(self, task: M.Task) -> None:
         """Send ``task``'s PrepareMachine (``task.prepare``) to the refbox."""
@@ -53,11 +54,12 @@ class TaskLink:
         color = self.kb.get("team_color")
         for item in self.queue:
             kind, t = item[0], item[1]
-            robot = self.kb.robots.get(t.robot) if t.robot is not None else None
+            number = item[3] if kind == CANCEL else t.robot
+            robot = self.kb.robots.get(number) if number is not None else None
             if kind == TASK:
                 self.to_robot(robot, self.codec.task_msg(t, color))
             elif kind == CANCEL:
-                self.to_robot(robot, self.codec.cancel_msg(t, item[2]))
+                self.to_robot(robot, self.codec.cancel_msg(t, item[2], number))
             elif kind == PREPARE:
                 self.to_refbox(self.refbox.prepare_machine(t.prepare))
         self.queue.clear()

@@ -12,24 +12,26 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from rll_bt.rules import Profile
+from rll_bt.rules import MPS_TIMES, Profile
 
 from ..knowledge import model as M
 
 
 @dataclass(frozen=True)
 class Durations:
-    """Estimated times in seconds; ``speed`` in m/s (driving, with turns)."""
+    """Estimated times in seconds; ``speed`` in m/s (driving, with turns).  The machines'
+    are the real machines' (:data:`rll_bt.rules.MPS_TIMES`: workpiece on the input to
+    product at the output)."""
 
     speed: float = 0.5
     pickup: float = 15.0
     put: float = 12.0
     shelf: float = 20.0
-    bs: float = 5.0             # BS dispensing
-    rs: float = 25.0            # ring mounting
-    cs: float = 15.0            # cap retrieve / mount
-    ds: float = 5.0
-    ss: float = 10.0            # storage station store / retrieve
+    bs: float = MPS_TIMES.base              # BS: dispensing and the belt, 3.8 s
+    rs: float = MPS_TIMES.ring              # ring mounting, 21.5 s
+    cs: float = MPS_TIMES.cap               # cap retrieve / mount, 21.7 s
+    ds: float = max(MPS_TIMES.delivery_slots)
+    ss: float = MPS_TIMES.retrieve          # storage station retrieve (a store: less)
     discard: float = 5.0
 
     def handling(self, kind: str) -> float:
@@ -57,6 +59,10 @@ def step_points(profile: Profile, kind: str, params: dict, order: M.Order | None
     s = profile.scoring
     if kind == M.PUT_WORKPIECE and params.get("side") == M.SLIDE:
         return s.additional_base
+    if kind == M.PUT_WORKPIECE and params.get("store"):
+        return s.ss_store                         # 2025: -5 for storing
+    if kind == M.GET_WORKPIECE and str(params.get("machine", "")).endswith("SS"):
+        return s.ss_retrieve                      # 2025: -5 for retrieving
     if kind == M.MOUNT_RING:
         pts = profile.ring_points(int(params.get("cost", 0)))
         if order is not None and params.get("ring_color") == order.rings[-1]:
@@ -67,7 +73,8 @@ def step_points(profile: Profile, kind: str, params: dict, order: M.Order | None
     if kind == M.RETRIEVE_CAP:
         return s.cap_retrieved
     if kind == M.DELIVER and order is not None:
-        pts = profile.delivery_points(order.complexity, max(finish, order.begin), order.end)
+        pts = profile.delivery_points(order.complexity, max(finish, order.begin), order.end,
+                                      order.begin)
         if order.competitive:
             pts += s.competitive_first
         return pts

@@ -113,6 +113,14 @@ class ProductionManager:
     def start(self, cand: Candidate) -> M.Product:
         """A product for the chosen order, with the planned network's tasks."""
         product = self.products.new("P", cand.order.id, created=self.kb.get("game_time", 0.0))
+        if cand.stock is not None:           # a C0 the storage station held from the start
+            self.shelf.reserve(*cand.stock, product.id)
+            o = cand.order
+            wp = M.Workpiece(f"{product.id}/stock", base=o.base, cap=o.cap,
+                             location=f"{self.shelf.ss}:{M.SHELF}", product=product.id)
+            self.kb.save_workpiece(wp)
+            product.workpiece = wp.id
+            self.kb.save_product(product)
         self.products.add_network(product, cand.network)
         log.info("started %s for order %d (%d tasks)", product.id, cand.order.id,
                  len(cand.network.steps))

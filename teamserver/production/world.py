@@ -132,7 +132,27 @@ class PlanningWorld:
         return World(orders, robots, self.positions(), self.rs_colors(),
                      dict(self.kb.get("ring_costs") or {}), self.cs_caps, game_time, horizon,
                      active=active, done=done, owned=self.locks.owners, in_progress=in_progress,
-                     unusable=unusable, max_products=n, making=making)
+                     unusable=unusable, max_products=n, making=making,
+                     stock=self.stock() if self.planner.ss not in unusable else {})
+
+    def stock(self) -> dict[tuple[int, int], tuple[str, str]]:
+        """C0 products in our storage station that no product of ours claimed (2025: the
+        game begins with one of every base x cap there): the places the refbox reports
+        filled with a description "BASE_... CAP_..." (MachineInfo ``status_ss``)."""
+        ss = self.kb.stations.get(self.planner.ss or "")
+        if ss is None:
+            return {}
+        taken = set(self.shelf.places)
+        out = {}
+        for entry in ss.stored:
+            key, _, desc = entry.partition("=")
+            words = desc.split()
+            if key in taken or len(words) != 2 or not words[0].startswith("BASE_") or \
+                    not words[1].startswith("CAP_"):
+                continue
+            shelf, slot = (int(v) for v in key.split(","))
+            out[(shelf, slot)] = (words[0], words[1])
+        return out
 
     def start_position(self) -> tuple[float, float]:
         """Where our robots enter the field (a robot whose pose is not known yet)."""

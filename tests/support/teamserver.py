@@ -76,11 +76,13 @@ class FakeAgent:
         self.seq += 1
         self.t.send(self.ms.Heartbeat(robot_id=self.number, seq=self.seq))
 
-    def status(self, state=1, holding=False):
+    def status(self, state=1, holding=False, waiting_at=None):
         st = self.ms.RobotStatus(robot_id=self.number, state=state)
         st.pose.x, st.pose.y, st.pose.theta = self.pose
         if holding:
             st.holding.SetInParent()
+        if waiting_at:
+            st.waiting_at = waiting_at
         self.t.send(st)
 
     def take(self):
@@ -355,7 +357,8 @@ def play(ls, until, *, t0=0.0, dt=0.5, steps=800, fail=None, drop=None, drive=3)
                 if machine and machine in pos():
                     x, y = pos()[machine]
                     a.pose = (x + 0.3, y, 0.0)
-                    a.status()
+                    into = kind in FEEDS or (kind == "put_workpiece" and t.put_workpiece.side != SLIDE)
+                    a.status(waiting_at=machine if into else None)   # docked, waiting
                 doing[a.number].append([t, drive])
             for item in list(doing[a.number]):
                 item[1] -= 1

@@ -227,7 +227,9 @@ def _machine_info(**states):
 ])
 def test_a_feed_waits_docked_until_the_refbox_shows_the_station_prepared(kind, fields, machine):
     """Never a workpiece on a station that is not PREPARED for it: the robot docks, then
-    puts only once MachineInfo shows the station PREPARED."""
+    puts only once MachineInfo shows the station PREPARED.  While it waits its RobotStatus
+    says where (``waiting_at``: a 2025 team server prepares the station only then), and
+    no more once it has put."""
     rig = make(holding=kind != "retrieve_cap")
     rig.agent.stations.update(_machine_info(**{machine.replace("-", "_"): "IDLE"}), rig.clock.now())
     rig.server.next = getattr(rig.server, "next", 0) + 1
@@ -235,11 +237,15 @@ def test_a_feed_waits_docked_until_the_refbox_shows_the_station_prepared(kind, f
     rig.server.task(tid, kind, **fields)
     rig.until(lambda: calls("approach_station") and rig.clock.now() > 30, seconds=60, what="waiting docked")
     assert not [v for k, v in CALLS if k == "put"]              # docked, not fed
+    rig.until(lambda: rig.server.of("RobotStatus")[-1].waiting_at == machine, seconds=5,
+              what="waiting_at in the RobotStatus")
     rig.agent.stations.update(_machine_info(**{machine.replace("-", "_"): "PREPARED"}), rig.clock.now())
     rig.until(lambda: [r for r in rig.server.results(tid) if r.status != TM.TaskResult.RUNNING],
               seconds=60, what="fed")
     res = [r for r in rig.server.results(tid) if r.status != TM.TaskResult.RUNNING][-1]
     assert outcome(res) == ("SUCCEEDED", "NONE") and [v for k, v in CALLS if k == "put"]
+    rig.until(lambda: not rig.server.of("RobotStatus")[-1].HasField("waiting_at"), seconds=5,
+              what="no waiting_at once fed")
 
 
 def test_a_delivery_takes_a_ds_waiting_for_its_window_or_delivering():

@@ -6,7 +6,7 @@ import numpy as np
 
 from teamserver.dispatch import parking
 from teamserver.knowledge import model as M
-from tests.support.teamserver import Lockstep, production_setup, task_kinds
+from tests.support.teamserver import RS_2016, Lockstep, production_setup, task_kinds
 
 
 def far_spots(n):
@@ -83,12 +83,20 @@ def test_a_parking_robot_gets_ready_work_and_its_park_is_cancelled():
     ls.close()
 
 
+def _full_slides(ls):
+    """Both ring stations' slides hold 3 bases: no room for a discard there."""
+    ls.refbox.machines(ls.station_states, RS_2016,
+                       **{rs: {"loaded_with": 3} for rs in ("C-RS1", "C-RS2")})
+    ls.step(n=2)
+
+
 def test_a_failed_discard_waits_before_the_next_one():
     f1, f2, f3 = far_spots(3)
     ls = Lockstep()
     for a, f in zip(ls.agents, (f1, f2, f3)):
         a.pose = (*f, 0.0)
     production_setup(ls, [])
+    _full_slides(ls)                       # dropped where the robot stands
     kb, disp = ls.server.kb, ls.server.dispatcher
     r = kb.robots[1]
     r.holding = "?"
@@ -107,4 +115,28 @@ def test_a_failed_discard_waits_before_the_next_one():
     wait(ls, 4)
     assert len(discards()) == 3
     assert disp.config.discard_backoff == 5.0
+    ls.close()
+
+
+def test_a_workpiece_nothing_needs_goes_on_the_nearest_slide_with_room():
+    """A base on a ring station's slide counts as an additional base (+2); dropped on
+    the floor it is a referee's call (2025: -10).  A full slide (3) takes no more."""
+    f1, f2, f3 = far_spots(3)
+    ls = Lockstep()
+    for a, f in zip(ls.agents, (f1, f2, f3)):
+        a.pose = (*f, 0.0)
+    production_setup(ls, [])
+    kb = ls.server.kb
+    pos = ls.server.production.world.positions()
+    near, other = sorted(("C-RS1", "C-RS2"), key=lambda m: math.dist(pos[m], f1))
+    ls.refbox.machines(ls.station_states, RS_2016, **{near: {"loaded_with": 3},
+                                                      other: {"loaded_with": 2}})
+    ls.step(n=2)
+    r = kb.robots[1]
+    r.holding = "?"
+    kb.save_robot(r)
+    ls.step(n=2)
+    [d] = [t for t in ls.agents[0].tasks() if t.WhichOneof("kind") == "discard"]
+    assert d.discard.machine == other and d.discard.side == ls.agents[0].ms.enum(
+        "MachineSide").Value("SLIDE")
     ls.close()

@@ -74,8 +74,9 @@ def test_storage_steps_exactly_when_the_wait_pays_for_the_detour():
     pl = ProductionPlanner(P25, "C")
     probe = order(rings=("RING_ORANGE",), begin=900)
     ready, min_wait = threshold(pl, probe, world([probe]))
-    assert 60 < ready < 400 and 40 < min_wait < 150
-    assert min_wait == pytest.approx(pl.storage_cost(POS25) + 30.0)
+    fee = 10 / StoragePolicy().point_value        # storing and retrieving cost 5 points each
+    assert 60 < ready < 400 and 40 + fee < min_wait < 150 + fee
+    assert min_wait == pytest.approx(pl.storage_cost(POS25) + 30.0 + fee)
     for begin, stored in [(0, False),                                  # standing order
                           (math.floor(ready), False),                   # ready as it opens
                           (math.floor(ready + min_wait) - 1, False),    # not quite worth it
@@ -152,10 +153,26 @@ class Stations2025(Stations):
         self.shelf: dict = {}               # (shelf, slot) -> product id stored there
         self.ss_ops: list = []              # (game time, operation, shelf, slot)
         self.storing: str | None = None     # product whose workpiece is on the SS input
+        self.stock: dict = {}               # (shelf, slot) -> description of a C0 there
 
     def _send(self):
-        self.ls.refbox.machines(self.states, RS25,
-                                **{rs: {"loaded_with": n} for rs, n in self.slides.items()})
+        rb = self.ls.refbox
+        info = rb.ms.MachineInfo(team_color=0)
+        e = rb.ms.enum("RingColor")
+        for name, state in self.states.items():
+            m = info.machines.add(name=name, state=state, type=name[2:4])
+            for c in RS25.get(name, ()):
+                m.ring_colors.append(e.Value(c))
+            if name in self.slides:
+                m.loaded_with = self.slides[name]
+            if name == "C-SS":                 # status_ss: every place, filled or not
+                for sh in range(6):
+                    for sl in range(8):
+                        place = m.status_ss.add(shelf=sh, slot=sl,
+                                                is_filled=(sh, sl) in self.shelf)
+                        if (sh, sl) in self.stock:
+                            place.description = self.stock[(sh, sl)]
+        rb.cyan.send(info)
 
     def take_prepares(self, gt):
         got = self.ls.refbox.received[self.seen:]
@@ -171,6 +188,7 @@ class Stations2025(Stations):
                 "RETRIEVE":
             assert (instr.instruction_ss.shelf, instr.instruction_ss.slot) in self.shelf
             del self.shelf[(instr.instruction_ss.shelf, instr.instruction_ss.slot)]
+            self.stock.pop((instr.instruction_ss.shelf, instr.instruction_ss.slot), None)
             self.states["C-SS"] = "READY-AT-OUTPUT"
             self._send()
 
@@ -204,11 +222,16 @@ class Stations2025(Stations):
 T0 = 200.0          # production game time after the 180 s of exploration
 
 
-def setup_2025(ls):
+def setup_2025(ls, stock=False):
     """Our colour, PRODUCTION running after exploration, known 2025 machines, ring costs,
-    idle stations."""
+    idle stations; the storage station's stock of C0 products (the rules' default
+    storage) in it with ``stock``, else used up (claimed by nobody of ours)."""
     machines_known(ls, ZONES25, COSTS, T0)
     ls.stations = Stations2025(ls)
+    if stock:
+        for shelf, slot, base, cap in P25.prestored:
+            ls.stations.shelf[(shelf, slot)] = "stock"
+            ls.stations.stock[(shelf, slot)] = f"{base} {cap}"
     ls.stations._send()
     ls.step(n=2)
 
@@ -242,7 +265,9 @@ def ss_prepares(ls):
 def test_an_early_product_waits_in_the_storage_station_not_in_a_gripper():
     ls = Lockstep("rcll2025")
     setup_2025(ls)
-    send_orders(ls, [{"id": 3, "delivery_period_begin": 400, "delivery_period_end": 700}])
+    ready, min_wait = estimate(ls, 900)
+    B = math.ceil(ready + min_wait) + 40                # storing pays (its points too)
+    send_orders(ls, [{"id": 3, "delivery_period_begin": B, "delivery_period_end": B + 300}])
     kb, pm = ls.server.kb, ls.server.production
     [p] = [p for p in kb.products.values() if p.order_id == 3]
     assert any(t.params.get("store") for t in kb.tasks_of(p.tasks))    # planned so
@@ -254,17 +279,17 @@ def test_an_early_product_waits_in_the_storage_station_not_in_a_gripper():
             seen.append((gt, [r.number for r in kb.robots.values() if r.holding == wp.id]))
             shelf.append((gt, dict(ls.stations.shelf), pm.shelf.places))
         return delivered(ls, 3)(gt)
-    assert play(ls, waiting, t0=T0, steps=700)
+    assert play(ls, waiting, t0=T0, steps=1200)
     # stored soon after it was made, still there until shortly before the window
-    assert seen and seen[0][0] < T0 + 60 and seen[-1][0] > 400 - 45 - 5
+    assert seen and seen[0][0] < T0 + 60 and seen[-1][0] > B - 45 - 5
     assert all(holding == [] for _, holding in seen)              # no robot holds it
     assert all(sh == {(0, 0): p.id} and ours == {"0,0": p.id}
-               for gt, sh, ours in shelf if gt < 400 - 45)
+               for gt, sh, ours in shelf if gt < B - 45)
     st = ls.stations
     assert [(op, sh, sl) for _, op, sh, sl in st.ss_ops] == [("STORE", 0, 0), ("RETRIEVE", 0, 0)]
-    assert 400 - 45 <= st.ss_ops[1][0] < 400                       # retrieved for the window
+    assert B - 45 <= st.ss_ops[1][0] < B                           # retrieved for the window
     [(gt, oid)] = st.deliveries
-    assert oid == 3 and 400 <= gt <= 430                           # delivered as it opened
+    assert oid == 3 and B <= gt <= B + 30                           # delivered as it opened
     assert ls.order_msgs[0]["quantity_delivered_cyan"] == 1
     assert p.repairs == 0 and pm.shelf.places == {} and st.shelf == {}
 
@@ -292,8 +317,8 @@ def test_the_choice_is_made_again_when_the_product_is_finished(actual):
     kb = ls.server.kb
     [p] = [p for p in kb.products.values() if p.order_id == 3]
     assert any(t.params.get("store") for t in kb.tasks_of(p.tasks)) is (actual == "late")
-    # quick robots: every task takes 1.5 s; slow ones 30 s
-    assert play(ls, delivered(ls, 3), t0=T0, steps=2000, drive=3 if actual == "early" else 60)
+    # quick robots: every task takes 1.5 s; slow ones 60 s
+    assert play(ls, delivered(ls, 3), t0=T0, steps=3000, drive=3 if actual == "early" else 120)
     stored = ss_prepares(ls)
     assert stored == ([(0, 0), (0, 0)] if actual == "early" else [])
     [(gt, oid)] = ls.stations.deliveries
@@ -330,3 +355,23 @@ def test_a_product_brought_out_but_not_picked_up_is_taken_from_the_output():
     assert last[-1].prepare is None and ls.server.production.shelf.places == {}
     [(gt, oid)] = ls.stations.deliveries
     assert oid == 3 and 400 <= gt <= 700
+
+
+def test_a_c0_is_delivered_from_the_stock_the_storage_station_began_with():
+    """2025: six C0 products (every base x cap) are in the storage station at the start; a
+    C0 order of one of them is a RETRIEVE (-5) and a delivery, not a product to make."""
+    ls = Lockstep("rcll2025")
+    setup_2025(ls, stock=True)
+    send_orders(ls, [{"id": 3, "delivery_period_begin": int(T0) + 60,
+                      "delivery_period_end": int(T0) + 360}])
+    kb, pm = ls.server.kb, ls.server.production
+    [p] = [p for p in kb.products.values() if p.order_id == 3]
+    assert [t.kind for t in kb.tasks_of(p.tasks)] == [M.GET_WORKPIECE, M.DELIVER]
+    assert pm.shelf.place_of(p.id) == (1, 1)            # BASE_RED + CAP_BLACK's place
+    assert play(ls, delivered(ls, 3), t0=T0, steps=800)
+    st = ls.stations
+    assert [(op, sh, sl) for _, op, sh, sl in st.ss_ops] == [("RETRIEVE", 1, 1)]
+    assert [oid for _, oid in st.deliveries] == [3]
+    assert [(t.kind, t.state) for t in kb.tasks_of(p.tasks)] == [(M.GET_WORKPIECE, M.DONE),
+                                                                 (M.DELIVER, M.DONE)]
+    assert not [t for t in kb.tasks.values() if t.kind == M.MOUNT_CAP]     # nothing made

@@ -1,7 +1,7 @@
 """The storage station in a whole lockstep rcll2025 game: the simulated refbox, the
 PyBullet world, the team server and three agents running the put/get trees at C-SS.
 
-A 300 s production is too short for a product to be ready long before its window,
+A 420 s production is too short for a product to be ready long before its window,
 so the team server is told to store every product (``min_wait`` -inf): what is
 checked is the machinery on the wire and in the world, not when storing pays
 (tests/teamserver/production/test_ts_storage.py)."""
@@ -18,7 +18,7 @@ pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
 
 
 def test_a_product_goes_through_the_storage_station_and_is_delivered(tmp_path):
-    opts = GameOptions(profile="rcll2025", seed=3, setup=1.0, exploration=40.0, production=300.0,
+    opts = GameOptions(profile="rcll2025", seed=3, setup=1.0, exploration=40.0, production=420.0,
                        strategy="oracle", out=tmp_path,
                        extra={"dispatch": DispatchConfig(heartbeat_timeout=3.0),
                               "storage": StoragePolicy(min_wait=-math.inf)})
