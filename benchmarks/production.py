@@ -12,6 +12,12 @@ refbox plays the real refbox's rules (docs/refbox.md).
 
     .venv/bin/python benchmarks/production.py [--profile rcll2016|rcll2025] [--seeds 20]
                                               [--jobs 2] [--per-seed] [--json FILE]
+                                              [--variants htn,baseline] [--jsonl FILE]
+    .venv/bin/python benchmarks/production.py --profile P --from-jsonl FILE [FILE ...]
+
+``--jsonl`` appends every game's numbers to FILE as the game ends (a long run
+cut short keeps what it played); ``--from-jsonl`` prints the tables from such
+files instead of playing (the seeds and variants found there).
 
 Aims (issue 17): a mean of at least 300 production points, no game under 150,
 at least 1.5x the baseline, and no station of ours BROKEN in any game.
@@ -43,14 +49,28 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2, help="games in parallel (default 2)")
     ap.add_argument("--per-seed", action="store_true", help="also print every game")
     ap.add_argument("--json", type=Path, help="write every game's numbers here")
+    ap.add_argument("--variants", default="htn,baseline",
+                    help="team servers to play, comma separated (default htn,baseline)")
+    ap.add_argument("--jsonl", type=Path, help="append every game's numbers here as it ends")
+    ap.add_argument("--from-jsonl", type=Path, nargs="+", metavar="FILE",
+                    help="print the tables from these --jsonl files instead of playing")
     args = ap.parse_args(argv)
+    names = [v.strip() for v in args.variants.split(",") if v.strip()]
+    if not names or any(v not in VARIANTS for v in names):
+        ap.error(f"--variants: choose from {', '.join(VARIANTS)}")
+    if args.from_jsonl:
+        return from_jsonl(args.profile, args.from_jsonl, args.per_seed)
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
-    games = [GameOptions(profile=args.profile, seed=s, baseline=base, production=args.production)
-             for s in seeds for base in VARIANTS.values()]
+    games = [GameOptions(profile=args.profile, seed=s, baseline=VARIANTS[v], production=args.production)
+             for s in seeds for v in names]
     t0 = time.perf_counter()
 
     def done(i, row):
         g = games[i]
+        if args.jsonl:
+            with args.jsonl.open("a", encoding="utf-8") as f:
+                f.write(json.dumps({"profile": g.profile, "seed": g.seed, "baseline": g.baseline,
+                                    "row": row}, default=str) + "\n")
         what = row.get("error") or (f"{row['points']['production']} production pts, "
                                     f"{row['orders_delivered']} orders, "
                                     f"{broken(row)} stations broken")
@@ -63,6 +83,33 @@ def main(argv=None) -> int:
         args.json.write_text(json.dumps(rows, indent=1, default=str))
     print(render(args.profile, seeds, games, rows, wall, args.per_seed))
     return 0 if all("error" not in r for r in rows) else 1
+
+
+def from_jsonl(profile: str, files, per_seed: bool) -> int:
+    """The tables of the games stored by ``--jsonl`` (``profile``'s; a seed and variant
+    played twice: the last)."""
+    got: dict[tuple[int, bool], dict] = {}
+    for path in files:
+        try:
+            lines = Path(path).read_text(encoding="utf-8").splitlines()
+        except OSError as exc:
+            print(f"production.py: cannot read {path}: {exc}", file=sys.stderr)
+            return 2
+        for n, line in enumerate(lines, 1):
+            try:
+                item = json.loads(line)
+                if item["profile"] == profile:
+                    got[(int(item["seed"]), bool(item["baseline"]))] = item["row"]
+            except (ValueError, KeyError, TypeError):
+                print(f"production.py: {path}:{n}: not a game's line, skipped", file=sys.stderr)
+    if not got:
+        print(f"production.py: no {profile} games in {', '.join(map(str, files))}", file=sys.stderr)
+        return 1
+    keys = sorted(got)
+    seeds = sorted({s for s, _ in keys})
+    games = [GameOptions(profile=profile, seed=s, baseline=b) for s, b in keys]
+    print(render(profile, seeds, games, [got[k] for k in keys], float("nan"), per_seed))
+    return 0
 
 
 def broken(row: dict) -> int:
@@ -78,8 +125,9 @@ def render(profile, seeds, games, rows, wall, per_seed=False) -> str:
     by = {name: [r for g, r in zip(games, rows) if g.baseline == base and "error" not in r]
           for name, base in VARIANTS.items()}
     errors = sum(1 for r in rows if "error" in r)
+    wall_text = f"; {wall:.0f} s wall" if wall == wall else ""
     lines = [f"production, {profile}, {len(seeds)} seeds ({seeds[0]}..{seeds[-1]}), 3 robots, "
-             f"oracle perception; {wall:.0f} s wall" + (f"; {errors} games failed" if errors else ""),
+             f"oracle perception{wall_text}" + (f"; {errors} games failed" if errors else ""),
              "",
              f"{'team server':12} {'games':>5} {'mean prod pts':>14} {'median':>7} {'min':>5} {'max':>5} "
              f"{'>=150 pts':>10} {'orders/game':>12} {'mean score':>11} {'broken':>7} {'referee':>8}",
@@ -117,9 +165,9 @@ def render(profile, seeds, games, rows, wall, per_seed=False) -> str:
         lines.append(f"{name:12} broken: " + (", ".join(f"{k} {v}" for k, v in sorted(
             causes.get(name, {}).items())) or "none") + "; referee: " + (", ".join(
             f"{k} {v}" for k, v in sorted(refs.get(name, {}).items())) or "none"))
-    if means.get("baseline"):
+    if means.get("baseline") and means.get("htn") is not None:
         lines += ["", f"HTN / baseline (mean production points): {means['htn'] / means['baseline']:.2f}x"]
-    elif means.get("htn") is not None:
+    elif means.get("htn") is not None and means.get("baseline") is not None:
         lines += ["", "HTN / baseline: the baseline scored no production points"]
     if per_seed:
         lines += ["", f"{'seed':>4} {'htn pts':>8} {'orders':>7} {'broken':>7} {'baseline pts':>13} "
@@ -131,7 +179,9 @@ def render(profile, seeds, games, rows, wall, per_seed=False) -> str:
             cells = []
             for name in VARIANTS:
                 r = table.get(seed, {}).get(name, {})
-                if "error" in r or not r:
+                if not r:
+                    cells.append(f"{'-':>8} {'':>7} {'':>7}")           # not played
+                elif "error" in r:
                     cells.append(f"{'error':>8} {'':>7} {'':>7}")
                 else:
                     cells.append(f"{r['points']['production']:8d} {r['orders_delivered']:7d} "
