@@ -23,6 +23,8 @@ entry points (groups ``rll_bt.simulators``, ``rll_bt.teamservers``,
 - :mod:`.processes`: every part its own process on loopback sockets
   (:class:`~.processes.ProcessGame`; :mod:`.child` runs its team server,
   :mod:`.teamlog` merges what the processes logged);
+- :mod:`.external`: the same against a refbox elsewhere, the real one
+  (:class:`~.external.ExternalGame`, ``rll-bt sim --refbox external``);
 - :mod:`.recorder`, :mod:`.report`, :mod:`.plots`: what a game did, as
   ``report.json``, a table and PNGs (``messages.jsonl`` is
   :mod:`rll_bt.comm.msglog`'s);
@@ -48,7 +50,10 @@ def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
     clock = clock or WallClock()
     t0 = clock.now()
     bar = ProgressBar(options.expected_duration(), clock=clock) if progress else None
-    if options.hardware == "emulated":
+    if options.refbox == "external":
+        from .external import ExternalGame
+        game = ExternalGame(options, progress=bar, clock=clock, connect_timeout=options.refbox_timeout)
+    elif options.hardware == "emulated":
         from .hardware import HardwareGame
         game = HardwareGame(options, progress=bar, clock=clock)
     elif options.processes:

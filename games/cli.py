@@ -3,6 +3,7 @@
     rll-bt sim --seed 3                       # lockstep, headless, 2016 rules
     rll-bt sim --profile rcll2025 --out game/ # + messages.jsonl, report.json, PNGs
     rll-bt sim --processes                    # refbox, world, team server, agents as processes
+    rll-bt sim --refbox external --refbox-host H   # against a refbox that runs already (the real one)
 
 By default everything runs in one process on one simulated clock (refbox,
 world, team server and agents; messages cross an in-process bus as encoded
@@ -12,8 +13,14 @@ the wall clock, as in a real game; this process keeps the world, serving
 the agents' backends and the refbox's stations (the station link) over TCP.  The SETUP phase is shortened to
 ``--setup`` seconds (default 10): nothing happens in it in simulation.
 
+``--refbox external`` plays against a refbox that runs already (the
+league's, or ``rll-bt refbox sim``): the world serves it its stations and
+its clock, the team server and the agents play on its ports
+(:mod:`games.external`, ``docs/league.md``).
+
 Exit codes: 0 the game finished, 1 it did not, 2 bad arguments, 3 no display
-for ``--gui``.  ``rll-bt sim world`` (the world's own command) draws layouts.
+for ``--gui`` or the external refbox (or its broker) cannot be reached.
+``rll-bt sim world`` (the world's own command) draws layouts.
 
 Registered through the ``rll_bt.commands`` entry point ``games``.  The
 values of ``--perception``, ``--strategy`` and ``--localisation`` are the
@@ -62,7 +69,8 @@ def register(cli) -> None:
     cli.group("sim")
     gp = cli.group_parser("sim")
     gp.description = __doc__.split("\n\n")[2].replace("\n", " ")
-    gp.epilog = "exit codes: 0 game finished, 1 it did not, 2 bad arguments, 3 no display for --gui"
+    gp.epilog = ("exit codes: 0 game finished, 1 it did not, 2 bad arguments, 3 no display for --gui or the "
+                 "external refbox unreachable")
     g = gp.add_argument_group("game")
     g.add_argument("--profile", default=rules.DEFAULT, choices=rules.PROFILES,
                    help="rules profile (default %(default)s)")
@@ -104,6 +112,31 @@ def register(cli) -> None:
                    help="the emulated laser with --hardware emulated: urg (Hokuyo, SCIP 2.0 on a pty, "
                         "the default) or tim (SICK TiM571, CoLa on TCP)")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    g = gp.add_argument_group("a refbox elsewhere (the real one; docs/league.md)")
+    g.add_argument("--refbox", default="simulated", choices=("simulated", "external"),
+                   help="simulated: ours (default); external: a refbox that runs already at --refbox-host: "
+                        "the world serves it its stations and its clock (SimTimeSync), the team server and "
+                        "the agents play on its ports as processes (implies --processes); it draws the game")
+    g.add_argument("--refbox-host", default="127.0.0.1", metavar="HOST",
+                   help="the external refbox's host (default %(default)s)")
+    g.add_argument("--refbox-port-offset", type=int, default=0, metavar="N",
+                   help="its ports: the refbox's sim layout (TCP 4444, UDP 4444/4445, cyan 4441/4446) plus N")
+    g.add_argument("--refbox-timeout", type=float, default=180.0, metavar="S",
+                   help="seconds to wait for the refbox's stream and then for its field (default %(default)g)")
+    g.add_argument("--refbox-control", default="auto", choices=("auto", "manual"),
+                   help="auto (default): this game names the team, starts SETUP and switches to the next phase "
+                        "once the robots are up; manual: a person drives the refbox")
+    g.add_argument("--stations", default="mqtt", choices=("mqtt", "opcua"),
+                   help="how the world's stations are served to it: mqtt (default, through --mqtt) or opcua "
+                        "(a PLC per station from --opcua-base-port; start this before the refbox)")
+    g.add_argument("--mqtt", metavar="HOST:PORT", help="the broker the refbox's stations use (default: the "
+                                                       "refbox host's 1883)")
+    g.add_argument("--opcua-base-port", type=int, default=4840, metavar="PORT",
+                   help="C-BS's OPC-UA port; C-x at base+0..6, M-x at base+10..16 (default %(default)s)")
+    g.add_argument("--team", default="GRIPS", metavar="NAME",
+                   help="our team's name (default %(default)s; the external refbox's llsfrb/game/teams must list it)")
+    g.add_argument("--key", default="rll-bt-sim-key", metavar="KEY",
+                   help="our team's crypto key (default %(default)s; llsfrb/game/crypto-keys/NAME)")
     g = gp.add_argument_group("watching (Foxglove, see README)")
     g.add_argument("--record", type=Path, metavar="FILE.mcap",
                    help="record the game as MCAP: every refbox and team-server message, poses, scans, trees, "
@@ -161,7 +194,12 @@ def options_from(args):
                            hz=args.hz, laser_rate=args.laser_rate, localisation=args.localisation,
                            baseline=args.baseline, record=args.record, live=args.live,
                            record_camera=args.record_camera, view=args.view, speed=args.speed,
-                           game=args.game, save_game=args.save_game)
+                           game=args.game, save_game=args.save_game,
+                           refbox=args.refbox, refbox_host=args.refbox_host,
+                           refbox_port_offset=args.refbox_port_offset, refbox_control=args.refbox_control,
+                           refbox_timeout=args.refbox_timeout,
+                           stations=args.stations, mqtt=args.mqtt, opcua_base_port=args.opcua_base_port,
+                           team_name=args.team, key=args.key)
     except ValueError as exc:
         raise UserError(str(exc)) from None
 
@@ -172,6 +210,8 @@ def run(args) -> int:
 
     from . import play
     options = options_from(args)
+    if options.refbox == "external":
+        options.processes = True
     if options.processes and (options.live is not None or options.view is not None):
         raise UserError("--live and --view serve a lockstep game; with --processes give --record (every process "
                         "records its part, merged into one file at the end) and replay it with rll-bt view FILE",

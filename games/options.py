@@ -26,6 +26,9 @@ UNTIL = ("exploration", "end")
 PUBLISHED = {"perception": (SIMULATORS, "simulator"), "strategy": (TEAMSERVERS, "teamserver"),
              "localisation": ("rll_bt.nodes", None)}
 HARDWARE = ("none", "emulated")
+REFBOXES = ("simulated", "external")
+CONTROLS = ("auto", "manual")
+STATIONS = ("mqtt", "opcua")
 LASERS = ("urg", "tim")
 TEAM_NAME = "GRIPS"
 TEAM_KEY = "rll-bt-sim-key"
@@ -70,6 +73,15 @@ class GameOptions:
     view: int | None = None            # port of the live page (games.view; 0: any free)
     speed: float | None = None         # game seconds per wall second; 0: as fast as possible;
                                        # None: real time when watched (gui, live, view), else as fast as possible
+    # a refbox elsewhere (``refbox="external"``, :mod:`games.external`)
+    refbox: str = "simulated"
+    refbox_host: str = "127.0.0.1"
+    refbox_port_offset: int = 0        # its ports: the refbox's "sim" layout moved by this
+    refbox_control: str = "auto"       # "auto": this game names the team and switches the phases
+    stations: str = "mqtt"             # how the world's stations are served to it
+    mqtt: str | None = None            # the broker ("HOST:PORT"; default the refbox host's 1883)
+    opcua_base_port: int = 4840
+    refbox_timeout: float = 180.0      # s to wait for the refbox and its field
     game: Path | None = None           # a stored game to play (its field, orders, ring setup, down periods)
     save_game: Path | None = None      # write the game in that form at its start
     extra: dict = field(default_factory=dict)
@@ -85,6 +97,17 @@ class GameOptions:
         for name, allowed in (("hardware", HARDWARE), ("laser", LASERS)):
             if getattr(self, name) not in allowed:
                 raise ValueError(f"{name} must be one of {', '.join(allowed)}, not {getattr(self, name)!r}")
+        for name, allowed in (("refbox", REFBOXES), ("refbox_control", CONTROLS), ("stations", STATIONS)):
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"{name} must be one of {', '.join(allowed)}, not {getattr(self, name)!r}")
+        if not self.refbox_timeout > 0:
+            raise ValueError(f"refbox_timeout must be positive, not {self.refbox_timeout}")
+        if not 0 <= int(self.refbox_port_offset) <= 60000:
+            raise ValueError(f"refbox_port_offset must be 0..60000, not {self.refbox_port_offset}")
+        if self.refbox == "external" and (self.game is not None or self.save_game is not None):
+            raise ValueError("a refbox elsewhere draws its own game: no --game or --save-game")
+        if self.refbox == "external" and self.hardware != "none":
+            raise ValueError("--hardware emulated plays against the simulated refbox only")
         for name, (group, field_name) in PUBLISHED.items():
             plugin = getattr(self, field_name) if field_name else None
             try:
@@ -116,6 +139,12 @@ class GameOptions:
     @property
     def rules(self):
         return rules.profile(self.profile)
+
+    def external(self) -> dict:
+        """The simulator's ``external`` arguments (``refbox="external"``)."""
+        return {"host": self.refbox_host, "port": 4444 + int(self.refbox_port_offset),
+                "control": self.refbox_control, "stations": self.stations, "broker": self.mqtt,
+                "opcua_base_port": self.opcua_base_port, "timeout": self.refbox_timeout}
 
     def stored(self) -> dict:
         """The stored-game arguments of the simulator's factory."""

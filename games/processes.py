@@ -106,16 +106,11 @@ class ProcessGame:
         self._tmp = tempfile.TemporaryDirectory(prefix="rll-bt-game-")
         self.dir = Path(o.out) if o.out is not None else Path(self._tmp.name)
         self.dir.mkdir(parents=True, exist_ok=True)
-        self.sim = load_simulator(o.simulator)(
-            profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key, perception=o.perception,
-            gui=o.gui, phases=o.phases(), world_step=o.world_step, robot_options={"laser_rate": o.laser_rate},
-            refbox="process", **o.stored())
+        self.sim = self._open_simulation()
         self.world, self.refbox = self.sim.world, self.sim.refbox
         self.clock = self.world.clock
         self.time_map = WallToSim()
-        p = free_ports(6)
-        self.layout = Layout("game", public=PeerPorts(send=p[0], recv=p[1]), cyan=PeerPorts(send=p[2], recv=p[3]),
-                             magenta=PeerPorts(send=p[4], recv=p[5]), stream=-1)
+        self.layout = self._refbox_layout()
         self.robots = list(range(1, o.robots + 1))
         self.backends = {n: self.world.backend(TEAM, n) for n in self.robots}
         # the remote backend's serving end, found through its entry point like the agents' end
@@ -146,6 +141,29 @@ class ProcessGame:
             self.close()
             raise
 
+    #: where the team server and the agents send to the refbox (it broadcasts back)
+    refbox_host = BROADCAST
+
+    def _open_simulation(self):
+        """The world, and the simulated refbox to run as a process."""
+        o = self.options
+        return load_simulator(o.simulator)(
+            profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key, perception=o.perception,
+            gui=o.gui, phases=o.phases(), world_step=o.world_step, robot_options={"laser_rate": o.laser_rate},
+            refbox="process", **o.stored())
+
+    def _refbox_layout(self) -> Layout:
+        """The refbox's UDP ports (the refbox's view): free ones for the refbox process."""
+        p = free_ports(6)
+        return Layout("game", public=PeerPorts(send=p[0], recv=p[1]), cyan=PeerPorts(send=p[2], recv=p[3]),
+                      magenta=PeerPorts(send=p[4], recv=p[5]), stream=-1)
+
+    def _start_refbox(self) -> None:
+        """The refbox process, up before anything else (the recorder needs its truth)."""
+        self._spawn("refbox", [sys.executable, "-c", CLI_MAIN, *self.refbox.command(
+            host=BROADCAST, layout=self.layout, snapshot=self.refbox_file, message_log=self._refbox_log)])
+        self._wait_for(self.refbox.ready, "the refbox")
+
     # -- children ----------------------------------------------------------------------------
     def _spawn(self, name: str, cmd: list[str]) -> None:
         log = open(self.dir / f"{name}.log", "a")  # noqa: SIM115 - closed with the game
@@ -163,14 +181,12 @@ class ProcessGame:
             old.unlink(missing_ok=True)
         for name in ("refbox", "teamserver", *(f"agent{n}" for n in self.robots)):
             (self.dir / f"{name}.log").unlink(missing_ok=True)
-        self._spawn("refbox", [sys.executable, "-c", CLI_MAIN, *self.refbox.command(
-            host=BROADCAST, layout=self.layout, snapshot=self.refbox_file, message_log=self._refbox_log)])
-        self._wait_for(self.refbox.ready, "the refbox")
+        self._start_refbox()
         self.recorder = Recorder(self.world, self.refbox, TEAM, self.robots, o.sample_period,
                                  snapshot=self.snapshot)
         robot = {ch: (self.layout.robot(ch).send, self.layout.robot(ch).recv) for ch in ("public", "cyan", "magenta")}
         self._ts_cfg = {
-            "profile": o.profile, "team": o.team_name, "key": o.key, "refbox_host": BROADCAST,
+            "profile": o.profile, "team": o.team_name, "key": o.key, "refbox_host": self.refbox_host,
             "ports": {ch: [robot[ch][0], robot[ch][1]] for ch in robot}, "listen": self._ts_port,
             "state": str(state), "strategy": o.strategy, "seed": o.seed, "baseline": o.baseline,
             "map_period": o.map_period, "snapshot": str(self.snapshot_file), "teamserver": o.teamserver,
@@ -209,7 +225,7 @@ class ProcessGame:
         self._spawn(f"agent{n}", [
             sys.executable, "-c", CLI_MAIN, "agent", "--robot", str(n), "--team", o.team_name,
             "--key", o.key, "--profile", o.profile, *self._agent_backend_args(n),
-            "--teamserver", f"127.0.0.1:{self._ts_port}", "--refbox-host", BROADCAST, "--layout", "sim",
+            "--teamserver", f"127.0.0.1:{self._ts_port}", "--refbox-host", self.refbox_host, "--layout", "sim",
             "--public-recv", str(pub.recv), "--public-send", str(pub.send),
             "--team-recv", str(team.recv), "--team-send", str(team.send), *start, "--hz", str(o.hz),
             "--localisation", o.localisation, "-q"] + (["--first-start"] if first_start else []) + self._record_args(n))
@@ -268,6 +284,10 @@ class ProcessGame:
         except (OSError, ValueError):
             pass
         return self._snap
+
+    def _dead(self) -> list[str]:
+        """The parts without which the game cannot go on that are gone."""
+        return [name for name in ("refbox", "teamserver") if name not in self._alive()]
 
     def _alive(self) -> list[str]:
         return [name for name, p in self.procs.items() if p.poll() is None]
@@ -354,7 +374,7 @@ class ProcessGame:
             limit = o.expected_duration() + o.rules.phases.overtime + 60.0
         end = self.clock.now() + limit
         while self.clock.now() < end and not self.finished():
-            dead = [name for name in ("refbox", "teamserver") if name not in self._alive()]
+            dead = self._dead()
             if dead:
                 self.recorder.note(f"the {dead[0]} process died", log=str(self.dir / f"{dead[0]}.log"))
                 break

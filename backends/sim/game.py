@@ -12,8 +12,11 @@ stations over the station link (:mod:`backends.sim.refbox.link`) to a
 refbox of its own process, ``rll-bt refbox sim --world remote:HOST:PORT``
 (the command line :meth:`RefboxOverLink.command` gives), and reads the game
 from the snapshot file that process rewrites (:mod:`backends.sim.refbox.view`).
-Robots are :class:`~backends.sim.backend.SimBackend`.  Times are seconds of
-the world's clock; game times are the refbox's.
+With ``refbox="external"`` (``rll-bt sim --refbox external``) the refbox
+runs elsewhere, the real one or ours: :mod:`.external` builds the world on
+its field, serves it the stations and its clock.  Robots are
+:class:`~backends.sim.backend.SimBackend`.  Times are seconds of the
+world's clock; game times are the refbox's.
 """
 from __future__ import annotations
 
@@ -31,6 +34,7 @@ from rll_bt.contracts import (
     Tally,
     World,
 )
+from rll_bt.errors import UserError
 from rll_bt.plugins import offers
 
 from .backend import SimBackend
@@ -39,7 +43,7 @@ from .refbox.view import GameView, SnapshotView
 from .world import PERCEPTION_MODES
 from .world import World as Physics
 
-REFBOX_MODES = ("here", "process")
+REFBOX_MODES = ("here", "process", "external")
 SNAPSHOT_PERIOD = 0.25       # s between two snapshots of a refbox process
 
 
@@ -219,8 +223,6 @@ def load_stored(path: str | Path, profile: str):
     """The stored game at ``path`` for a world of ``profile``; a
     :class:`~rll_bt.errors.UserError` naming the file when it cannot be read
     or plays another profile."""
-    from rll_bt.errors import UserError
-
     from .stored import StoredGameError, load_game
     try:
         stored = load_game(str(path))
@@ -236,15 +238,29 @@ def load_stored(path: str | Path, profile: str):
 def open_game(profile: str = "rcll2016", seed: int = 0, *, team_name: str, key: str, perception: str = "oracle",
               gui: bool = False, phases: dict | None = None, world_step: float = 0.05,
               robot_options: dict | None = None, refbox: str = "here", stored_game: str | Path | None = None,
-              save_game: str | Path | None = None) -> Simulation:
+              save_game: str | Path | None = None, external: dict | None = None) -> Simulation:
     """Entry point ``rll_bt.simulators: pybullet``: a :class:`PyBulletWorld` and
-    its refbox (``refbox``: "here" or "process", see the module doc);
+    its refbox (``refbox``: "here", "process" or "external", see the module
+    doc; "external": ``external`` holds :func:`.external.open_external`'s
+    keywords, the refbox's address, its control, the stations' wire);
     publishes its perception modes (``choices["perception"]``).
     ``stored_game``: a stored game's file (:mod:`.stored`) whose field the
     world takes and whose orders, ring setup and down periods the refbox
     plays; ``save_game``: where the refbox writes its game as one."""
     if refbox not in REFBOX_MODES:
         raise ValueError(f"refbox must be one of {', '.join(REFBOX_MODES)}, not {refbox!r}")
+    if refbox == "external":
+        from rll_bt import rules
+
+        from .external import open_external
+        if stored_game is not None or save_game is not None:
+            raise UserError("a refbox elsewhere draws its own game", where="--game/--save-game")
+
+        def build(layout):
+            return PyBulletWorld(profile, seed, perception=perception, gui=gui, world_step=world_step,
+                                 robot_options=robot_options, layout=layout)
+        world, made = open_external(build, rules.profile(profile), team_name=team_name, **(external or {}))
+        return Simulation(world, made)
     stored = load_stored(stored_game, profile) if stored_game is not None else None
     world = PyBulletWorld(profile, seed, perception=perception, gui=gui, world_step=world_step,
                           robot_options=robot_options, layout=stored.layout(seed) if stored is not None else None)

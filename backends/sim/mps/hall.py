@@ -38,18 +38,23 @@ class MachineHall:
 
     ``feeders`` {machine: (colour 1, colour 2)} overrides the profile's
     RS feeders; ``storage`` the SS contents at the start (default
-    :data:`DEFAULT_STORAGE` on every SS)."""
+    :data:`DEFAULT_STORAGE` on every SS); ``shelves`` {CS: carrier}: keep
+    that CS's shelf slots filled with cap carriers (a field's referee does,
+    where no simulated refbox puts them there), each one taken replaced at
+    the next update."""
 
     def __init__(self, world, machines: Iterable[str] | None = None, *,
                  durations: Durations | None = None,
                  feeders: dict[str, tuple[str, str]] | None = None,
-                 storage: dict[tuple[int, int], Product] | None = None):
+                 storage: dict[tuple[int, int], Product] | None = None,
+                 shelves: dict[str, Product] | None = None):
         self.world = world
         names = sorted(machines) if machines is not None else list(world.machines)
         unknown = [m for m in names if m not in world.machines]
         if unknown:
             raise KeyError(f"no station {', '.join(unknown)} in the world "
                            f"(known: {', '.join(world.machines)})")
+        self.shelves = dict(shelves or {})         # CS -> the cap carrier its shelf slots are kept filled with
         self._inbox: queue.SimpleQueue = queue.SimpleQueue()
         self._listeners: list[Callable[[Feedback], None]] = []
         profile = getattr(world, "profile", None)
@@ -99,6 +104,10 @@ class MachineHall:
             self.machines[machine].command(command, now)
         for m in self.machines.values():
             m.update(now)
+        for name, carrier in self.shelves.items():
+            for slot in self.world.station(name).slots:
+                if slot.startswith("shelf") and self.world.workpiece_at(name, slot) is None:
+                    self.world.spawn_workpiece(name, slot, carrier.base, carrier.rings, carrier.cap)
 
 
 __all__ = ["DEFAULT_STORAGE", "MachineHall", "default_feeders"]

@@ -7,7 +7,9 @@ SimTimeSync messages (COMP_ID 2000, MSG_TYPE 327: ``sim_time``,
 4444, never encrypted).  Its game clock then advances by the differences
 of ``sim_time`` times ``llsfrb/simulation/speedup`` (keep that at 1.0), and
 with ``time-sync/estimate-time: true`` it extrapolates between messages
-with ``real_time_factor``.  Send from before the game is RUNNING on: the
+with ``real_time_factor`` and never goes back, so it gains on a world that
+stalls (seen: 86 s ahead after 8 minutes on a loaded machine); with
+``false`` (what docs/league.md configures) its time is the last message's.  Send from before the game is RUNNING on: the
 refbox takes the first game-time step from the last time it saw.
 
 :class:`TimeSync` is called from the world's loop with the world's time; it
