@@ -26,7 +26,8 @@ from games import GameOptions
 from games.external import ExternalGame
 from rll_bt.rules import profile
 
-pytestmark = pytest.mark.slow  # a whole game: `make test-fast` leaves it out
+pytestmark = [pytest.mark.slow,  # a whole game: `make test-fast` leaves it out
+              pytest.mark.timeout(1500)]  # 255 s at a load of 50 on 2 cores
 
 CLI_MAIN = "import sys; from rll_bt.cli import main; sys.exit(main())"
 TEAM, KEY = "GRIPS", "external-test-key"
