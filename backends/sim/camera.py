@@ -7,7 +7,11 @@
   :class:`backends.sim.render.View` (BGR image and segmentation) from any
   camera pose: ``eye`` field frame (metres), ``rot`` optical-frame axes in
   the field frame;
-- ``world.camera_image(robot, camera)``: the robot's camera frame;
+- ``world.camera_image(robot, camera)``: the robot's camera frame (at most
+  ``camera_rate`` new frames per second), rendered
+  at full resolution where stations can be detected and reused while
+  nothing in view changes (:mod:`.sparse`; ``world.sparse_camera = False``
+  renders every frame whole);
 - ``world.hall``: the hall around the field (walls, ceiling, floor), built
   on the first view (oracle-only games never pay for it);
   ``world.hall.restyle(rng)`` gives it other textures;
@@ -26,7 +30,7 @@ import numpy as np
 
 from rll_bt.backend import CameraImage
 
-from . import sensors
+from . import sensors, sparse
 from .fieldgeom import floor_rect
 from .hall import Hall
 from .render import EMISSION, Lighting, View, render_view, seg_value
@@ -40,6 +44,7 @@ class CameraViews:
     _hall: Hall | None = None
     _emission: dict[str, tuple[float, float, float]] | None = None
     texture_dir: str | None = None
+    sparse_camera: bool = True
 
     @property
     def lighting(self) -> Lighting:
@@ -79,21 +84,34 @@ class CameraViews:
                 out[seg_value(st.body, link)] = table[colour]
         return out
 
-    def render_view(self, eye, rot: np.ndarray, intrinsics, lighting: Lighting | None = None) -> View:
-        """A view from any camera pose (see the module)."""
+    def render_view(self, eye, rot: np.ndarray, intrinsics, lighting: Lighting | None = None,
+                    window: tuple[int, int, int, int] | None = None, stations=None) -> View:
+        """A view from any camera pose (see the module); ``window`` (x, y, w, h)
+        renders only that part of the image; ``stations`` (names), when given,
+        are the only stations drawn (the others cannot show in this view)."""
         self.hall                                   # noqa: B018  (built on the first view)
         self._sync_bodies()
         self._show_lights()
-        return render_view(self.cid, eye, rot, intrinsics, lighting or self.lighting, self._emitters())
+        if not self.gui:                            # a window on the screen would flicker
+            for st in self.stations.values():
+                st.set_visible(self.cid, stations is None or st.name in stations)
+        return render_view(self.cid, eye, rot, intrinsics, lighting or self.lighting, self._emitters(), window)
 
     def camera_image(self, robot, camera: str = "front"):
-        """The robot's camera frame (one render per robot per sim instant)."""
+        """The robot's camera frame (one per robot per sim instant, and at most
+        ``camera_rate`` a second)."""
         last = robot.last_image
-        if last is not None and last.stamp == self.time and last.camera == camera:
+        rate = robot.config.camera_rate
+        if last is not None and last.camera == camera and (
+                last.stamp == self.time or (rate and 0.0 <= self.time - last.stamp < 1.0 / rate - 1e-9)):
             return last
         intr, extr = sensors.camera_model(robot)
         self._sync_bodies()
         eye, rot = sensors.camera_pose(robot, extr)
-        view = self.render_view(eye, rot, intr)
-        robot.last_image = CameraImage(self.time, view.image, intr, extr, camera)
+        if self.sparse_camera:
+            robot.camera_frame = sparse.sparse_frame(self, robot, eye, rot, intr, robot.camera_frame)
+            image = robot.camera_frame[1]
+        else:
+            image = self.render_view(eye, rot, intr).image
+        robot.last_image = CameraImage(self.time, image, intr, extr, camera)
         return robot.last_image

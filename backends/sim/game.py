@@ -45,13 +45,18 @@ from .world import World as Physics
 
 REFBOX_MODES = ("here", "process", "external")
 SNAPSHOT_PERIOD = 0.25       # s between two snapshots of a refbox process
+#: frames a second a robot's camera delivers in a game with rendered perception (the detectors
+#: run on each: at 2 Hz blinking a light is still seen on and off)
+GAME_CAMERA_RATE = 5.0
 
 
 class PyBulletWorld(World):
     """The :class:`rll_bt.contracts.World` of a PyBullet world (``pybullet``:
     the :class:`~backends.sim.world.World` itself, for tests that move
     robots and workpieces by hand).  ``robot_options`` are
-    :class:`~backends.sim.robot.RobotConfig` fields for every robot."""
+    :class:`~backends.sim.robot.RobotConfig` fields for every robot (with
+    rendered perception a camera delivers :data:`GAME_CAMERA_RATE` frames a
+    second unless ``camera_rate`` says otherwise)."""
 
     def __init__(self, profile: str = "rcll2016", seed: int = 0, *, perception: str = "oracle", gui: bool = False,
                  world_step: float = 0.05, robot_options: dict | None = None, layout=None):
@@ -60,6 +65,8 @@ class PyBulletWorld(World):
         self.clock = self.pybullet.clock
         self.seed = int(seed)
         self.robot_options = dict(robot_options or {})
+        if perception == "rendered":
+            self.robot_options.setdefault("camera_rate", GAME_CAMERA_RATE)
 
     def step(self, dt: float) -> None:
         self.pybullet.step(dt)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -52,7 +53,11 @@ EMISSION = {"GREEN": (0.28, 1.90, 0.38), "YELLOW": (2.10, 1.45, 0.12), "RED": (2
 
 def kelvin_rgb(kelvin: float) -> np.ndarray:
     """(R, G, B) of a black body at ``kelvin`` (1500-12000 K), largest channel 1."""
-    k = float(np.clip(kelvin, _KELVIN[0], _KELVIN[-1]))
+    return _kelvin_rgb(float(np.clip(kelvin, _KELVIN[0], _KELVIN[-1]))).copy()
+
+
+@lru_cache(maxsize=64)
+def _kelvin_rgb(k: float) -> np.ndarray:
     rgb = np.array([np.interp(k, _KELVIN, _KELVIN_RGB[:, i]) for i in range(3)])
     return rgb / rgb.max()
 
@@ -136,30 +141,41 @@ def seg_value(body: int, link: int) -> int:
 
 
 def render_view(cid: int, eye, rot: np.ndarray, intr: CameraIntrinsics, lighting: Lighting = Lighting(),
-                emitters: dict[int, tuple[float, float, float]] | None = None) -> View:
+                emitters: dict[int, tuple[float, float, float]] | None = None,
+                window: tuple[int, int, int, int] | None = None) -> View:
     """Render the view from ``eye`` with rotation ``rot`` (see the module).
     ``emitters`` maps segmentation values (:func:`seg_value`) of lit parts
-    to their linear emission (R, G, B)."""
+    to their linear emission (R, G, B).  With ``window`` (x, y, w, h in
+    pixels of the ``intr`` image) only that part of the image is rendered
+    (an off-centre frustum), pixel for pixel as the whole view would show it."""
     p = pybullet()
     eye = np.asarray(eye, float)
     view = p.computeViewMatrix(eye.tolist(), (eye + rot[:, 2]).tolist(), (-rot[:, 1]).tolist(),
                                physicsClientId=cid)
-    vfov = math.degrees(2.0 * math.atan(intr.height / (2.0 * intr.fy)))
-    proj = p.computeProjectionMatrixFOV(vfov, intr.width / intr.height, NEAR, FAR, physicsClientId=cid)
+    if window is None:
+        width, height = intr.width, intr.height
+        vfov = math.degrees(2.0 * math.atan(intr.height / (2.0 * intr.fy)))
+        proj = p.computeProjectionMatrixFOV(vfov, intr.width / intr.height, NEAR, FAR, physicsClientId=cid)
+    else:
+        x, y, width, height = (int(v) for v in window)
+        proj = p.computeProjectionMatrix(NEAR * (x - intr.cx) / intr.fx, NEAR * (x + width - intr.cx) / intr.fx,
+                                         NEAR * (intr.cy - y - height) / intr.fy, NEAR * (intr.cy - y) / intr.fy,
+                                         NEAR, FAR, physicsClientId=cid)
     _, _, rgba, _, seg = p.getCameraImage(
-        intr.width, intr.height, view, proj, shadow=0, renderer=p.ER_TINY_RENDERER,
+        width, height, view, proj, shadow=0, renderer=p.ER_TINY_RENDERER,
         lightDirection=lighting.direction, lightColor=[1.0, 1.0, 1.0], lightAmbientCoeff=lighting.ambient,
         lightDiffuseCoeff=lighting.intensity, lightSpecularCoeff=lighting.specular,
         flags=p.ER_SEGMENTATION_MASK_OBJECT_AND_LINKINDEX, physicsClientId=cid)
-    rgb = np.reshape(np.asarray(rgba, dtype=np.uint8), (intr.height, intr.width, 4))[:, :, :3]
-    seg = np.reshape(np.asarray(seg, dtype=np.int64), (intr.height, intr.width))
-    return View(develop(rgb, seg, lighting, emitters or {}), seg)
+    rgb = np.reshape(np.asarray(rgba, dtype=np.uint8), (height, width, 4))[:, :, :3]
+    seg = np.reshape(np.asarray(seg, dtype=np.int64), (height, width))
+    return View(develop(rgb, seg, lighting, emitters or {}, intr.width), seg)
 
 
 def develop(rgb: np.ndarray, seg: np.ndarray, lighting: Lighting,
-            emitters: dict[int, tuple[float, float, float]]) -> np.ndarray:
+            emitters: dict[int, tuple[float, float, float]], frame_width: int | None = None) -> np.ndarray:
     """Steps 2-5 of the module on a TinyRenderer image (RGB uint8) and its
-    segmentation; returns BGR uint8."""
+    segmentation; returns BGR uint8.  ``frame_width``: the width of the
+    whole view when this is a window of it (the bloom's size goes by it)."""
     img = rgb.astype(np.float32) * np.float32(1.0 / 255.0)
     img *= kelvin_rgb(lighting.kelvin).astype(np.float32)                  # reflected light: the illuminant
     glow = None
@@ -180,19 +196,19 @@ def develop(rgb: np.ndarray, seg: np.ndarray, lighting: Lighting,
             glow[lit] = emission
     img *= np.float32(lighting.exposure)
     if glow is not None and lighting.bloom > 0:
-        img += lighting.bloom * lighting.exposure * _bloom(glow)
+        img += lighting.bloom * lighting.exposure * _bloom(glow, frame_width or glow.shape[1])
     img *= (1.0 / kelvin_rgb(lighting.white_balance)).astype(np.float32) * np.float32(
         kelvin_rgb(lighting.white_balance)[1])                              # white balance, green kept
     out = np.clip(img * 255.0 + 0.5, 0, 255).astype(np.uint8)
     return np.ascontiguousarray(out[:, :, ::-1])
 
 
-def _bloom(glow: np.ndarray) -> np.ndarray:
+def _bloom(glow: np.ndarray, frame_width: int) -> np.ndarray:
     """Lens glare around emitting pixels: two Gaussians (a tight halo and a
-    wide veil), their widths in proportion to the image size."""
+    wide veil), their widths in proportion to the view's width."""
     h, w = glow.shape[:2]
     small = cv2.resize(glow, (max(1, w // 4), max(1, h // 4)), interpolation=cv2.INTER_AREA)
-    s = w / 640.0
+    s = frame_width / 640.0
     halo = cv2.GaussianBlur(small, (0, 0), 0.9 * s)
     veil = cv2.GaussianBlur(small, (0, 0), 4.0 * s)
     return cv2.resize(0.7 * halo + 0.3 * veil, (w, h), interpolation=cv2.INTER_LINEAR)

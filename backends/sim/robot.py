@@ -59,6 +59,7 @@ class RobotConfig:
     camera_height: int = 240
     camera_hfov: float = ROBOT.camera_hfov
     camera_pitch: float = 0.0             # rad, positive looks down
+    camera_rate: float | None = None      # Hz; faster calls return the latest frame (None: no limit)
     # oracle perception
     camera_range: float = ROBOT.camera_range
     tag_max_angle: float = math.radians(70.0)   # tag normal to viewing ray
@@ -128,6 +129,7 @@ class SimRobot:
     holding: int | None = None            # id of the workpiece in the gripper
     last_scan: object = None
     last_image: object = None
+    camera_frame: tuple | None = None     # (what it showed, image) of the last sparse frame
     gripper: Gripper = field(init=False)
 
     def __post_init__(self):

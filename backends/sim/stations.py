@@ -99,6 +99,8 @@ class Station:
         self.tower_links: set[int] = set()           # links of the signal tower (segments, core, housing)
         self.unlit_rgba = dict(RGBA_OFF)             # colour of each segment while unlit
         self._shown: dict[str, bool] = {}
+        self._colours: dict[int, tuple] | None = None  # each link's colour, once the station was hidden
+        self.visible = True                             # drawn in camera views (see set_visible)
         self._c, self._s = math.cos(self.pose.theta), math.sin(self.pose.theta)
 
     # -- geometry -----------------------------------------------------------
@@ -187,13 +189,10 @@ class Station:
         """Colour the tower segments for time ``t`` (only segments that change)."""
         if self.body is None:
             return
-        p = pybullet()
         for c, state in self.lights.items():
             on = blink_on(state, t, blink_hz)
             if self._shown.get(c) != on:
-                p.changeVisualShape(self.body, self._light_links[c],
-                                    rgbaColor=list(RGBA_ON[c] if on else self.unlit_rgba[c]),
-                                    physicsClientId=cid)
+                self._paint(cid, self._light_links[c], RGBA_ON[c] if on else self.unlit_rgba[c])
                 self._shown[c] = on
 
     def set_unlit_colours(self, cid: int, rgba: dict[str, tuple]) -> None:
@@ -203,8 +202,28 @@ class Station:
             return
         for c, on in self._shown.items():
             if not on:
-                pybullet().changeVisualShape(self.body, self._light_links[c], rgbaColor=list(self.unlit_rgba[c]),
-                                             physicsClientId=cid)
+                self._paint(cid, self._light_links[c], self.unlit_rgba[c])
+
+    def _paint(self, cid: int, link: int, rgba) -> None:
+        """Give ``link`` the colour ``rgba`` (shown when the station is visible)."""
+        if self._colours is not None:
+            self._colours[link] = tuple(rgba)
+        if self.visible:
+            pybullet().changeVisualShape(self.body, link, rgbaColor=list(rgba), physicsClientId=cid)
+
+    def set_visible(self, cid: int, visible: bool) -> None:
+        """Show or hide the whole station in camera views (a hidden one costs a
+        renderer nothing: :mod:`backends.sim.sparse` hides the stations a view
+        cannot show).  Colours set while hidden apply when it shows again."""
+        if self.body is None or visible == self.visible:
+            return
+        p = pybullet()
+        if self._colours is None:
+            self._colours = {int(d[1]): tuple(d[7]) for d in p.getVisualShapeData(self.body, physicsClientId=cid)}
+        for link, rgba in self._colours.items():
+            p.changeVisualShape(self.body, link, rgbaColor=list(rgba) if visible else [0.0, 0.0, 0.0, 0.0],
+                                physicsClientId=cid)
+        self.visible = visible
 
     # -- body ---------------------------------------------------------------
     def build(self, cid: int, shapes: ShapeCache, texture_dir: str | None = None) -> int:
@@ -270,4 +289,5 @@ class Station:
             tex = p.loadTexture(texture_file(self.tag_id(side), texture_dir), physicsClientId=cid)
             p.changeVisualShape(self.body, link, textureUniqueId=tex, physicsClientId=cid)
         self._shown = dict.fromkeys(LIGHT_COLORS, False)
+        self._colours, self.visible = None, True
         return self.body

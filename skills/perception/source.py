@@ -44,6 +44,7 @@ class CameraPerception:
         self.read_lights = read_lights
         self.full_frame_lights = full_frame_lights
         self._last: tuple[float, Detections] | None = None
+        self._last_image = None
 
     @property
     def reader(self):
@@ -62,8 +63,15 @@ class CameraPerception:
             return None
         if self._last is not None and self._last[0] == frame.stamp:
             return self._last[1]
-        dets = self.process(frame)
+        if self._last is not None and self._last_image is frame.image:
+            # the very same image as last time (a camera that hands out its last frame while
+            # nothing in view changed): the same detections, stamped now
+            last = self._last[1]
+            dets = Detections(frame.stamp, last.tags, last.lights, frame.extrinsics)
+        else:
+            dets = self.process(frame)
         self._last = (frame.stamp, dets)
+        self._last_image = frame.image
         return dets
 
     def process(self, frame) -> Detections:

@@ -99,3 +99,20 @@ def test_service_on_the_sim_backend_reads_station_and_blinking_light(world, read
     assert r.pose.distance_to(st.pose) < 0.05 and r.zone == st.zone and r.rotation_deg == st.rotation % 360
     assert r.pattern.as_dict() == {"green": "BLINK", "yellow": "OFF", "red": "ON"}
     assert seen and seen[-1].machine == STATION
+
+
+def test_the_same_frame_again_is_not_detected_again(world, reader):
+    """A camera handing out its last frame (nothing in view changed) gets that
+    frame's detections, stamped now, without running the detectors again."""
+    from rll_bt.backend import open_backend
+    backend = open_backend("sim", world=world, robot=("CYAN", 1))
+    source = CameraPerception(backend, world.profile, reader=reader)
+    look_at_face(world, STATION, "input", 1.2, 0)
+    first = source.detections()
+    assert first.tags
+    calls = []
+    source.process = lambda frame: calls.append(frame)
+    world.step(0.1)
+    again = source.detections()
+    assert again.stamp == world.time and again.stamp > first.stamp
+    assert again.tags == first.tags and again.lights == first.lights and not calls
