@@ -6,11 +6,14 @@ frames (time stamped, from one station) and calls a light
 
 - ON when it was on in at least ``on_ratio`` of the window,
 - OFF when it was on in at most ``1 - on_ratio`` of it,
-- BLINK when it changed state at least ``min_toggles`` times in between,
+- BLINK when, in between, it changed state at least ``min_toggles`` times
+  and was seen on and off in at least ``min_phase_frames`` frames each,
 
-and UNKNOWN until the window spans ``min_span`` seconds.  A light that is
-on about half of the time but never toggled (a detector flip-flopping on
-one bad frame) stays UNKNOWN rather than guessed.
+and UNKNOWN until the window spans ``min_span`` seconds.  Frames without a
+reading (the tower not found, or read unsure) are not in the window: the
+filter holds its call over them.  A light that is on about half of the
+time but never toggled, or that toggled around one odd frame (a detector
+flip-flopping on one bad reading), stays UNKNOWN rather than guessed.
 """
 from __future__ import annotations
 
@@ -46,9 +49,10 @@ class LightPattern:
 
 class LightFilter:
     def __init__(self, window: float = 2.0, min_span: float = 1.2, on_ratio: float = 0.85,
-                 min_toggles: int = 2, max_frames: int = 200):
+                 min_toggles: int = 2, max_frames: int = 200, min_phase_frames: int = 2):
         self.window, self.min_span = window, min_span
         self.on_ratio, self.min_toggles = on_ratio, min_toggles
+        self.min_phase_frames = min_phase_frames
         self._frames: deque[tuple[float, int]] = deque(maxlen=max_frames)
 
     def add(self, stamp: float, state: int) -> None:
@@ -76,7 +80,7 @@ class LightFilter:
                 out.append(ON)
             elif ratio <= 1.0 - self.on_ratio:
                 out.append(OFF)
-            elif toggles >= self.min_toggles:
+            elif toggles >= self.min_toggles and min(sum(seq), len(seq) - sum(seq)) >= self.min_phase_frames:
                 out.append(BLINK)
             else:
                 out.append(UNKNOWN)

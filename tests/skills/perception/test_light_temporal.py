@@ -52,3 +52,17 @@ def test_old_frames_leave_the_window_and_bad_input():
         f.add(10.0, 9)
     f.add(0.0, 1)                          # time went backwards: restart
     assert f.pattern().green == UNKNOWN
+
+
+def test_a_blink_at_the_game_cameras_rate_and_one_odd_frame_among_few():
+    """At 5 frames a second (a game's camera) a 2 Hz blink is still a blink;
+    with frames missing (unsure readings left out), one odd frame among six
+    is not."""
+    f = LightFilter()
+    feed(f, [4 | (1 if (i * 0.2) % 0.5 < 0.25 else 0) for i in range(10)], dt=0.2)
+    p = f.pattern()
+    assert (p.green, p.yellow, p.red) == (BLINK, OFF, ON)
+    g = LightFilter()
+    for t, s in ((0.0, 1), (0.3, 1), (0.7, 0), (1.0, 1), (1.4, 1), (1.8, 1)):
+        g.add(t, s)
+    assert g.pattern().green != BLINK
