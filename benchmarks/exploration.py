@@ -43,6 +43,9 @@ def main(argv=None) -> int:
     ap.add_argument("--first-seed", type=int, default=1)
     ap.add_argument("--strategies", default=",".join(strategies_known))
     ap.add_argument("--jobs", type=int, default=2, help="games in parallel (default 2)")
+    ap.add_argument("--perception", default="oracle", choices=("oracle", "rendered"),
+                    help="oracle (default): the simulator hands over tags and lights in view; rendered: the "
+                         "detectors read every robot's camera frames")
     ap.add_argument("--per-seed", action="store_true", help="also print every game")
     ap.add_argument("--json", type=Path, help="write every game's numbers here")
     args = ap.parse_args(argv)
@@ -51,7 +54,8 @@ def main(argv=None) -> int:
     if bad:
         ap.error(f"unknown strategy {', '.join(sorted(bad))} (known: {', '.join(strategies_known)})")
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
-    games = [GameOptions(profile=args.profile, seed=s, strategy=st, until="exploration", setup=1.0)
+    games = [GameOptions(profile=args.profile, seed=s, strategy=st, until="exploration", setup=1.0,
+                         perception=args.perception)
              for st in strategies for s in seeds]
     t0 = time.perf_counter()
 
@@ -66,7 +70,7 @@ def main(argv=None) -> int:
     wall = time.perf_counter() - t0
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1, default=str))
-    print(render(args.profile, strategies, seeds, games, rows, wall, args.per_seed))
+    print(render(args.profile, strategies, seeds, games, rows, wall, args.per_seed, args.perception))
     return 0 if all("error" not in r for r in rows) else 1
 
 
@@ -76,16 +80,16 @@ def known_after(game, row) -> float:
     return t if t is not None else game.exploration_window()
 
 
-def render(profile, strategies, seeds, games, rows, wall, per_seed=False) -> str:
+def render(profile, strategies, seeds, games, rows, wall, per_seed=False, perception="oracle") -> str:
     by = {st: [(g, r) for g, r in zip(games, rows) if g.strategy == st and "error" not in r] for st in strategies}
     errors = {st: sum(1 for g, r in zip(games, rows) if g.strategy == st and "error" in r) for st in strategies}
     oracle = median(known_after(g, r) for g, r in by.get("oracle", []))
     lines = [f"exploration, {profile}, {len(seeds)} seeds ({seeds[0]}..{seeds[-1]}), 3 robots, "
-             f"oracle perception; {wall:.0f} s wall",
+             f"{perception} perception; {wall:.0f} s wall",
              "",
              f"{'strategy':16} {'full points':>12} {'median pts':>11} {'median time s':>14} {'vs oracle':>10} "
-             f"{'mean time s':>12} {'sure':>7} {'errors':>7}",
-             f"{'-' * 16} {'-' * 12} {'-' * 11} {'-' * 14} {'-' * 10} {'-' * 12} {'-' * 7} {'-' * 7}"]
+             f"{'mean time s':>12} {'sure':>7} {'wrong':>7} {'errors':>7}",
+             f"{'-' * 16} {'-' * 12} {'-' * 11} {'-' * 14} {'-' * 10} {'-' * 12} {'-' * 7} {'-' * 7} {'-' * 7}"]
     for st in strategies:
         ok = by[st]
         full = sum(1 for _, r in ok if r["exploration"]["points"] >= r["exploration"]["max_points"])
@@ -97,16 +101,18 @@ def render(profile, strategies, seeds, games, rows, wall, per_seed=False) -> str
         mean = sum(times) / len(times) if times else None
         lines.append(f"{st:16} {share:>12} {fmt(median(r['exploration']['points'] for _, r in ok), '.0f'):>11} "
                      f"{fmt(med):>14} {fmt(ratio, '.2f') + 'x' if ratio else '-':>10} {fmt(mean):>12} "
-                     f"{sure:>3}/{len(ok):<3} {errors[st]:>7}")
+                     f"{sure:>3}/{len(ok):<3} {sum(r['exploration'].get('wrong', 0) for _, r in ok):>7} "
+                     f"{errors[st]:>7}")
     if per_seed:
-        lines += ["", f"{'strategy':16} {'seed':>4} {'points':>6} {'all points s':>12} {'sure s':>7} {'wall s':>7}"]
+        lines += ["", f"{'strategy':16} {'seed':>4} {'points':>6} {'all points s':>12} {'sure s':>7} {'wrong':>5} "
+                      f"{'wall s':>7}"]
         for g, r in zip(games, rows):
             if "error" in r:
                 lines.append(f"{g.strategy:16} {g.seed:4d} error: {r['error']}")
             else:
                 ex = r["exploration"]
                 lines.append(f"{g.strategy:16} {g.seed:4d} {ex['points']:6d} {fmt(ex['all_points_after']):>12} "
-                             f"{fmt(ex['sure_all_after']):>7} {fmt(r['wall_time'], '.0f'):>7}")
+                             f"{fmt(ex['sure_all_after']):>7} {ex.get('wrong', 0):>5} {fmt(r['wall_time'], '.0f'):>7}")
     return "\n".join(lines)
 
 

@@ -47,6 +47,9 @@ def main(argv=None) -> int:
     ap.add_argument("--first-seed", type=int, default=1)
     ap.add_argument("--production", type=float, help="PRODUCTION length in game s (default: the rules')")
     ap.add_argument("--jobs", type=int, default=2, help="games in parallel (default 2)")
+    ap.add_argument("--perception", default="oracle", choices=("oracle", "rendered"),
+                    help="oracle (default): the simulator hands over tags and lights in view; rendered: the "
+                         "detectors read every robot's camera frames")
     ap.add_argument("--per-seed", action="store_true", help="also print every game")
     ap.add_argument("--json", type=Path, help="write every game's numbers here")
     ap.add_argument("--variants", default="htn,baseline",
@@ -61,7 +64,8 @@ def main(argv=None) -> int:
     if args.from_jsonl:
         return from_jsonl(args.profile, args.from_jsonl, args.per_seed)
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
-    games = [GameOptions(profile=args.profile, seed=s, baseline=VARIANTS[v], production=args.production)
+    games = [GameOptions(profile=args.profile, seed=s, baseline=VARIANTS[v], production=args.production,
+                         perception=args.perception)
              for s in seeds for v in names]
     t0 = time.perf_counter()
 
@@ -81,7 +85,7 @@ def main(argv=None) -> int:
     wall = time.perf_counter() - t0
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1, default=str))
-    print(render(args.profile, seeds, games, rows, wall, args.per_seed))
+    print(render(args.profile, seeds, games, rows, wall, args.per_seed, args.perception))
     return 0 if all("error" not in r for r in rows) else 1
 
 
@@ -121,13 +125,13 @@ def calls(row: dict) -> int:
     return sum(c.get("count", 0) for c in row.get("referee", {}).get("calls", {}).values())
 
 
-def render(profile, seeds, games, rows, wall, per_seed=False) -> str:
+def render(profile, seeds, games, rows, wall, per_seed=False, perception="oracle") -> str:
     by = {name: [r for g, r in zip(games, rows) if g.baseline == base and "error" not in r]
           for name, base in VARIANTS.items()}
     errors = sum(1 for r in rows if "error" in r)
     wall_text = f"; {wall:.0f} s wall" if wall == wall else ""
     lines = [f"production, {profile}, {len(seeds)} seeds ({seeds[0]}..{seeds[-1]}), 3 robots, "
-             f"oracle perception{wall_text}" + (f"; {errors} games failed" if errors else ""),
+             f"{perception} perception{wall_text}" + (f"; {errors} games failed" if errors else ""),
              "",
              f"{'team server':12} {'games':>5} {'mean prod pts':>14} {'median':>7} {'min':>5} {'max':>5} "
              f"{'>=150 pts':>10} {'orders/game':>12} {'mean score':>11} {'broken':>7} {'referee':>8}",

@@ -57,11 +57,11 @@ def _pin() -> None:
 def run_game(mode: str, profile: str, seed: int, until: str) -> dict:
     """A whole lockstep game with ``mode``'s perception; the numbers of :func:`main`'s table."""
     _pin()
-    from rll_bt.game.lockstep import LockstepGame
-    from rll_bt.game.options import GameOptions
+    from games.lockstep import LockstepGame
+    from games.options import GameOptions
     opts = GameOptions(profile=profile, seed=seed, perception=mode.split("-")[1], until=until, setup=1.0)
     with LockstepGame(opts) as game:
-        world = game.sim.world
+        world = game.world.pybullet                   # the PyBullet world behind the contract
         frames = {"n": 0}
         if mode == "game-rendered":
             render = world.render_view

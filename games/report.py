@@ -106,6 +106,7 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
         "points": {"total": result.status.points.get(team, 0), "by_phase": by_phase,
                    "exploration": explore_pts, "production": production_pts},
         "exploration": {"points": explore_pts, "max_points": max_exploration_points(prof),
+                        "wrong": sum(1 for a in result.awards if a.team == team and _exploration(a) and a.points < 0),
                         "all_points_after": all_points_after(result.awards, team, max_exploration_points(prof)),
                         "sure_all_after": (round(rec.known_all_game_time, 2)
                                            if rec.known_all_game_time is not None else None)},
