@@ -29,7 +29,9 @@ entry points (groups ``rll_bt.simulators``, ``rll_bt.teamservers``,
   ``report.json``, a table and PNGs (``messages.jsonl`` is
   :mod:`rll_bt.comm.msglog`'s);
 - :mod:`.progress`: the progress line; :mod:`.batch`: many games in worker
-  processes (the benchmarks); :mod:`.cli`: ``rll-bt sim``.
+  processes (the benchmarks); :mod:`.cli`: ``rll-bt sim``;
+- :mod:`.teams`: who plays (``--cyan CONFIG --magenta CONFIG``, two teams
+  on one field).
 """
 from __future__ import annotations
 
@@ -49,7 +51,9 @@ def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
     from .progress import ProgressBar
     clock = clock or WallClock()
     t0 = clock.now()
-    bar = ProgressBar(options.expected_duration(), clock=clock) if progress else None
+    colors = tuple(options.lineup())
+    bar = (ProgressBar(options.expected_duration(), clock=clock, team=colors if len(colors) > 1 else colors[0])
+           if progress else None)
     if options.refbox == "external":
         from .external import ExternalGame
         game = ExternalGame(options, progress=bar, clock=clock, connect_timeout=options.refbox_timeout)

@@ -60,14 +60,17 @@ def run(cfg: dict) -> int:
         kw = {"registry": team_reg, "key": cfg["key"], "host": "127.0.0.1", "clock": clock}
         if msglog is None:
             return StreamServer(cfg["listen"], **kw)
-        return LoggedStreamServer(cfg["listen"], log=msglog, **kw)
+        channel = cfg.get("log_channel", "teamserver")
+        return LoggedStreamServer(cfg["listen"], log=msglog, channel=channel, server=channel,
+                                  prefix=cfg.get("robot_prefix", ""), **kw)
 
     oracle = cfg.get("oracle")
     handle = load_teamserver(cfg.get("teamserver", "htn"))(
         profile=cfg["profile"], team_name=cfg["team"], key=cfg["key"], clock=clock, refbox_public=public,
         refbox_team=team, agents=agents, state=cfg["state"], strategy=cfg["strategy"], seed=cfg["seed"],
         oracle={k: int(v) for k, v in oracle.items()} if oracle else None,
-        options=TeamServerOptions(baseline=cfg.get("baseline", False), map_period=cfg.get("map_period", 5.0)))
+        options=TeamServerOptions(baseline=cfg.get("baseline", False), map_period=cfg.get("map_period", 5.0),
+                                  extra=cfg.get("extra") or {}))
     snapshot = Path(cfg["snapshot"])
     period = float(cfg.get("snapshot_period", 1.0))
 

@@ -4,6 +4,7 @@
     rll-bt sim --profile rcll2025 --out game/ # + messages.jsonl, report.json, PNGs
     rll-bt sim --processes                    # refbox, world, team server, agents as processes
     rll-bt sim --refbox external --refbox-host H   # against a refbox that runs already (the real one)
+    rll-bt sim --cyan htn --magenta baseline  # two teams on one field (CONFIG: games.teams)
 
 By default everything runs in one process on one simulated clock (refbox,
 world, team server and agents; messages cross an in-process bus as encoded
@@ -83,6 +84,12 @@ def register(cli) -> None:
                    help="exploration strategy of the team server (%(choices)s; default %(default)s)")
     g.add_argument("--baseline", action="store_true",
                    help="greedy one-order-at-a-time production instead of the HTN planner")
+    g.add_argument("--cyan", metavar="CONFIG",
+                   help="the team playing cyan: htn, baseline, external (another team's software over the "
+                        "refbox's network protocol; with --processes) or another team server, with settings "
+                        "after a colon, e.g. htn:strategy=nearest,replan_period=5 or external:name=Caro,key=K; "
+                        "without --cyan and --magenta our one team plays cyan (see docs/teams.md)")
+    g.add_argument("--magenta", metavar="CONFIG", help="the team playing magenta, as --cyan")
     g.add_argument("--until", default="end", choices=UNTIL, help="stop after exploration or play to the end")
     g.add_argument("--setup", type=_seconds, default=10.0, metavar="S",
                    help="SETUP phase length in game seconds (default 10; the rules' 300 s change nothing here)")
@@ -199,7 +206,7 @@ def options_from(args):
                            refbox_port_offset=args.refbox_port_offset, refbox_control=args.refbox_control,
                            refbox_timeout=args.refbox_timeout,
                            stations=args.stations, mqtt=args.mqtt, opcua_base_port=args.opcua_base_port,
-                           team_name=args.team, key=args.key)
+                           team_name=args.team, key=args.key, cyan=args.cyan, magenta=args.magenta)
     except ValueError as exc:
         raise UserError(str(exc)) from None
 
@@ -212,6 +219,9 @@ def run(args) -> int:
     options = options_from(args)
     if options.refbox == "external":
         options.processes = True
+    if len(options.lineup()) > 1 and (options.record is not None or options.live is not None
+                                      or options.view is not None):
+        raise UserError("--record, --live and --view watch a game of one team", where="--magenta")
     if options.processes and (options.live is not None or options.view is not None):
         raise UserError("--live and --view serve a lockstep game; with --processes give --record (every process "
                         "records its part, merged into one file at the end) and replay it with rll-bt view FILE",

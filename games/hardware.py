@@ -44,7 +44,7 @@ class HardwareGame(ProcessGame):
         self._hw_t0 = self.wall.now()
         super()._start_children()
 
-    def _agent_backend_args(self, n: int) -> list[str]:
+    def _agent_backend_args(self, n: int, team: str = TEAM) -> list[str]:
         return ["--backend", "robotino", "--robot-config", str(self._configs[n])]
 
     def _tick(self, last: float) -> float:

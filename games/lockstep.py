@@ -10,6 +10,14 @@ the in-process :class:`~rll_bt.comm.Bus` as encoded frames (the team
 channel and the team-server link encrypted with the team key), so the same
 bytes as in a real game; a seeded game is deterministic.
 
+Two teams (``GameOptions(cyan=..., magenta=...)``, :mod:`.teams`): each
+colour is a :class:`Side` with its own team server (on its own bus stream,
+``teamserver-cyan``/``teamserver-magenta``), agents and recorder, its own
+team channel and key; a team knows only its own robots, the other team's
+it meets only in its lasers.  ``game.teamserver``, ``game.agents``,
+``game.robot_numbers`` and ``game.recorder`` are the first side's (cyan's
+when it plays); ``game.sides`` holds both.
+
 The simulator and the team server come from the ``rll_bt.simulators`` and
 ``rll_bt.teamservers`` entry points (:mod:`rll_bt.contracts`): ``game.world``
 is the simulator's :class:`~rll_bt.contracts.World`, ``game.refbox`` its
@@ -33,6 +41,7 @@ from rll_bt.contracts import GameStatus, TeamServerOptions, load_simulator, load
 
 from .options import GameOptions
 from .recorder import Recorder, Recording
+from .teams import Team
 
 TEAM = "CYAN"
 
@@ -53,6 +62,39 @@ class GameResult:
     wall_time: float = 0.0
     messages: int = 0
     tally: dict = field(default_factory=dict)    # team -> rll_bt.contracts.Tally
+    #: per team colour: its recording and its team server's snapshot (``recording``/``snapshot``
+    #: are the first team's); labels: colour -> the CONFIG it played (:mod:`.teams`)
+    recordings: dict = field(default_factory=dict)
+    snapshots: dict = field(default_factory=dict)
+    labels: dict = field(default_factory=dict)
+    sightings: dict = field(default_factory=dict)    # robot -> {robot of the other team: laser scans seeing it}
+
+
+@dataclass
+class Side:
+    """One team of a game: its :class:`~.teams.Team`, the bus stream its team
+    server serves (``stream``), the team server, its agents and its recorder."""
+
+    team: Team
+    stream: str
+    teamserver: object = None
+    agents: dict = field(default_factory=dict)
+    recorder: Recorder | None = None
+
+    @property
+    def color(self) -> str:
+        return self.team.color
+
+    @property
+    def robot_numbers(self) -> list[int]:
+        return list(range(1, self.team.robots + 1))
+
+
+def legacy_single(lineup: dict) -> bool:
+    """One team of ours playing cyan with the options' own settings: the
+    names on the bus are those of every game before two teams (``teamserver``,
+    ``R1``), so such a game sends exactly the messages it always did."""
+    return list(lineup) == ["CYAN"] and lineup["CYAN"].spec is None
 
 
 class LockstepGame:
@@ -62,15 +104,21 @@ class LockstepGame:
     def __init__(self, options: GameOptions, *, progress: Callable | None = None, pace=None):
         self.options = o = options
         self.pace = pace              # a wall Clock: keep to ``options.pace`` (real time: 1); None: as fast as possible
-        sim_factory = load_simulator(o.simulator)
-        ts_factory = load_teamserver(o.teamserver)
-        self.sim = sim_factory(profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key,
-                               perception=o.perception, gui=o.gui, phases=o.phases(),
-                               world_step=o.world_step, robot_options={"laser_rate": o.laser_rate},
-                               refbox="here", **o.stored())
+        lineup = o.lineup()
+        if any(t.external for t in lineup.values()):
+            raise ValueError("an external team plays over the network: give --processes")
+        self.legacy = legacy_single(lineup)
+        home = next(iter(lineup.values()))
+        teams = {} if self.legacy else {"teams": {c: (t.name, t.key) for c, t in lineup.items()}}
+        self.sides: dict[str, Side] = {
+            c: Side(t, "teamserver" if self.legacy else f"teamserver-{c.lower()}") for c, t in lineup.items()}
+        self.sim = load_simulator(o.simulator)(
+            profile=o.profile, seed=o.seed, team_name=home.name, key=home.key, perception=o.perception, gui=o.gui,
+            phases=o.phases(), world_step=o.world_step, robot_options={"laser_rate": o.laser_rate},
+            refbox="here", **o.stored(), **teams)
         self.world, self.refbox = self.sim.world, self.sim.refbox
         try:
-            self._wire(o, ts_factory)
+            self._wire(o)
         except BaseException:
             if getattr(self, "watch", None) is not None:
                 self.watch.close()
@@ -81,8 +129,8 @@ class LockstepGame:
         self.rounds = 0
         self._started = False
 
-    def _wire(self, o: GameOptions, ts_factory) -> None:
-        """Bus, message log, team server, agents and recorder around the simulation."""
+    def _wire(self, o: GameOptions) -> None:
+        """Bus, message log, team servers, agents and recorders around the simulation."""
         self.clock = self.world.clock
         self.bus = Bus(self.clock)
         self.ref_reg = MessageRegistry.from_message_set(msgs.message_set(self.world.profile.name))
@@ -90,8 +138,10 @@ class LockstepGame:
         self.log: MessageLog | None = None
         if o.out is not None:
             o.out.mkdir(parents=True, exist_ok=True)
+            keys = {a: sd.team.key for sd in self.sides.values() for a in (sd.color.lower(), sd.stream)}
             self.log = MessageLog(o.out / "messages.jsonl", self.clock,
-                                  {"teamserver": self.team_reg}, self.ref_reg, key=o.key)
+                                  {sd.stream: self.team_reg for sd in self.sides.values()}, self.ref_reg,
+                                  key=o.key if self.legacy else keys)
             self.bus.tap(self.log.tap)
         self.watch = self.view = None
         if o.record is not None or o.live is not None or o.view is not None:
@@ -103,78 +153,125 @@ class LockstepGame:
                                meta={"kind": "sim", "name": f"rll-bt sim --seed {o.seed}", "seed": o.seed})
         self.refbox.attach_bus(self.bus)
         self._tmp = None
-        state = o.state
-        if state is None:
-            if o.out is not None:
-                state = o.out / "teamserver.sqlite"
-                if state.exists():
-                    state.unlink()
-            else:
-                self._tmp = tempfile.TemporaryDirectory(prefix="rll-bt-sim-")
-                state = Path(self._tmp.name) / "teamserver.sqlite"
-        truth = ({n: s.zone for n, s in self.refbox.stations().items()}
-                 if o.strategy == "oracle" else None)
-        bus, reg, key = self.bus, self.ref_reg, o.key
-        self.teamserver = ts_factory(
-            profile=o.profile, team_name=o.team_name, key=key, clock=self.clock,
-            refbox_public=lambda: bus.peer("public", registry=reg, name="teamserver"),
-            refbox_team=lambda color: bus.peer(color.lower(), registry=reg, name="teamserver"),
-            agents=lambda: bus.stream_server("teamserver", registry=self.team_reg, key=key),
-            state=str(state), strategy=o.strategy, seed=o.seed, oracle=truth,
-            options=TeamServerOptions(baseline=o.baseline, map_period=o.map_period, extra=o.extra))
-        self.agents: dict[int, RobotAgent] = {}
-        self.robot_numbers = list(range(1, o.robots + 1))
-        for n in self.robot_numbers:
-            self.start_agent(n, restarted=False)
-        self.recorder = Recorder(self.world, self.refbox, TEAM, self.robot_numbers, o.sample_period,
-                                 snapshot=self.teamserver.snapshot)
+        for side in self.sides.values():
+            self._start_teamserver(side, o)
+        for side in self.sides.values():
+            for n in side.robot_numbers:
+                self.start_agent(n, restarted=False, team=side.color)
+            side.recorder = Recorder(self.world, self.refbox, side.color, side.robot_numbers, o.sample_period,
+                                     snapshot=side.teamserver.snapshot)
         if self.watch is not None:
             self.recorder.listeners.append(self.watch.recorded)
 
+    def _state_file(self, side: Side, o: GameOptions) -> Path:
+        """Where ``side``'s team server keeps its database."""
+        name = "teamserver.sqlite" if self.legacy else f"teamserver-{side.color.lower()}.sqlite"
+        if o.state is not None:
+            return o.state if self.legacy else o.state.with_name(f"{o.state.stem}-{side.color.lower()}.sqlite")
+        if o.out is not None:
+            state = o.out / name
+            if state.exists():
+                state.unlink()
+            return state
+        if self._tmp is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix="rll-bt-sim-")
+        return Path(self._tmp.name) / name
+
+    def _start_teamserver(self, side: Side, o: GameOptions) -> None:
+        t = side.team
+        truth = ({n: s.zone for n, s in self.refbox.stations().items()} if t.strategy == "oracle" else None)
+        bus, reg, key, stream = self.bus, self.ref_reg, t.key, side.stream
+        side.teamserver = load_teamserver(t.teamserver)(
+            profile=o.profile, team_name=t.name, key=key, clock=self.clock,
+            refbox_public=lambda: bus.peer("public", registry=reg, name=stream),
+            refbox_team=lambda color: bus.peer(color.lower(), registry=reg, name=stream),
+            agents=lambda: bus.stream_server(stream, registry=self.team_reg, key=key),
+            state=str(self._state_file(side, o)), strategy=t.strategy, seed=o.seed, oracle=truth,
+            options=TeamServerOptions(baseline=t.baseline, map_period=o.map_period, extra=t.extra))
+
+    # -- the first side's parts, as in a game of one team ------------------------------------
+    @property
+    def home(self) -> Side:
+        return next(iter(self.sides.values()))
+
+    @property
+    def teamserver(self):
+        return self.home.teamserver
+
+    @property
+    def agents(self) -> dict[int, RobotAgent]:
+        return self.home.agents
+
+    @property
+    def robot_numbers(self) -> list[int]:
+        return self.home.robot_numbers
+
+    @property
+    def recorder(self) -> Recorder:
+        return self.home.recorder
+
+    def side(self, team: str | None) -> Side:
+        """The side playing ``team`` (a colour; None: the first side)."""
+        if team is None:
+            return self.home
+        try:
+            return self.sides[team.upper()]
+        except KeyError:
+            raise ValueError(f"no {team} team in this game (teams: {', '.join(self.sides)})") from None
+
     # -- parts -------------------------------------------------------------------------
-    def start_agent(self, number: int, restarted: bool = True, known_pose: bool = True) -> RobotAgent:
-        """A new agent for robot ``number`` (its robot stays where it is; the
-        agent starts from the robot's true pose, as an operator would set it,
-        or with ``known_pose=False`` finds it by global localisation)."""
+    def start_agent(self, number: int, restarted: bool = True, known_pose: bool = True,
+                    team: str | None = None) -> RobotAgent:
+        """A new agent for robot ``number`` of ``team`` (default the first side)
+        (its robot stays where it is; the agent starts from the robot's true
+        pose, as an operator would set it, or with ``known_pose=False`` finds
+        it by global localisation)."""
         o, bus, reg = self.options, self.bus, self.ref_reg
-        name = f"R{number}"
-        cfg = AgentConfig(robot_id=number, team_name=o.team_name, profile=o.profile, hz=o.hz)
-        backend = self.world.backend(TEAM, number)
-        rw = self.watch.robot(number) if self.watch is not None else None
+        side = self.side(team)
+        t, color = side.team, side.color
+        name = f"R{number}" if self.legacy else f"{t.prefix}-R{number}"
+        cfg = AgentConfig(robot_id=number, team_name=t.name, profile=o.profile, hz=o.hz)
+        backend = self.world.backend(color, number)
+        watched = self.watch is not None and side is self.home
+        rw = self.watch.robot(number) if watched else None
         agent = RobotAgent(
             cfg, clock=self.clock, backend=backend if rw is None else rw.tap(backend),
-            link=bus.stream_client("teamserver", registry=self.team_reg, key=o.key, name=name),
+            link=bus.stream_client(side.stream, registry=self.team_reg, key=t.key, name=name),
             public=bus.peer("public", registry=reg, name=name),
-            team=lambda color: bus.peer(color.lower(), registry=reg, key=o.key, name=name),
+            team=lambda c: bus.peer(c.lower(), registry=reg, key=t.key, name=name),
             services={"localisation": o.localisation},
-            start_pose=self.world.robot_pose(TEAM, number) if known_pose else None, restarted=restarted)
-        self.agents[number] = agent
+            start_pose=self.world.robot_pose(color, number) if known_pose else None, restarted=restarted)
+        side.agents[number] = agent
         if rw is not None:
             rw.attach(agent)
         if restarted:
-            self._note("agent started", robot=number)
+            self._note("agent started", side, robot=number)
         return agent
 
-    def kill_agent(self, number: int) -> None:
+    def kill_agent(self, number: int, team: str | None = None) -> None:
         """The agent dies without a goodbye: its links drop, its robot stops
         once the last drive command times out."""
-        agent = self.agents.pop(number)
-        self.recorder.task(number, None, outcome="agent killed")
+        side = self.side(team)
+        agent = side.agents.pop(number)
+        side.recorder.task(number, None, outcome="agent killed")
         agent.link.close()
         agent.refbox.close()
-        self._note("agent killed", robot=number)
+        self._note("agent killed", side, robot=number)
 
-    def restart_teamserver(self) -> None:
-        self.teamserver.restart()
-        self._note("team server restarted")
+    def restart_teamserver(self, team: str | None = None) -> None:
+        side = self.side(team)
+        side.teamserver.restart()
+        self._note("team server restarted", side)
 
     def station_down(self, machine: str, seconds: float) -> None:
         self.refbox.station_down(machine, seconds)
         self._note("station down", machine=machine, seconds=seconds)
 
-    def _note(self, what: str, **data) -> None:
-        if hasattr(self, "recorder"):
-            self.recorder.note(what, **data)
+    def _note(self, what: str, side: Side | None = None, **data) -> None:
+        """A note in ``side``'s recording (every side's for None: a fault of the field)."""
+        for sd in ([side] if side is not None else self.sides.values()):
+            if sd.recorder is not None:
+                sd.recorder.note(what, **data)
 
     # -- running -------------------------------------------------------------------------
     def start(self) -> None:
@@ -183,30 +280,34 @@ class LockstepGame:
             self.refbox.start()
             if self.watch is not None:
                 self.watch.stations()
-            self.recorder.sample(force=True)
+            for side in self.sides.values():
+                side.recorder.sample(force=True)
 
     def round(self) -> None:
         """One lockstep round of ``dt`` seconds."""
-        for n in sorted(self.agents):
-            agent = self.agents[n]
-            before = agent.run
-            agent.step()
-            run = agent.run
-            ended = before.outcome.status if before is not None and before.done else None
-            if run is not None and not run.done:
-                self.recorder.task(n, run.kind, run.task_id, outcome=ended)
-            else:
-                self.recorder.task(n, None, outcome=ended)
+        for side in self.sides.values():
+            for n in sorted(side.agents):
+                agent = side.agents[n]
+                before = agent.run
+                agent.step()
+                run = agent.run
+                ended = before.outcome.status if before is not None and before.done else None
+                if run is not None and not run.done:
+                    side.recorder.task(n, run.kind, run.task_id, outcome=ended)
+                else:
+                    side.recorder.task(n, None, outcome=ended)
         self.world.step(self.options.dt)
         self.refbox.step()
-        self.teamserver.tick()
+        for side in self.sides.values():
+            side.teamserver.tick()
         self.rounds += 1
         if self.watch is not None:
             self.watch.round()
         if self.pace is not None:
             self._keep_real_time()
         before = len(self.recorder.rec.samples)
-        self.recorder.sample()
+        for side in self.sides.values():
+            side.recorder.sample()
         if self.progress is not None and len(self.recorder.rec.samples) != before:
             self.progress(self.clock.now(), self.refbox.status())
         for hook in list(self.hooks):
@@ -257,8 +358,9 @@ class LockstepGame:
                 break
             self.round()
         done = done or self.finished()
-        self.recorder.sample(force=True)
-        self.recorder.close_tasks()
+        for side in self.sides.values():
+            side.recorder.sample(force=True)
+            side.recorder.close_tasks()
         result = self.result(done)
         if self.watch is not None:
             self.watch.result(result)
@@ -266,21 +368,28 @@ class LockstepGame:
 
     def result(self, finished: bool) -> GameResult:
         collisions = self.world.collision_log()
+        snaps = {c: sd.teamserver.snapshot() for c, sd in self.sides.items()}
         return GameResult(finished=finished, status=self.refbox.status(), recording=self.recorder.rec,
                           awards=self.refbox.awards(), deliveries=self.refbox.deliveries(),
-                          snapshot=self.teamserver.snapshot(), stations=self.refbox.stations(),
+                          snapshot=snaps[self.home.color], stations=self.refbox.stations(),
                           orders=self.refbox.orders(), collisions=len(collisions),
-                          tally={TEAM: self.refbox.tally(TEAM)},
+                          tally={c: self.refbox.tally(c) for c in self.sides},
                           sim_time=self.clock.now(), messages=self.bus.frames,
-                          collision_log=collisions)
+                          collision_log=collisions,
+                          recordings={c: sd.recorder.rec for c, sd in self.sides.items()}, snapshots=snaps,
+                          labels={c: sd.team.label for c, sd in self.sides.items()},
+                          sightings=self.world.laser_sightings())
 
     def close(self) -> None:
-        for agent in self.agents.values():
-            try:
-                agent.shutdown()
-            except Exception:
-                pass
-        self.teamserver.close()
+        for side in self.sides.values():
+            for agent in side.agents.values():
+                try:
+                    agent.shutdown()
+                except Exception:
+                    pass
+        for side in self.sides.values():
+            if side.teamserver is not None:
+                side.teamserver.close()
         if self.log is not None:
             self.log.close()
         if self.view is not None:

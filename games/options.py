@@ -18,7 +18,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from rll_bt import plugins, rules
-from rll_bt.contracts import SIMULATORS, TEAMSERVERS
+from rll_bt.contracts import SIMULATORS, TEAMSERVERS, TeamServerOptions, check_teamserver
+
+from .teams import Team, TeamSpec, lineup
 
 UNTIL = ("exploration", "end")
 #: option -> (entry point group publishing its values, the GameOptions field naming
@@ -85,8 +87,15 @@ class GameOptions:
     game: Path | None = None           # a stored game to play (its field, orders, ring setup, down periods)
     save_game: Path | None = None      # write the game in that form at its start
     extra: dict = field(default_factory=dict)
+    # two teams (games.teams): a CONFIG per colour; both None: the single team above plays cyan
+    cyan: TeamSpec | str | None = None
+    magenta: TeamSpec | str | None = None
 
     def __post_init__(self) -> None:
+        for color in ("cyan", "magenta"):
+            spec = getattr(self, color)
+            if isinstance(spec, str):
+                setattr(self, color, TeamSpec.parse(spec))
         if self.profile not in rules.PROFILES:
             raise ValueError(f"unknown profile {self.profile!r} (known: {', '.join(rules.PROFILES)})")
         if not 1 <= int(self.robots) <= 3:
@@ -128,6 +137,49 @@ class GameOptions:
         for name in ("out", "game", "save_game"):
             if getattr(self, name) is not None:
                 setattr(self, name, Path(getattr(self, name)))
+        self._check_teams()
+
+    def _check_teams(self) -> None:
+        teams = self.lineup()
+        for team in teams.values():
+            if team.external:
+                if not self.processes:
+                    raise ValueError(f"an external team ({team.color.lower()}) plays over the network: "
+                                     "give --processes")
+                continue
+            try:
+                strategies = plugins.choices(TEAMSERVERS, "strategy", team.teamserver)
+                settings = plugins.choices(TEAMSERVERS, "setting", team.teamserver)
+            except KeyError as exc:
+                raise ValueError(f"{team.color.lower()} team {team.label!r}: {exc.args[0]}") from None
+            if strategies and team.strategy not in strategies:
+                raise ValueError(f"{team.color.lower()} team {team.label!r}: strategy must be one of "
+                                 f"{', '.join(strategies)}, not {team.strategy!r}")
+            if team.spec is not None and settings:
+                unknown = [n for n in team.spec.server_settings if n not in settings]
+                if unknown:
+                    raise ValueError(f"{team.color.lower()} team {team.label!r}: {team.teamserver} has no setting "
+                                     f"{', '.join(unknown)} (settings: {', '.join(settings)})")
+            if team.spec is not None and team.spec.server_settings:
+                try:
+                    check_teamserver(team.teamserver, TeamServerOptions(extra=team.spec.server_settings))
+                except ValueError as exc:
+                    raise ValueError(f"{team.color.lower()} team {team.label!r}: {exc}") from None
+        if all(t.external for t in teams.values()):
+            raise ValueError("both teams are external: nothing of ours would play")
+        if self.hardware == "emulated" and len(teams) > 1:
+            raise ValueError("--hardware emulated plays one team")
+        if getattr(self, "refbox", "sim") == "external" and len(teams) > 1:
+            raise ValueError("--refbox external plays one team of ours")
+
+    def lineup(self) -> dict[str, Team]:
+        """The teams of this game by colour, cyan first (:func:`games.teams.lineup`)."""
+        return lineup(self)
+
+    @property
+    def head_to_head(self) -> bool:
+        """Two teams on the field."""
+        return self.cyan is not None and self.magenta is not None
 
     @property
     def pace(self) -> float:

@@ -8,20 +8,26 @@ This process holds the world: PyBullet, the robots and the stations'
 physical state.  It serves each robot's backend over TCP (the serving end
 of the ``remote`` backend, found through its entry point) and the stations
 to the refbox over the simulator's station link (TCP too).  The simulated
-refbox is its own process (the command line the simulator gives, for
-PyBullet ``rll-bt refbox sim --world remote:...``):
-it talks UDP (broadcast to ``127.255.255.255`` on free local ports, the
-``sim`` style of split send/receive ports) and sees the stations only
-through the link.  The team server runs as ``python -m games.child``
-(TCP for the agents, UDP to the refbox) and each robot as a real ``rll-bt
+refbox is its own process (for PyBullet ``rll-bt refbox sim --world
+remote:...``): it talks UDP (broadcast to ``127.255.255.255`` on free local
+ports, split send/receive) and sees the stations only through the link.
+The team server runs as ``python -m games.child`` (TCP for the agents,
+UDP to the refbox) and each robot as a real ``rll-bt
 agent --backend remote`` process.  Everything runs on the wall clock: the
 world advances by the wall time that passed (at most 0.1 s a step, so it
 may fall behind), so a game takes its real length.  The refbox's view
 (status, points, awards, deliveries, station states) reaches this process
 through the snapshot file it rewrites (``refbox.json``, 4 times a second),
-the team server's through ``teamserver.json`` (every second).  The refbox
-comes up first (the recorder needs its stations' light codes), then the
-team server and the agents.
+the team server's through ``teamserver.json`` (every second).
+
+Two teams (``GameOptions(cyan=..., magenta=...)``): each of ours has its
+own team server process (``teamserver-cyan``, ...: its files are named so)
+and agent processes (``agent-cyan1``, ...) on its own team channel and key.
+An ``external`` team is another team's software: the refbox knows its name
+and key and plays it on its channel; nothing of it runs here, and
+``external-<colour>.json`` in the game's folder tells it the refbox's
+UDP host, ports and its key (:meth:`ProcessGame.external`).  The refbox
+comes up first (the recorder needs its light codes), then the rest.
 
 The message log holds what the refbox sends and receives (logged by the
 refbox process) and every message of the team server's link to the agents
@@ -48,48 +54,19 @@ from rll_bt.backend import ENTRY_POINT_GROUP as BACKENDS
 from rll_bt.comm import Layout, PeerPorts, free_ports
 from rll_bt.contracts import load_simulator
 
-from .lockstep import TEAM, GameResult
+from .lockstep import TEAM, GameResult, legacy_single
 from .options import GameOptions
+from .processlog import shift_recording, udp_sender
 from .recorder import Recorder
 from .teamlog import WallToSim, merge_into, read_lines, task_runs
+from .teams import Team, joining
 
 BROADCAST = "127.255.255.255"
 CLI_MAIN = "import sys; from rll_bt.cli import main; sys.exit(main())"
 
 
-def shift_recording(rec, t0: float) -> None:
-    """Every time of the recording ``rec`` made ``t0`` seconds earlier (in place)."""
-    def s(t):
-        return None if t is None else round(t - t0, 3)
-    rec.samples = [{**x, "t": s(x["t"])} for x in rec.samples]
-    rec.paths = {n: [(s(t), x, y) for t, x, y in pts] for n, pts in rec.paths.items()}
-    rec.stations = {n: [(s(t), st) for t, st in hist] for n, hist in rec.stations.items()}
-    rec.phases = [(s(t), p) for t, p in rec.phases]
-    rec.events = [{**e, "t": s(e["t"])} for e in rec.events]
-    rec.tasks = {n: [{**r, "start": s(r["start"]), "end": s(r["end"])} for r in runs]
-                 for n, runs in rec.tasks.items()}
-    rec.known_all_at = s(rec.known_all_at)
-    rec.exploration_started = s(rec.exploration_started)
-
-
 class ChildExited(RuntimeError):
     """A process of the game ended on its own (or never came up)."""
-
-
-def udp_sender(entry: dict) -> str:
-    """Who sent a message the refbox logged, named as lockstep names them.
-
-    On loopback every robot and the team server send from the same address
-    (each binds the shared receive port), so the address tells nobody
-    apart: a beacon names its robot (``peer_name``, else ``R<number>``), and
-    everything else reaching the refbox here comes from the team server
-    (reports, machine instructions).  The refbox's own sends keep "refbox"."""
-    if entry["from"] == "refbox":
-        return "refbox"
-    if entry.get("type") == "BeaconSignal":
-        msg = entry.get("msg") or {}
-        return msg.get("peer_name") or f"R{msg.get('number', 0)}"
-    return "teamserver"
 
 
 class ProcessGame:
@@ -97,37 +74,46 @@ class ProcessGame:
     clock (:class:`~rll_bt.clock.WallClock`): the team server's log is
     stamped with it in another process."""
 
-    def __init__(self, options: GameOptions, *, progress=None, clock=None, connect_timeout: float = 60.0):
+    def __init__(self, options: GameOptions, *, progress=None, clock=None, connect_timeout: float | None = None):
         from rll_bt.clock import WallClock
         self.options = o = options
         self.wall = clock or WallClock()
         self.progress = progress
-        self.connect_timeout = connect_timeout
+        # 60 s and 20 s per process to start (imports, sockets; one team of three: 160 s, two: 240 s)
+        n = 1 + sum(1 + t.robots for t in o.lineup().values() if not t.external)
+        self.connect_timeout = connect_timeout if connect_timeout is not None else 60.0 + 20.0 * n
         self._tmp = tempfile.TemporaryDirectory(prefix="rll-bt-game-")
         self.dir = Path(o.out) if o.out is not None else Path(self._tmp.name)
         self.dir.mkdir(parents=True, exist_ok=True)
+        self.lineup = lineup = o.lineup()
+        if "CYAN" not in lineup:
+            raise ValueError("with --processes a team plays cyan: give --cyan")
+        self.legacy = legacy_single(lineup)
+        self.ours = {c: t for c, t in lineup.items() if not t.external}
+        home = next(iter(self.ours.values()))
         self.sim = self._open_simulation()
         self.world, self.refbox = self.sim.world, self.sim.refbox
         self.clock = self.world.clock
         self.time_map = WallToSim()
         self.layout = self._refbox_layout()
-        self.robots = list(range(1, o.robots + 1))
-        self.backends = {n: self.world.backend(TEAM, n) for n in self.robots}
+        self.robots = list(range(1, home.robots + 1))      # the first team's, as in a game of one team
+        self.backends = {(c, n): self.world.backend(c, n) for c, t in self.ours.items()
+                         for n in range(1, t.robots + 1)}
         # the remote backend's serving end, found through its entry point like the agents' end
         self.server = plugins.load(BACKENDS, "remote").serve(
-            lambda team, n: self.backends[int(n)] if team == TEAM else None, self.clock.now)
-        self.snapshot_file = self.dir / "teamserver.json"
+            lambda team, n: self.backends.get((str(team).upper(), int(n))), self.clock.now)
+        self.snapshot_file = self.dir / f"{self._ts_name(home.color)}.json"
         self.refbox_file = self.dir / "refbox.json"
         self._refbox_log = self.dir / "refbox-messages.jsonl" if o.out is not None or o.record else None
-        self._snap: dict = {}
+        self._snap: dict[str, dict] = {}
         self.procs: dict[str, subprocess.Popen] = {}
-        self.recorder: Recorder | None = None
+        self.recorders: dict[str, Recorder] = {}
         self._logs = []
-        self._team_logs: list[Path] = []
-        # (wall time, robot) of killed agents: on the clock the team server stamps its lines with,
+        self._team_logs: dict[str, list[Path]] = {c: [] for c in self.ours}
+        # (wall time, team, robot) of killed agents: on the clock the team server stamps its lines with,
         # so that a task sent just before the kill starts before it once both are mapped
-        self._kills: list[tuple[float, int]] = []
-        self.restarts = 0
+        self._kills: list[tuple[float, str, int]] = []
+        self.restarts: dict[str, int] = dict.fromkeys(self.ours, 0)
         self._t0 = 0.0                  # sim time the game started (the world runs while processes start)
         self._started = False
         self._result_made = False
@@ -145,12 +131,14 @@ class ProcessGame:
     refbox_host = BROADCAST
 
     def _open_simulation(self):
-        """The world, and the simulated refbox to run as a process."""
+        """The world, and the simulated refbox to run as a process (for both teams when two play)."""
         o = self.options
+        home = next(iter(self.ours.values()))
+        teams = {} if self.legacy else {"teams": {c: (t.name, t.key) for c, t in self.lineup.items()}}
         return load_simulator(o.simulator)(
-            profile=o.profile, seed=o.seed, team_name=o.team_name, key=o.key, perception=o.perception,
+            profile=o.profile, seed=o.seed, team_name=home.name, key=home.key, perception=o.perception,
             gui=o.gui, phases=o.phases(), world_step=o.world_step, robot_options={"laser_rate": o.laser_rate},
-            refbox="process", **o.stored())
+            refbox="process", **o.stored(), **teams)
 
     def _refbox_layout(self) -> Layout:
         """The refbox's UDP ports (the refbox's view): free ones for the refbox process."""
@@ -164,6 +152,30 @@ class ProcessGame:
             host=BROADCAST, layout=self.layout, snapshot=self.refbox_file, message_log=self._refbox_log)])
         self._wait_for(self.refbox.ready, "the refbox")
 
+    # -- names -----------------------------------------------------------------------------------
+    def _ts_name(self, color: str) -> str:
+        """The team server process of ``color`` (and the stem of its files)."""
+        return "teamserver" if self.legacy else f"teamserver-{color.lower()}"
+
+    def _agent_name(self, color: str, n: int) -> str:
+        return f"agent{n}" if self.legacy else f"agent-{color.lower()}{n}"
+
+    def _team(self, team: str | None) -> Team:
+        if team is None:
+            return next(iter(self.ours.values()))
+        if team.upper() not in self.ours:
+            raise ValueError(f"no team of ours plays {team} (ours: {', '.join(self.ours)})")
+        return self.ours[team.upper()]
+
+    @property
+    def recorder(self) -> Recorder | None:
+        """The first team's recorder (as in a game of one team)."""
+        return next(iter(self.recorders.values()), None)
+
+    def external(self, color: str) -> dict:
+        """What the external team playing ``color`` needs to join (:func:`.teams.joining`)."""
+        return joining(self.lineup[color.upper()], self.layout, BROADCAST)
+
     # -- children ----------------------------------------------------------------------------
     def _spawn(self, name: str, cmd: list[str]) -> None:
         log = open(self.dir / f"{name}.log", "a")  # noqa: SIM115 - closed with the game
@@ -173,27 +185,38 @@ class ProcessGame:
     def _start_children(self) -> None:
         """The refbox first (the recorder needs its truth), then the team server and the agents."""
         o = self.options
-        self._ts_port = free_ports(1, tcp=True)[0]
-        state = self.dir / "teamserver.sqlite"
-        for old in [state, self.refbox_file, self.snapshot_file, self.dir / "messages.jsonl",
-                    *self.dir.glob("teamserver.sqlite-*"),
-                    *self.dir.glob("teamserver-messages*.jsonl"), *self.dir.glob("refbox-messages*.jsonl")]:
+        self._ts_port = dict(zip(self.ours, free_ports(len(self.ours), tcp=True), strict=True))
+        for old in [self.refbox_file, self.dir / "messages.jsonl", *self.dir.glob("refbox-messages*.jsonl"),
+                    *self.dir.glob("teamserver*.sqlite*"), *self.dir.glob("teamserver*.json"),
+                    *self.dir.glob("teamserver*-messages*.jsonl"), *self.dir.glob("external-*.json")]:
             old.unlink(missing_ok=True)
-        for name in ("refbox", "teamserver", *(f"agent{n}" for n in self.robots)):
+        for name in ("refbox", *(self._ts_name(c) for c in self.ours),
+                     *(self._agent_name(c, n) for c, n in self.backends)):
             (self.dir / f"{name}.log").unlink(missing_ok=True)
         self._start_refbox()
-        self.recorder = Recorder(self.world, self.refbox, TEAM, self.robots, o.sample_period,
-                                 snapshot=self.snapshot)
+        for c, t in self.lineup.items():
+            robots = [] if t.external else list(range(1, t.robots + 1))
+            self.recorders[c] = Recorder(self.world, self.refbox, c, robots, o.sample_period,
+                                         snapshot=None if t.external else (lambda c=c: self.snapshot(c)))
+            if t.external:
+                (self.dir / f"external-{c.lower()}.json").write_text(json.dumps(self.external(c), indent=2))
         robot = {ch: (self.layout.robot(ch).send, self.layout.robot(ch).recv) for ch in ("public", "cyan", "magenta")}
-        self._ts_cfg = {
-            "profile": o.profile, "team": o.team_name, "key": o.key, "refbox_host": self.refbox_host,
-            "ports": {ch: [robot[ch][0], robot[ch][1]] for ch in robot}, "listen": self._ts_port,
-            "state": str(state), "strategy": o.strategy, "seed": o.seed, "baseline": o.baseline,
-            "map_period": o.map_period, "snapshot": str(self.snapshot_file), "teamserver": o.teamserver,
-            "oracle": ({n: s.zone for n, s in self.refbox.stations().items()} if o.strategy == "oracle" else None)}
-        self._spawn_teamserver()
-        for n in self.robots:
-            self._spawn_agent(n, first_start=True)
+        truth = {n: s.zone for n, s in self.refbox.stations().items()}
+        self._ts_cfg = {}
+        for c, t in self.ours.items():
+            name = self._ts_name(c)
+            self._ts_cfg[c] = {
+                "profile": o.profile, "team": t.name, "key": t.key, "refbox_host": self.refbox_host,
+                "ports": {ch: [robot[ch][0], robot[ch][1]] for ch in robot}, "listen": self._ts_port[c],
+                "state": str(self.dir / f"{name}.sqlite"), "strategy": t.strategy, "seed": o.seed,
+                "baseline": t.baseline, "map_period": o.map_period, "snapshot": str(self.dir / f"{name}.json"),
+                "teamserver": t.teamserver, "oracle": truth if t.strategy == "oracle" else None,
+                "extra": t.spec.server_settings if t.spec is not None else {},
+                "log_channel": "teamserver" if self.legacy else name,
+                "robot_prefix": "" if self.legacy else f"{t.prefix}-"}
+            self._spawn_teamserver(c)
+        for c, n in self.backends:
+            self._spawn_agent(n, first_start=True, team=c)
 
     def _wait_for(self, ready: Callable[[], bool], what: str) -> None:
         """Until ``ready()`` (the world runs meanwhile); :class:`ChildExited` if a process ends or time runs out."""
@@ -204,33 +227,38 @@ class ProcessGame:
             last = self._tick(last)
             self._check_children()
 
-    def _spawn_teamserver(self) -> None:
-        k = len(self._team_logs)
-        log = self.dir / ("teamserver-messages.jsonl" if k == 0 else f"teamserver-messages-{k + 1}.jsonl")
-        self._team_logs.append(log)
-        cfg_file = self.dir / "teamserver-config.json"
-        cfg_file.write_text(json.dumps({**self._ts_cfg, "message_log": str(log)}))
-        self._spawn("teamserver", [sys.executable, "-m", "games.child", str(cfg_file)])
+    def _spawn_teamserver(self, color: str) -> None:
+        name = self._ts_name(color)
+        logs = self._team_logs[color]
+        k = len(logs)
+        log = self.dir / (f"{name}-messages.jsonl" if k == 0 else f"{name}-messages-{k + 1}.jsonl")
+        logs.append(log)
+        cfg_file = self.dir / f"{name}-config.json"
+        cfg_file.write_text(json.dumps({**self._ts_cfg[color], "message_log": str(log)}))
+        self._spawn(name, [sys.executable, "-m", "games.child", str(cfg_file)])
 
-    def _agent_backend_args(self, n: int) -> list[str]:
+    def _agent_backend_args(self, n: int, team: str = TEAM) -> list[str]:
         """The ``rll-bt agent`` arguments naming robot ``n``'s backend."""
         return ["--backend", "remote", "--backend-opt", f"address=127.0.0.1:{self.server.port}",
-                "--backend-opt", f"robot={n}"]
+                "--backend-opt", f"robot={n}" if team == TEAM else f"robot={team}/{n}"]
 
-    def _spawn_agent(self, n: int, first_start: bool, known_pose: bool = True) -> None:
+    def _spawn_agent(self, n: int, first_start: bool, known_pose: bool = True, team: str | None = None) -> None:
         o = self.options
-        pub, team = self.layout.robot("public"), self.layout.robot("cyan")
-        pose = self.world.robot_pose(TEAM, n)
-        start = ["--start-pose", f"{pose.x},{pose.y},{pose.theta}"] if known_pose else []
-        self._spawn(f"agent{n}", [
-            sys.executable, "-c", CLI_MAIN, "agent", "--robot", str(n), "--team", o.team_name,
-            "--key", o.key, "--profile", o.profile, *self._agent_backend_args(n),
-            "--teamserver", f"127.0.0.1:{self._ts_port}", "--refbox-host", self.refbox_host, "--layout", "sim",
+        t = self._team(team)
+        pub, chan = self.layout.robot("public"), self.layout.robot(t.color.lower())
+        pose = self.world.robot_pose(t.color, n)
+        start = [f"--start-pose={pose.x},{pose.y},{pose.theta}"] if known_pose else []
+        peer = [] if self.legacy else ["--name", f"{t.prefix}-R{n}"]
+        self._spawn(self._agent_name(t.color, n), [
+            sys.executable, "-c", CLI_MAIN, "agent", "--robot", str(n), "--team", t.name,
+            "--key", t.key, "--profile", o.profile, *self._agent_backend_args(n, t.color), *peer,
+            "--teamserver", f"127.0.0.1:{self._ts_port[t.color]}", "--refbox-host", self.refbox_host, "--layout", "sim",
             "--public-recv", str(pub.recv), "--public-send", str(pub.send),
-            "--team-recv", str(team.recv), "--team-send", str(team.send), *start, "--hz", str(o.hz),
+            "--team-recv", str(chan.recv), "--team-send", str(chan.send), *start, "--hz", str(o.hz),
             "--localisation", o.localisation, "-q"] + (["--first-start"] if first_start else []) + self._record_args(n))
 
     def _record_args(self, n: int) -> list[str]:
+        """``--record`` for an agent of a recorded game (a game of one team: ``GameOptions`` refuses two)."""
         if self.watch is None:
             return []
         cam = self.options.record_camera
@@ -249,45 +277,51 @@ class ProcessGame:
                 self._serve(0.01)
 
     # -- faults ------------------------------------------------------------------------------
-    def kill_agent(self, number: int) -> None:
+    def kill_agent(self, number: int, team: str | None = None) -> None:
         """The agent process dies without a goodbye (SIGKILL): its links drop,
         its robot stops once the last drive command times out."""
-        self._kill(f"agent{number}")
-        self._kills.append((self.wall.now(), number))
-        self.recorder.note("agent killed", robot=number)
+        t = self._team(team)
+        self._kill(self._agent_name(t.color, number))
+        self._kills.append((self.wall.now(), t.color, number))
+        self.recorders[t.color].note("agent killed", robot=number)
 
-    def start_agent(self, number: int, known_pose: bool = True) -> None:
+    def start_agent(self, number: int, known_pose: bool = True, team: str | None = None) -> None:
         """A new agent process for robot ``number`` (no memory of earlier tasks),
         starting from the robot's true pose, as an operator would set it, or
         with ``known_pose=False`` finding it by global localisation."""
-        if f"agent{number}" in self._alive():
+        t = self._team(team)
+        if self._agent_name(t.color, number) in self._alive():
             raise RuntimeError(f"the agent of robot {number} is running")
-        self._spawn_agent(number, first_start=False, known_pose=known_pose)
-        self.recorder.note("agent started", robot=number)
+        self._spawn_agent(number, first_start=False, known_pose=known_pose, team=t.color)
+        self.recorders[t.color].note("agent started", robot=number)
 
-    def restart_teamserver(self) -> None:
+    def restart_teamserver(self, team: str | None = None) -> None:
         """Kill the team server process (SIGKILL) and start a new one on the
         same database and agent port; the agents reconnect to it."""
-        self._kill("teamserver")
-        self.restarts += 1
-        self._spawn_teamserver()
-        self.recorder.note("team server restarted")
+        t = self._team(team)
+        self._kill(self._ts_name(t.color))
+        self.restarts[t.color] += 1
+        self._spawn_teamserver(t.color)
+        self.recorders[t.color].note("team server restarted")
 
     def station_down(self, machine: str, seconds: float) -> None:
         self.refbox.station_down(machine, seconds)
-        self.recorder.note("station down", machine=machine, seconds=seconds)
+        for rec in self.recorders.values():
+            rec.note("station down", machine=machine, seconds=seconds)
 
-    def snapshot(self) -> dict:
-        """The team server's view as it last wrote it (``now``: its wall clock)."""
+    def snapshot(self, team: str | None = None) -> dict:
+        """A team server's view as it last wrote it (``now``: its wall clock);
+        ``team``: its colour (default the first team of ours)."""
+        color = self._team(team).color
         try:
-            self._snap = json.loads(self.snapshot_file.read_text())
+            self._snap[color] = json.loads((self.dir / f"{self._ts_name(color)}.json").read_text())
         except (OSError, ValueError):
             pass
-        return self._snap
+        return self._snap.get(color, {})
 
     def _dead(self) -> list[str]:
         """The parts without which the game cannot go on that are gone."""
-        return [name for name in ("refbox", "teamserver") if name not in self._alive()]
+        return [name for name in ("refbox", *(self._ts_name(c) for c in self.ours)) if name not in self._alive()]
 
     def _alive(self) -> list[str]:
         return [name for name, p in self.procs.items() if p.poll() is None]
@@ -306,7 +340,8 @@ class ProcessGame:
             self.refbox.step()
             if self._started:
                 before = len(self.recorder.rec.samples)
-                self.recorder.sample()
+                for rec in self.recorders.values():
+                    rec.sample()
                 if self.progress is not None and len(self.recorder.rec.samples) != before:
                     self.progress(self.clock.now() - self._t0, self.refbox.status())
             elif self.progress is not None:       # the processes are coming up (the bar throttles itself)
@@ -317,8 +352,8 @@ class ProcessGame:
     def _wait_for_robots(self) -> bool:
         """Until the team server has every robot (the world runs meanwhile, the game does not)."""
         def ready() -> bool:
-            robots = self.snapshot().get("robots", {})
-            return all(robots.get(str(n), {}).get("status") == "ACTIVE" for n in self.robots)
+            return all(self.snapshot(c).get("robots", {}).get(str(n), {}).get("status") == "ACTIVE"
+                       for c, n in self.backends)
         try:
             self._wait_for(ready, "the team server's robots")
         except ChildExited:
@@ -336,7 +371,8 @@ class ProcessGame:
         self.refbox.start()
         self._t0 = self.clock.now()
         self._last = self._wall0 = self.wall.now()
-        self.recorder.sample(force=True)
+        for rec in self.recorders.values():
+            rec.sample(force=True)
         return True
 
     def run_until(self, predicate: Callable[[ProcessGame], bool], limit: float) -> bool:
@@ -388,36 +424,48 @@ class ProcessGame:
             raise RuntimeError("the result of this game was already made")
         self._result_made = True
         if self._started:
-            self.recorder.sample(force=True)
+            for r in self.recorders.values():
+                r.sample(force=True)
             lag = (self.wall.now() - self._wall0) - (self.clock.now() - self._t0)
             if lag > 1.0:         # the agents' timeouts ran on the wall clock meanwhile
                 self.recorder.note("the world fell behind the wall clock", seconds=round(lag, 1))
         self._stop_children()
-        snap = dict(self.snapshot())
-        snap["restarts"] = self.restarts
+        snaps = {}
+        for c in self.ours:
+            snaps[c] = dict(self.snapshot(c))
+            snaps[c]["restarts"] = self.restarts[c]
         t0, end = self._t0, self.clock.now()
-        team = sorted((e for path in self._team_logs for e in read_lines(path, self.time_map)),
-                      key=lambda e: e["t"])
-        rec = self.recorder.rec
-        rec.tasks = task_runs(team, end=end)
-        for wall, robot in self._kills:
-            t = round(self.time_map(wall), 4) if len(self.time_map) else self.clock.now()
-            for run in rec.tasks.get(robot, []):
-                if run["start"] <= t < run["end"]:
-                    run["end"], run["outcome"] = t, "agent killed"
-        shift_recording(rec, t0)
+        team = sorted((e for logs in self._team_logs.values() for path in logs
+                       for e in read_lines(path, self.time_map)), key=lambda e: e["t"])
+        for c in self.ours:
+            rec = self.recorders[c].rec
+            channel = "teamserver" if self.legacy else self._ts_name(c)
+            rec.tasks = task_runs(team, end=end, channel=channel, server=channel)
+            for wall, color, robot in self._kills:
+                t = round(self.time_map(wall), 4) if len(self.time_map) else self.clock.now()
+                for run in rec.tasks.get(robot, []) if color == c else ():
+                    if run["start"] <= t < run["end"]:
+                        run["end"], run["outcome"] = t, "agent killed"
+        for r in self.recorders.values():
+            shift_recording(r.rec, t0)
         messages = 0
         if self._refbox_log is not None:
-            refbox = [{**e, "from": udp_sender(e)} for e in read_lines(self._refbox_log, self.time_map)]
+            names = {c.lower(): self._ts_name(c) if c in self.ours else f"external-{c.lower()}" for c in self.lineup}
+            refbox = [{**e, "from": udp_sender(e, None if self.legacy else names)}
+                      for e in read_lines(self._refbox_log, self.time_map)]
             messages = merge_into(self.dir / "messages.jsonl", refbox, team, shift=t0)
-            for path in [self._refbox_log, *self._team_logs]:
+            for path in [self._refbox_log, *(p for logs in self._team_logs.values() for p in logs)]:
                 path.unlink(missing_ok=True)
         collisions = self.world.collision_log()
-        result = GameResult(finished=finished, status=self.refbox.status(), recording=rec,
-                            awards=self.refbox.awards(), deliveries=self.refbox.deliveries(), snapshot=snap,
+        home = next(iter(self.ours))
+        result = GameResult(finished=finished, status=self.refbox.status(), recording=self.recorder.rec,
+                            awards=self.refbox.awards(), deliveries=self.refbox.deliveries(), snapshot=snaps[home],
                             stations=self.refbox.stations(), orders=self.refbox.orders(), collisions=len(collisions),
-                            sim_time=end - t0, messages=messages, tally={TEAM: self.refbox.tally(TEAM)},
-                            collision_log=[(round(t - t0, 3), *rest) for t, *rest in collisions])
+                            sim_time=end - t0, messages=messages, tally={c: self.refbox.tally(c) for c in self.ours},
+                            collision_log=[(round(t - t0, 3), *rest) for t, *rest in collisions],
+                            recordings={c: r.rec for c, r in self.recorders.items()}, snapshots=snaps,
+                            labels={c: t.label for c, t in self.lineup.items()},
+                            sightings=self.world.laser_sightings())
         if self.watch is not None:
             self.watch.finish(result, self.dir / "messages.jsonl", t0)
         return result

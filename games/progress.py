@@ -14,7 +14,8 @@ from rll_bt.clock import Clock, WallClock
 
 class ProgressBar:
     def __init__(self, total: float, *, stream: IO[str] | None = None, clock: Clock | None = None,
-                 team: str = "CYAN", width: int = 28, every: float = 0.25, every_plain: float = 15.0):
+                 team: str | tuple[str, ...] = "CYAN", width: int = 28, every: float = 0.25,
+                 every_plain: float = 15.0):
         self.total = max(float(total), 1e-9)
         self.stream = stream or sys.stderr
         self.clock = clock or WallClock()
@@ -32,8 +33,14 @@ class ProgressBar:
         wall = self.clock.now() - self.t0
         speed = sim_t / wall if wall > 0 else 0.0
         return (f"[{'#' * fill}{'.' * (self.width - fill)}] {sim_t:6.0f}/{self.total:.0f} s  "
-                f"{status.phase:<11} {status.game_time:5.0f} s  score {status.points.get(self.team, 0):4d}  "
+                f"{status.phase:<11} {status.game_time:5.0f} s  score {self._score(status)}  "
                 f"wall {wall:5.0f} s ({speed:4.1f}x)")
+
+    def _score(self, status) -> str:
+        """Our points, or both teams' ("C 12 : M 8") when ``team`` names two."""
+        if isinstance(self.team, str):
+            return f"{status.points.get(self.team, 0):4d}"
+        return " : ".join(f"{t[0]} {status.points.get(t, 0)}" for t in self.team)
 
     def __call__(self, sim_t: float, status) -> None:
         now = self.clock.now()

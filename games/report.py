@@ -70,8 +70,53 @@ def _tally(result, team: str) -> dict:
                         "penalty": t.referee_penalty}}
 
 
-def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float | None = None) -> dict:
-    rec = result.recording
+def _other_team_collisions(log) -> int:
+    """Collisions of a robot with a robot of the other team."""
+    return sum(1 for _t, robot, what in log
+               if what.startswith("robot ") and what[len("robot "):].split("/")[0] != robot.split("/")[0])
+
+
+def summarise(result, options: GameOptions, team: str | None = None, wall_time: float | None = None) -> dict:
+    """The report of ``team`` (default: the first team of the game); a game of
+    two teams adds ``teams`` (each colour's report, without the game-wide
+    fields) and ``match`` (the score, who won, collisions between the teams,
+    what each robot's laser saw of the other team)."""
+    team = team or next(iter(getattr(result, "recordings", None) or {}), None) or result.recording.team
+    out = _summarise(result, options, team, wall_time)
+    recordings = getattr(result, "recordings", None) or {}
+    if len(recordings) > 1:
+        out["teams"] = {c: _team_part(_summarise(result, options, c, wall_time)) for c in recordings}
+        out["match"] = match(result)
+    return out
+
+
+TEAM_FIELDS = ("team", "config", "robots", "strategy", "baseline", "points", "exploration", "orders_delivered",
+               "deliveries", "robot_stats", "team_server_restarts", "awards", "events")
+
+
+def _team_part(summary: dict) -> dict:
+    return {k: summary[k] for k in TEAM_FIELDS if k in summary}
+
+
+def match(result) -> dict:
+    """Both teams' scores, the winner ("CYAN", "MAGENTA" or None for a draw),
+    collisions between the teams and the laser sightings of the other team."""
+    points = {c: int(result.status.points.get(c, 0)) for c in result.recordings}
+    cyan, magenta = points.get("CYAN", 0), points.get("MAGENTA", 0)
+    winner = None if cyan == magenta else ("CYAN" if cyan > magenta else "MAGENTA")
+    seen = {robot: sum(n for other, n in saw.items() if other.split("/")[0] != robot.split("/")[0])
+            for robot, saw in (result.sightings or {}).items()}
+    return {"points": points, "labels": dict(result.labels), "winner": winner,
+            "collisions_between_teams": _other_team_collisions(result.collision_log),
+            "other_team_in_laser_scans": {r: n for r, n in sorted(seen.items()) if n}}
+
+
+def _summarise(result, options: GameOptions, team: str, wall_time: float | None) -> dict:
+    recordings = getattr(result, "recordings", None) or {}
+    rec = recordings.get(team, result.recording)
+    snapshot = (getattr(result, "snapshots", None) or {}).get(team, result.snapshot)
+    teams = options.lineup()
+    me = teams.get(team)
     prof = options.rules
     by_phase: dict[str, int] = {}
     for a in result.awards:
@@ -94,10 +139,12 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
     lengths = options.phase_lengths()
     rules_setup = prof.phases.setup
     return {
-        "profile": options.profile, "seed": options.seed, "strategy": options.strategy,
+        "profile": options.profile, "seed": options.seed,
+        "strategy": me.strategy if me is not None else options.strategy,
         "perception": "camera (emulated hardware)" if options.hardware == "emulated" else options.perception,
-        "hardware": options.hardware, "robots": options.robots, "team": team,
-        "baseline": options.baseline,
+        "hardware": options.hardware, "robots": me.robots if me is not None else options.robots, "team": team,
+        "config": (getattr(result, "labels", None) or {}).get(team) or (me.label if me is not None else None),
+        "baseline": me.baseline if me is not None else options.baseline,
         "finished": bool(result.finished), "phase": result.status.phase,
         "sim_time": round(result.sim_time, 2),
         "wall_time": round(wall_time, 2) if wall_time is not None else None,
@@ -115,9 +162,10 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
         "robot_stats": robots,
         "collisions": result.collisions,
         "collisions_by_kind": _collision_kinds(result.collision_log),
+        "collisions_between_teams": _other_team_collisions(result.collision_log),
         "messages": result.messages,
-        "team_server_restarts": result.snapshot.get("restarts", 0),
-        "hardware_stats": result.snapshot.get("hardware", {}),
+        "team_server_restarts": snapshot.get("restarts", 0),
+        "hardware_stats": snapshot.get("hardware", {}),
         **_tally(result, team),
         "awards": [asdict(a) for a in result.awards if a.team == team],
         "events": rec.events,
@@ -125,6 +173,9 @@ def summarise(result, options: GameOptions, team: str = "CYAN", wall_time: float
 
 
 def table(summary: dict) -> str:
+    """The report for a person: one team's, or both teams' side by side."""
+    if summary.get("teams"):
+        return match_table(summary)
     s = summary
     ex = s["exploration"]
     known = (f"all scored after {ex['all_points_after']:.0f} s" if ex["all_points_after"] is not None
@@ -161,6 +212,47 @@ def table(summary: dict) -> str:
         for name, h in sorted(hw.items()):
             lines.append(f"{name:8} {h['serial_polls_per_s']:14.1f} {h['scans_per_s']:8.2f} {h['frames_per_s']:9.2f} "
                          f"{h['watchdog_motion_stops']:15d}")
+    return "\n".join(lines)
+
+
+def match_table(summary: dict) -> str:
+    """Both teams of a game side by side, then the match and every robot."""
+    s, teams, m = summary, summary["teams"], summary["match"]
+    colors = list(teams)
+    head = {c: f"{c} {teams[c]['config'] or ''}".strip() for c in colors}
+    width = max(18, *(len(h) + 2 for h in head.values()))
+
+    def row(label: str, values) -> str:
+        return f"{label:22}" + "".join(f"{v:>{width}}" for v in values)
+    win = m["winner"]
+    result = (f"{head[win]} won {m['points'][win]} : {min(m['points'].values())}" if win
+              else f"a draw at {m['points'][colors[0]]}")
+    lines = [
+        f"{s['profile']} seed {s['seed']}, perception {s['perception']}: "
+        + " against ".join(f"{c.lower()} {teams[c]['config']} ({teams[c]['robots']} robots, strategy "
+                           f"{teams[c]['strategy']})" for c in colors),
+        f"game {'finished' if s['finished'] else 'NOT finished'} in phase {s['phase']} after "
+        f"{s['sim_time']:.0f} s simulated" + (f", {s['wall_time']:.0f} s wall" if s.get("wall_time") else "")
+        + (f" (SETUP shortened to {s['phase_lengths']['SETUP']:.0f} s)" if s["setup_shortened"] else ""),
+        "",
+        row("", [head[c] for c in colors]),
+        row("exploration points", [f"{teams[c]['exploration']['points']} / {teams[c]['exploration']['max_points']}"
+                                   for c in colors]),
+        row("production points", [teams[c]["points"]["production"] for c in colors]),
+        row("total score", [teams[c]["points"]["total"] for c in colors]),
+        row("orders delivered", [teams[c]["orders_delivered"] for c in colors]),
+        "",
+        f"{result}; collisions between the teams {m['collisions_between_teams']}, all collisions "
+        f"{s['collisions']} (" + ", ".join(f"{k} {v}" for k, v in sorted(s.get("collisions_by_kind", {}).items()))
+        + ")",
+        "",
+        f"{'robot':8} {'busy s':>8} {'busy %':>7} {'tasks':>6} {'failed':>7} {'driven m':>9} {'other team seen':>16}",
+    ]
+    seen = m.get("other_team_in_laser_scans", {})
+    for c in colors:
+        for n, r in teams[c]["robot_stats"].items():
+            lines.append(f"{c[0]}-R{n:<5} {r['busy_time']:8.0f} {100 * r['busy_share']:6.0f}% {r['tasks']:6d} "
+                         f"{r['failed']:7d} {r['distance']:9.1f} {seen.get(f'{c}/{n}', 0):>9d} scans")
     return "\n".join(lines)
 
 

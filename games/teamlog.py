@@ -13,7 +13,8 @@ robot's task intervals from them (:func:`task_runs`) as lockstep records
 them from its agents.
 
 Lines have the lockstep schema: ``{"t", "channel": "teamserver", "from":
-"teamserver" or "R<robot>", "type", "msg"}``.
+"teamserver" or "R<robot>", "type", "msg"}``; in a game of two teams
+each team's as lockstep names them (``teamserver-cyan``, ``C-R1``).
 """
 from __future__ import annotations
 
@@ -35,11 +36,13 @@ class LoggedStreamServer(StreamServer):
     """A :class:`~rll_bt.comm.StreamServer` that records every message it
     sends (one line per client it reaches, as the bus carries them) and
     receives into ``log`` (a :class:`~games.msglog.MessageLog`).
-    A client is named ``R<robot_id>`` after the first message naming its robot."""
+    A client is named ``<prefix>R<robot_id>`` after the first message naming its robot;
+    the lines say ``channel`` and the server is ``server``."""
 
-    def __init__(self, *args, log, **kwargs):
+    def __init__(self, *args, log, channel: str = CHANNEL, server: str = SERVER, prefix: str = "", **kwargs):
         super().__init__(*args, **kwargs)
         self.log = log
+        self.channel, self.server, self.prefix = channel, server, prefix
         self._names: dict[int, str] = {}
 
     def send(self, msg, to: int | None = None) -> bool:
@@ -48,19 +51,19 @@ class LoggedStreamServer(StreamServer):
         for cid in targets:
             if super().send(msg, to=cid):
                 sent = True
-                self.log.record(CHANNEL, SERVER, msg)
+                self.log.record(self.channel, self.server, msg)
         return sent
 
     def receive(self):
         items = super().receive()
         for rx in items:
-            self.log.record(CHANNEL, self._name(rx), rx.msg)
+            self.log.record(self.channel, self._name(rx), rx.msg)
         return items
 
     def _name(self, rx) -> str:
         fields = rx.msg.DESCRIPTOR.fields_by_name
         if "robot_id" in fields and rx.msg.HasField("robot_id"):
-            self._names[rx.source] = f"R{int(rx.msg.robot_id)}"
+            self._names[rx.source] = f"{self.prefix}R{int(rx.msg.robot_id)}"
         return self._names.get(rx.source, f"client{rx.source}")
 
     def _drop(self, cid: int) -> None:
@@ -166,23 +169,25 @@ def _kinds() -> frozenset[str]:
     return frozenset(f.name for f in task.DESCRIPTOR.oneofs_by_name["kind"].fields)
 
 
-def task_runs(lines: Iterable[dict], end: float | None = None) -> dict[int, list[dict]]:
+def task_runs(lines: Iterable[dict], end: float | None = None, *, channel: str = CHANNEL,
+              server: str = SERVER) -> dict[int, list[dict]]:
     """Each robot's task intervals from team-protocol lines in time order:
     ``{robot: [{"kind", "id", "start", "end", "outcome"}]}``.  A Task sent
     to a robot starts a run (a repeat of its open task changes nothing, a
     different one ends the open run as CANCELLED); the robot's TaskResult
     SUCCEEDED, FAILED or CANCELLED ends it.  Runs still open are closed at
-    ``end`` ("running at the end"), or left with ``end`` None."""
+    ``end`` ("running at the end"), or left with ``end`` None.  ``channel`` and
+    ``server``: the team's link and its server as the lines name them."""
     kinds = _kinds()
     runs: dict[int, list[dict]] = {}
     for e in lines:
-        if e.get("channel") != CHANNEL or e.get("type") not in ("Task", "TaskResult"):
+        if e.get("channel") != channel or e.get("type") not in ("Task", "TaskResult"):
             continue
         m = e["msg"]
         robot, tid, t = int(m["robot_id"]), int(m["task_id"]), e["t"]
         mine = runs.setdefault(robot, [])
         cur = mine[-1] if mine and mine[-1]["end"] is None else None
-        if e["type"] == "Task" and e["from"] == SERVER:
+        if e["type"] == "Task" and e["from"] == server:
             if cur is not None and cur["id"] == tid:
                 continue
             if cur is not None:

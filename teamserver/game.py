@@ -14,6 +14,8 @@ look-ahead, so no caps retrieved ahead either; see
 """
 from __future__ import annotations
 
+import dataclasses
+
 from rll_bt.contracts import TeamServerHandle, TeamServerOptions
 from rll_bt.plugins import offers
 
@@ -42,8 +44,7 @@ class InProcessTeamServer(TeamServerHandle):
         if self.options.baseline:
             cfg.max_products = 1
             cfg.prefill_caps = False        # no look-ahead: no caps retrieved for later orders
-        for k, v in self.options.extra.items():
-            setattr(cfg, k, v)
+        configure(cfg, self.options.extra)
         self.config = cfg
         self.oracle = oracle
         self.restarts = 0
@@ -100,8 +101,42 @@ class InProcessTeamServer(TeamServerHandle):
         srv.close()
 
 
-@offers(strategy=tuple(STRATEGIES))
+#: the ServerConfig fields a team configuration may set by name (``htn:replan_period=5``)
+SETTINGS = tuple(f.name for f in dataclasses.fields(ServerConfig)
+                 if f.type in ("str", "int", "float", "bool", "int | None") and f.name not in ("strategy", "seed"))
+
+
+def configure(cfg: ServerConfig, extra: dict) -> None:
+    """Set ``extra`` on ``cfg``: objects as they are (tests pass a DispatchConfig),
+    the named scalar :data:`SETTINGS` checked against their field's type;
+    ``ValueError`` for an unknown name or a value of the wrong type."""
+    types = {f.name: f.type for f in dataclasses.fields(ServerConfig)}
+    for name, value in extra.items():
+        if name not in types:
+            raise ValueError(f"the team server has no setting {name!r} (settings: {', '.join(SETTINGS)})")
+        kind = types[name]
+        if name in SETTINGS:
+            ok = {"bool": isinstance(value, bool), "str": isinstance(value, str),
+                  "int": isinstance(value, int) and not isinstance(value, bool),
+                  "int | None": value is None or (isinstance(value, int) and not isinstance(value, bool)),
+                  "float": isinstance(value, int | float) and not isinstance(value, bool)}[kind]
+            if not ok:
+                raise ValueError(f"team server setting {name} takes {kind}, not {value!r}")
+            if kind == "float":
+                value = float(value)
+        setattr(cfg, name, value)
+
+
+def check_options(options: TeamServerOptions) -> None:
+    """What :func:`open_teamserver` would refuse in ``options`` (``ValueError``), without starting it."""
+    configure(ServerConfig(), options.extra)
+
+
+@offers(strategy=tuple(STRATEGIES), setting=SETTINGS, planner=("htn", "greedy"))
 def open_teamserver(**options) -> InProcessTeamServer:
     """Entry point ``rll_bt.teamservers: htn`` (options of :class:`InProcessTeamServer`);
     publishes the exploration strategies it plays (``choices["strategy"]``)."""
     return InProcessTeamServer(**options)
+
+
+open_teamserver.check = check_options

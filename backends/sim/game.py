@@ -90,6 +90,9 @@ class PyBulletWorld(World):
     def collision_log(self) -> list[tuple[float, str, str]]:
         return [(c.time, f"{c.robot[0]}/{c.robot[1]}", str(c.obstacle)) for c in self.pybullet.collision_log]
 
+    def laser_sightings(self) -> dict[str, dict[str, int]]:
+        return self.pybullet.laser_sightings()
+
     def close(self) -> None:
         self.pybullet.close()
 
@@ -130,18 +133,32 @@ class _ViewOfWorld:
         return self.view.tally(team)
 
 
+def _teams(team_name: str, key: str, teams: dict | None) -> dict[str, tuple[str, str]]:
+    """colour -> (team name, key): ``teams`` when given, else ``team_name`` playing cyan."""
+    if not teams:
+        return {"CYAN": (team_name, key)}
+    out = {c.upper(): (str(n), str(k)) for c, (n, k) in teams.items()}
+    bad = set(out) - {"CYAN", "MAGENTA"}
+    if bad:
+        raise ValueError(f"team colours are CYAN and MAGENTA, not {', '.join(sorted(bad))}")
+    return out
+
+
 class RefboxHere(_ViewOfWorld, InProcessRefbox):
-    """The simulated refbox in this process on the world's clock.  ``team_name``/``key``:
-    the team playing cyan; ``phases``: phase lengths in game seconds ({"setup": 10, ...})."""
+    """The simulated refbox in this process on the world's clock.  ``teams``:
+    colour -> (team name, key) of each team playing (default: ``team_name``
+    with ``key`` playing cyan); ``phases``: phase lengths in game seconds
+    ({"setup": 10, ...})."""
 
     def __init__(self, world: PyBulletWorld, *, team_name: str, key: str, phases: dict | None = None,
-                 stored=None, save_game: str | None = None):
+                 stored=None, save_game: str | None = None, teams: dict | None = None):
         from .refbox.stored_game import play_stored, store_game
         self.world = world
-        self.team_name, self.key = team_name, key
+        self.teams = _teams(team_name, key, teams)
         timing = Timing.from_profile(world.profile, **{k: float(v) for k, v in (phases or {}).items()})
-        self.game = RefboxGame(world.profile, world.clock, world.pybullet, seed=world.seed, team_cyan=team_name,
-                               timing=timing)
+        names = {c: n for c, (n, _k) in self.teams.items()}
+        self.game = RefboxGame(world.profile, world.clock, world.pybullet, seed=world.seed,
+                               team_cyan=names.get("CYAN"), team_magenta=names.get("MAGENTA"), timing=timing)
         if stored is not None:
             play_stored(self.game, stored)
         if save_game is not None:
@@ -150,7 +167,7 @@ class RefboxHere(_ViewOfWorld, InProcessRefbox):
         self.node: RefboxNode | None = None
 
     def attach_bus(self, bus) -> None:
-        self.node = RefboxNode.on_bus(self.game, bus, keys={self.team_name: self.key})
+        self.node = RefboxNode.on_bus(self.game, bus, keys=dict(self.teams.values()))
 
     def start(self) -> None:
         self.game.start()
@@ -176,10 +193,11 @@ class RefboxOverLink(_ViewOfWorld, RefboxProcess):
     snapshot.  ``team_name``, ``key`` and ``phases`` as for :class:`RefboxHere`."""
 
     def __init__(self, world: PyBulletWorld, *, team_name: str, key: str, phases: dict | None = None,
-                 stored=None, save_game: str | None = None, stored_file: str | None = None):
+                 stored=None, save_game: str | None = None, stored_file: str | None = None,
+                 teams: dict | None = None):
         from .refbox.link import StationServer
         self.world = world
-        self.team_name, self.key = team_name, key
+        self.teams = _teams(team_name, key, teams)
         self.phases = {k: float(v) for k, v in (phases or {}).items()}
         self.stored_file, self.save_game = stored_file, save_game
         self.link = StationServer(world.pybullet)
@@ -190,7 +208,7 @@ class RefboxOverLink(_ViewOfWorld, RefboxProcess):
         ports = ",".join(f"{ch}={layout.refbox(ch).send}/{layout.refbox(ch).recv}"
                          for ch in ("public", "cyan", "magenta"))
         args = ["refbox", "sim", "--profile", self.world.profile.name, "--seed", str(self.world.seed),
-                "--team-cyan", self.team_name, f"--key-cyan={self.key}", "--host", host, "--ports", ports,
+                *self._team_args(), "--host", host, "--ports", ports,
                 "--no-stream", "--start", "command", "--mockup", "off",
                 "--world", f"remote:127.0.0.1:{self.link.port}", "--snapshot", str(snapshot),
                 "--snapshot-period", str(SNAPSHOT_PERIOD)]
@@ -203,6 +221,12 @@ class RefboxOverLink(_ViewOfWorld, RefboxProcess):
         if self.save_game is not None:
             args += ["--save-game", str(self.save_game)]
         return args
+
+    def _team_args(self) -> list[str]:
+        out = []
+        for color, (name, key) in self.teams.items():
+            out += [f"--team-{color.lower()}", name, f"--key-{color.lower()}={key}"]
+        return out
 
     def ready(self) -> bool:
         return self.view.ready
@@ -245,11 +269,13 @@ def load_stored(path: str | Path, profile: str):
 def open_game(profile: str = "rcll2016", seed: int = 0, *, team_name: str, key: str, perception: str = "oracle",
               gui: bool = False, phases: dict | None = None, world_step: float = 0.05,
               robot_options: dict | None = None, refbox: str = "here", stored_game: str | Path | None = None,
-              save_game: str | Path | None = None, external: dict | None = None) -> Simulation:
+              save_game: str | Path | None = None, external: dict | None = None,
+              teams: dict | None = None) -> Simulation:
     """Entry point ``rll_bt.simulators: pybullet``: a :class:`PyBulletWorld` and
     its refbox (``refbox``: "here", "process" or "external", see the module
     doc; "external": ``external`` holds :func:`.external.open_external`'s
-    keywords, the refbox's address, its control, the stations' wire);
+    keywords, the refbox's address, its control, the stations' wire) for the
+    ``teams`` (colour -> (team name, key); default ``team_name`` playing cyan);
     publishes its perception modes (``choices["perception"]``).
     ``stored_game``: a stored game's file (:mod:`.stored`) whose field the
     world takes and whose orders, ring setup and down periods the refbox
@@ -274,10 +300,12 @@ def open_game(profile: str = "rcll2016", seed: int = 0, *, team_name: str, key: 
     save = str(save_game) if save_game is not None else None
     try:
         if refbox == "here":
-            made = RefboxHere(world, team_name=team_name, key=key, phases=phases, stored=stored, save_game=save)
+            made = RefboxHere(world, team_name=team_name, key=key, phases=phases, stored=stored, save_game=save,
+                              teams=teams)
         else:
             made = RefboxOverLink(world, team_name=team_name, key=key, phases=phases, save_game=save,
-                                  stored_file=str(Path(stored_game).resolve()) if stored_game is not None else None)
+                                  stored_file=str(Path(stored_game).resolve()) if stored_game is not None else None,
+                                  teams=teams)
         return Simulation(world, made)
     except BaseException:
         world.close()

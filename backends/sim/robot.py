@@ -128,6 +128,8 @@ class SimRobot:
     born: float = 0.0                     # sim time the robot was added
     holding: int | None = None            # id of the workpiece in the gripper
     last_scan: object = None
+    #: bodies of other robots its laser scans have hit: body id -> scans (see World.laser_sightings)
+    laser_hits: dict = field(default_factory=dict)
     last_image: object = None
     camera_frame: tuple | None = None     # (what it showed, image) of the last sparse frame
     gripper: Gripper = field(init=False)

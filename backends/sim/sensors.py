@@ -32,13 +32,15 @@ def ray_mask(robot: SimRobot | None) -> int:
 
 
 def laser_ranges(cid: int, robot: SimRobot, angles: np.ndarray, noisy: bool = True, *,
-                 first: float | None = None, step: float = 0.0) -> np.ndarray:
+                 first: float | None = None, step: float = 0.0, robots: frozenset = frozenset()) -> np.ndarray:
     """Ranges (m) along ``angles`` (rad, laser frame) from the robot's laser
     mount; ``inf`` where nothing is hit within range; the robot's laser noise
     when ``noisy``.  A regular scan may pass its ``first`` angle and ``step``
     too: the world angles are then ``(theta + first) + step * i``, summed in
     the order lockstep games have always used (a different rounding of the
-    beam angles makes a seeded game play differently)."""
+    beam angles makes a seeded game play differently).  Each body of
+    ``robots`` (other robots' body ids) the rays hit is counted once in
+    ``robot.laser_hits``."""
     p = pybullet()
     cfg, g = robot.config, robot.config.geometry
     angles = np.asarray(angles, dtype=float)
@@ -57,20 +59,24 @@ def laser_ranges(cid: int, robot: SimRobot, angles: np.ndarray, noisy: bool = Tr
     hits = p.rayTestBatch(start, end, numThreads=1, collisionFilterMask=ray_mask(robot),
                           physicsClientId=cid)
     ranges = np.array([hit[2] for hit in hits]) * rmax
-    ranges[np.array([hit[0] for hit in hits]) < 0] = np.inf
+    bodies = np.array([hit[0] for hit in hits])
+    ranges[bodies < 0] = np.inf
+    if robots:
+        for body in robots.intersection(bodies.tolist()):
+            robot.laser_hits[body] = robot.laser_hits.get(body, 0) + 1
     if noisy and cfg.laser_noise > 0.0:
         ranges = ranges + robot.rng.normal(0.0, cfg.laser_noise, n)
     return np.where(np.isfinite(ranges), np.clip(ranges, rmin, rmax), np.inf)
 
 
-def laser_scan(cid: int, robot: SimRobot, stamp: float) -> LaserScan:
+def laser_scan(cid: int, robot: SimRobot, stamp: float, robots: frozenset = frozenset()) -> LaserScan:
     cfg, g = robot.config, robot.config.geometry
     n = cfg.laser_beams
     angle_min = -cfg.laser_fov / 2.0
     inc = cfg.laser_fov / (n - 1) if n > 1 else 0.0
     rmin, rmax = cfg.laser_range
     mx, my, _ = g.laser_mount
-    ranges = laser_ranges(cid, robot, angle_min + inc * np.arange(n), first=angle_min, step=inc)
+    ranges = laser_ranges(cid, robot, angle_min + inc * np.arange(n), first=angle_min, step=inc, robots=robots)
     return LaserScan(stamp, angle_min, inc, rmin, rmax, ranges, mount=Pose2D(mx, my, 0.0))
 
 

@@ -342,8 +342,15 @@ class World(StationAPI, GripperHandling, CameraViews):
         if last is not None and self.time - last.stamp < 1.0 / robot.config.laser_rate - 1e-9:
             return last
         self._sync_bodies()
-        robot.last_scan = sensors.laser_scan(self.cid, robot, self.time)
+        others = frozenset(r.body for r in self.robots.values() if r is not robot)
+        robot.last_scan = sensors.laser_scan(self.cid, robot, self.time, others)
         return robot.last_scan
+
+    def laser_sightings(self) -> dict[str, dict[str, int]]:
+        """Per robot ("TEAM/N"), the other robots its laser scans have hit: robot -> scans."""
+        name = {r.body: r.name for r in self.robots.values()}
+        return {r.name: {name[b]: n for b, n in sorted(r.laser_hits.items(), key=lambda kv: name[kv[0]])}
+                for r in sorted(self.robots.values(), key=lambda r: r.name) if r.laser_hits}
 
     def detections(self, robot: SimRobot, camera: str = "front"):
         """Oracle detections (works in either mode; the backend exposes it only in oracle mode)."""

@@ -38,9 +38,11 @@ class _Counted(DropStats):
 class FrameDecoder:
     """Decodes tapped frames with the registry of their channel, plain or
     with the team key.  ``registries``: channel or address ->
-    :class:`MessageRegistry` (``default`` for the rest)."""
+    :class:`MessageRegistry` (``default`` for the rest); ``key``: the team
+    key, or channel or address -> key (a game of two teams, each its own)."""
 
-    def __init__(self, registries: dict[str, MessageRegistry], default: MessageRegistry, key: str | None = None):
+    def __init__(self, registries: dict[str, MessageRegistry], default: MessageRegistry,
+                 key: str | dict[str, str] | None = None):
         self._codecs: dict[str, tuple[FrameCodec, FrameCodec | None]] = {}
         self._registries = registries
         self._default = default
@@ -50,7 +52,8 @@ class FrameDecoder:
         pair = self._codecs.get(channel)
         if pair is None:
             reg = self._registries.get(channel, self._default)
-            keyed = FrameCodec(reg, key=self._key, stats=_Counted()) if self._key else None
+            key = self._key.get(channel) if isinstance(self._key, dict) else self._key
+            keyed = FrameCodec(reg, key=key, stats=_Counted()) if key else None
             pair = self._codecs[channel] = (FrameCodec(reg, stats=_Counted()), keyed)
         return pair
 

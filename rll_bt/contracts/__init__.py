@@ -25,10 +25,18 @@ from .refbox import (
     Tally,
 )
 from .simulation import SIMULATORS, Simulation, SimulatorFactory, load_simulator
-from .teamserver import TEAMSERVERS, TeamServerFactory, TeamServerHandle, TeamServerOptions, load_teamserver
+from .teamserver import (
+    TEAMSERVERS,
+    TeamServerFactory,
+    TeamServerHandle,
+    TeamServerOptions,
+    check_teamserver,
+    load_teamserver,
+)
 from .world import World
 
 __all__ = ["Award", "Delivery", "GameStatus", "StationTruth", "Tally", "RefboxView", "SimulatedRefbox",
            "InProcessRefbox", "RefboxProcess", "World", "SIMULATORS", "Simulation", "SimulatorFactory",
            "load_simulator",
-           "TEAMSERVERS", "TeamServerFactory", "TeamServerHandle", "TeamServerOptions", "load_teamserver"]
+           "TEAMSERVERS", "TeamServerFactory", "TeamServerHandle", "TeamServerOptions", "load_teamserver",
+           "check_teamserver"]

@@ -8,7 +8,11 @@ refbox's public channel, ``refbox_team`` is ``color -> Transport`` (the
 team channel once the colour is known) and ``agents`` a zero-argument
 factory of the stream server the agents connect to (each called again on a
 restart).  The factory publishes the exploration strategies it plays as
-``choices["strategy"]`` (:func:`rll_bt.plugins.offers`).
+``choices["strategy"]`` (:func:`rll_bt.plugins.offers`), the names of the
+settings :attr:`TeamServerOptions.extra` may give as ``choices["setting"]``,
+and may carry ``factory.check(options)``, raising ``ValueError`` for options
+it would refuse (:func:`check_teamserver`), so a tournament of many games
+finds a bad setting before its first game.
 """
 from __future__ import annotations
 
@@ -63,3 +67,11 @@ def load_teamserver(name: str) -> TeamServerFactory:
     """The ``rll_bt.teamservers`` entry point ``name``; KeyError names the installed ones."""
     from .. import plugins
     return plugins.load(TEAMSERVERS, name)
+
+
+def check_teamserver(name: str, options: TeamServerOptions) -> None:
+    """``ValueError`` when team server ``name`` would refuse ``options`` (its
+    factory's ``check``, when it has one); KeyError names the installed ones."""
+    check = getattr(load_teamserver(name), "check", None)
+    if check is not None:
+        check(options)

@@ -51,5 +51,11 @@ class World(abc.ABC):
         station's name, "wall" or "robot TEAM/N")."""
         return []
 
+    def laser_sightings(self) -> dict[str, dict[str, int]]:
+        """Per robot ("TEAM/N"), the other robots ("TEAM/N") its laser has
+        seen so far and in how many scans: what a robot can know of another
+        team's robots (empty where the world does not count them)."""
+        return {}
+
     def close(self) -> None:
         pass
