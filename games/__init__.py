@@ -31,7 +31,8 @@ entry points (groups ``rll_bt.simulators``, ``rll_bt.teamservers``,
 - :mod:`.progress`: the progress line; :mod:`.batch`: many games in worker
   processes (the benchmarks); :mod:`.cli`: ``rll-bt sim``;
 - :mod:`.teams`: who plays (``--cyan CONFIG --magenta CONFIG``, two teams
-  on one field).
+  on one field); :mod:`.tournament`: round robins of configurations
+  (``rll-bt tournament``) on a local pool or a Dask cluster.
 """
 from __future__ import annotations
 

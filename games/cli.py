@@ -182,6 +182,9 @@ def register(cli) -> None:
     from .view.command import add
     add(cli)
 
+    from .tournament.cli import register as register_tournament
+    register_tournament(cli)
+
 
 def options_from(args):
     from .options import GameOptions
