@@ -134,10 +134,14 @@ class ProductionContext:
 
 def storage_pays(ctx: ProductionContext) -> bool:
     """Store the finished product in the storage station: there is one, it is usable,
-    and the product is expected ready ``min_wait`` s or more before its window opens."""
+    and the product is expected ready ``min_wait`` s or more before its window opens,
+    and more than ``retrieve_lead`` s (a product would be retrieved again at once: one
+    just retrieved for its window would go round the station again and again)."""
     st = ctx.storage
-    return (st is not None and st.ready_at is not None and st.machine not in ctx.unusable
-            and ctx.order is not None and ctx.order.begin - st.ready_at >= st.min_wait)
+    if st is None or st.ready_at is None or st.machine in ctx.unusable or ctx.order is None:
+        return False
+    wait = ctx.order.begin - st.ready_at
+    return wait >= st.min_wait and wait > st.retrieve_lead
 
 
 def _ss_place(place) -> dict:
