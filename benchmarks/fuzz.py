@@ -206,25 +206,30 @@ def tree_targets(tmp: Path) -> list[Target]:
     return [Target("YAML trees", seeds, tree, (TreeLoadError,), note="parse_tree raises TreeLoadError")]
 
 
-def config_targets() -> list[Target]:
-    """The robot configuration, where the project has one."""
-    try:
-        from backends.devices import config as robot_config  # added with the Robotino's devices
-    except ImportError:
-        return []
-    load = getattr(robot_config, "parse_config", None) or getattr(robot_config, "load_text", None)
-    error = getattr(robot_config, "ConfigError", ValueError)
-    examples = sorted(Path(__file__).resolve().parents[1].rglob("robot*.yaml"))
-    if load is None or not examples:
-        return []
-    return [Target("robot configs", [p.read_bytes() for p in examples], lambda d: load(text(d)), (error,))]
+def config_targets(tmp: Path) -> list[Target]:
+    """The robot configuration (backends/robotino/config.py): YAML read from a file
+    and checked against its schema; seeds: the module's own example and variants."""
+    import textwrap
+
+    from backends.robotino import config as robot_config
+    example = textwrap.dedent(robot_config.__doc__.split("Example::", 1)[1]).strip() + "\n"
+    seeds = [example, "base: {type: robotino3, device: /dev/ttyACM0}\n",
+             "name: R2\nbase: {type: robotino4}\nlaser: {type: tim, host: 192.168.0.1, port: 2112}\n",
+             example.replace("urg", "tim") + "faults: {}\n"]
+    path = tmp / "robot.yaml"
+
+    def load(data: bytes):
+        path.write_bytes(data)
+        robot_config.load_robot_config(path)
+    return [Target("robot configs", [x.encode() for x in seeds], load, (robot_config.RobotConfigError,),
+                   note="load_robot_config raises RobotConfigError")]
 
 
 def all_targets(tmp: Path) -> list[Target]:
     out = []
-    for make in (refbox_targets, team_targets, robotino_targets, laser_targets, config_targets):
+    for make in (refbox_targets, team_targets, robotino_targets, laser_targets):
         out += make()
-    return out + tree_targets(tmp)
+    return out + config_targets(tmp) + tree_targets(tmp)
 
 
 def fuzz(target: Target, n: int, seed: int, report: Callable[[int], None]) -> None:

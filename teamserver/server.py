@@ -235,6 +235,8 @@ class TeamServer:
             self._on_agent(rx.msg, rx.source)
 
     def _on_agent(self, m, peer) -> None:
+        if not self.tasks.incoming(m):
+            return
         name = m.DESCRIPTOR.name
         if name == "RobotHello":
             r = self.link.on_hello(m, peer)
@@ -274,9 +276,7 @@ class TeamServer:
         self.send_agent(r, self._phase_msg())
         self.send_agent(r, self.link.machine_map_msg(consistent_set(self.profile,
                                                                     self.kb.machines)))
-        t = self.kb.tasks.get(r.task_id) if r.task_id is not None else None
-        if t is not None and t.state == M.ASSIGNED and t.robot == r.number:
-            self.send_agent(r, self.link.task_msg(t, self.color))
+        self.tasks.welcome(r)
         self._replan = True
 
     def send_agent(self, robot: M.Robot | None, msg) -> None:

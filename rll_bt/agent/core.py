@@ -24,6 +24,7 @@ from ..clock import Clock
 from ..comm import CONNECTED, DISCONNECTED
 from . import robotstate
 from .config import AgentConfig
+from .delivery import ServerDelivery
 from .errorcodes import error_code
 from .gamestate import GameGate
 from .machinemap import KnownMachines, changed_names, distribute
@@ -36,7 +37,7 @@ from .tasks import InvalidTask, agent_task, task_kind, task_params
 
 log = logging.getLogger("rll_bt.agent")
 
-KEEP_FINISHED = 64      # results remembered to answer re-sent tasks and cancels
+KEEP_FINISHED = 1024    # results remembered to answer re-sent tasks and cancels
 
 
 class RobotAgent:
@@ -81,8 +82,8 @@ class RobotAgent:
         self.machines: KnownMachines | None = None
         self.map_updates = 0
         self.finished: OrderedDict[int, Any] = OrderedDict()     # task id -> final TaskResult
-        self._beacon_finished: deque[list] = deque()             # [task_id, ok, beacons left]
-        self._outbox: deque = deque(maxlen=256)                  # final results awaiting the link
+        self._beacon_finished: deque[list] = deque(maxlen=32)    # [task_id, ok, beacons left]
+        self.delivery = ServerDelivery(link, clock, lambda: self.tm.LinkAck(robot_id=config.robot_id))
         self._restarted_next = restarted
         self._hello_due = False
         self.connected = False
@@ -120,6 +121,7 @@ class RobotAgent:
                 self._next_tick = now + period
             self.tick()
         self._periodic(self.clock.now())
+        self.delivery.step(self.connected)
         self._flush()
         self._notify("stepped")
 
@@ -170,6 +172,8 @@ class RobotAgent:
         for rec in self.link.receive():
             self.last_server_rx = self.clock.now()
             self.server_silent = False
+            if not self.delivery.incoming(rec.msg):
+                continue                        # an acknowledgement
             try:
                 self._on_server_message(rec.msg)
             except Exception:       # a message the agent chokes on must not stop the robot's loop
@@ -190,10 +194,7 @@ class RobotAgent:
             self._send_status(force=True)
             if self.run is not None and not self.run.done:
                 self._send(self._result(self.run.task_id, "RUNNING"))
-            while self._outbox:
-                if not self.link.send(self._outbox[0]):
-                    break
-                self._outbox.popleft()
+            self.delivery.reconnected()         # final results the server has not acknowledged
 
     def _on_server_message(self, m) -> None:
         name = m.DESCRIPTOR.name
@@ -340,8 +341,7 @@ class RobotAgent:
         while len(self.finished) > KEEP_FINISHED:
             self.finished.popitem(last=False)
         self._beacon_finished.append([tid, ok, self.config.finished_beacons])
-        if not self._send(result):
-            self._outbox.append(result)
+        self.delivery.send_final(result, self.connected)
 
     def _result(self, tid: int, status: str, code: str = "NONE", text: str = ""):
         r = self.tm.TaskResult(task_id=tid, robot_id=self.config.robot_id,

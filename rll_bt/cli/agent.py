@@ -72,6 +72,17 @@ def register(cli) -> None:
     g.add_argument("--first-start", action="store_true",
                    help="the first RobotHello says restarted=false (default: true, the agent has no memory "
                         "of earlier tasks)")
+    g = p.add_argument_group(
+        "network faults (testing)", "emulate a lossy radio on this agent's team-server link, both ways "
+        "(the refbox channels stay as they are)")
+    g.add_argument("--net-loss", type=_share, default=0.0, metavar="P", help="share of TCP segments lost (default 0)")
+    g.add_argument("--net-delay", type=_nonneg_float, default=0.0, metavar="S", help="one-way delay (default 0)")
+    g.add_argument("--net-jitter", type=_nonneg_float, default=0.0, metavar="S",
+                   help="standard deviation of the delay (default 0)")
+    g.add_argument("--net-bandwidth", type=_positive_float, metavar="BIT/S", help="bandwidth cap per direction")
+    g.add_argument("--net-cut", action="append", type=_interval, default=[], metavar="T0-T1",
+                   help="no link from T0 to T1 s after the agent started, repeatable")
+    g.add_argument("--net-seed", default="0", metavar="SEED", help="seed of the faults (default 0)")
     g = p.add_argument_group("refbox")
     g.add_argument("--refbox-host", default=DEFAULT_HOST, metavar="HOST",
                    help=f"where refbox broadcasts go, e.g. a broadcast address (default {DEFAULT_HOST})")
@@ -97,6 +108,46 @@ def register(cli) -> None:
                    "trees and every message it sends and receives (team-server link and refbox channels)",
                 camera=True)
     p.set_defaults(func=cmd_agent)
+
+
+def _share(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 <= v < 1.0:
+        raise argparse.ArgumentTypeError(f"a share is in [0, 1), not {text}")
+    return v
+
+
+def _nonneg_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not v >= 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, not {text}")
+    return v
+
+
+def _interval(text: str) -> tuple[float, float]:
+    from ..comm.faults import parse_cut
+    try:
+        _, a, b = parse_cut(f"this:{text}")
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a cut is T0-T1 in seconds (e.g. 30-45), not {text!r}") from None
+    return a, b
+
+
+def _faulty(args, link, robot: int, clock):
+    """``link`` behind the --net-* faults (cut times from now), or as it is."""
+    from ..comm.faults import FaultyTransport, NetFaults
+    net = NetFaults(loss=args.net_loss, delay=args.net_delay, jitter=args.net_jitter, bandwidth=args.net_bandwidth,
+                    cuts=tuple(("all", a, b) for a, b in args.net_cut))
+    faults = net.for_robot(robot, offset=clock.now())
+    if faults is None:
+        return link
+    return FaultyTransport(link, faults, seed=f"{args.net_seed}/R{robot}", clock=clock, stream=True)
 
 
 def _config(args):
@@ -185,7 +236,7 @@ def cmd_agent(args) -> int:
     link = public = agent = watch = None
     try:
         public, team = _open_refbox(args, config, clock)
-        link = team_server_link(host, port, key=args.key, clock=clock)
+        link = _faulty(args, team_server_link(host, port, key=args.key, clock=clock), config.robot_id, clock)
         watch = open_watch(args, f"rll-bt agent R{config.robot_id} ({config.profile})",
                            {"kind": "agent", "robot": config.robot_id, "team": config.team_name,
                             "profile": config.profile})

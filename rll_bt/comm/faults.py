@@ -23,7 +23,8 @@ Randomness comes from ``seed`` so a lockstep game stays deterministic for a
 seed.  Outgoing frames wait in the wrapper until their time comes: it sends
 them from :meth:`send`, :meth:`receive`, :meth:`events` and :meth:`wait`,
 which a robot calls every tick.  :attr:`FaultyTransport.counts` tells what
-the layer did (sent, lost, duplicated, delayed, cut).
+the layer did (sent, lost, duplicated, delayed, cut, overflow: frames beyond
+``max_held`` held in one direction, dropped as a full queue drops them).
 """
 from __future__ import annotations
 
@@ -102,6 +103,54 @@ def parse_cut(text: str) -> tuple[str, float, float]:
     return m["who"], t0, t1
 
 
+def robot_matches(who: str, robot: int) -> bool:
+    """Whether the cut target ``who`` ("R2", "2", "all", "*") names robot ``robot``."""
+    w = who.strip().upper()
+    return w in ("ALL", "*") or w == f"R{robot}" or w == str(robot)
+
+
+@dataclass(frozen=True)
+class NetFaults:
+    """The faults a game puts on every robot's team-server link (``--net-*``):
+    the same loss, delay, jitter and bandwidth for each robot, and cuts of
+    named robots (``(who, t0, t1)``, ``who`` as :func:`robot_matches` reads it)."""
+
+    loss: float = 0.0
+    delay: float = 0.0
+    jitter: float = 0.0
+    bandwidth: float | None = None
+    cuts: tuple[tuple[str, float, float], ...] = ()
+
+    def __post_init__(self):
+        LinkFaults(loss=self.loss, delay=self.delay, jitter=self.jitter, bandwidth=self.bandwidth)  # checks
+        for who, _a, _b in self.cuts:
+            if not (who.strip().upper() in ("ALL", "*") or re.fullmatch(r"R?\d+", who.strip().upper())):
+                raise ValueError(f"a cut names a robot as R<N>, <N> or all, not {who!r}")
+
+    @property
+    def perfect(self) -> bool:
+        return self == NetFaults()
+
+    def for_robot(self, robot: int, offset: float = 0.0) -> LinkFaults | None:
+        """The link faults of robot ``robot`` (None: a perfect link); cut times
+        shifted by ``offset`` (the clock's time at the cuts' zero)."""
+        cuts = tuple((a + offset, b + offset) for who, a, b in self.cuts if robot_matches(who, robot))
+        f = LinkFaults(loss=self.loss, delay=self.delay, jitter=self.jitter, bandwidth=self.bandwidth, cuts=cuts)
+        return None if f.perfect else f
+
+    def args(self, robot: int) -> list[str]:
+        """``rll-bt agent`` options giving robot ``robot`` these faults."""
+        f = self.for_robot(robot)
+        if f is None:
+            return []
+        out = ["--net-loss", repr(f.loss), "--net-delay", repr(f.delay), "--net-jitter", repr(f.jitter)]
+        if f.bandwidth is not None:
+            out += ["--net-bandwidth", repr(f.bandwidth)]
+        for a, b in f.cuts:
+            out += ["--net-cut", f"{a:g}-{b:g}"]
+        return out
+
+
 @dataclass(order=True)
 class _Held:
     due: float
@@ -115,7 +164,7 @@ class FaultyTransport:
     transport with ``clients`` or ``connected`` is a stream)."""
 
     def __init__(self, inner, faults: LinkFaults, *, seed: int | str = 0, clock: Clock | None = None,
-                 stream: bool | None = None):
+                 stream: bool | None = None, max_held: int = 10000):
         self.inner = inner
         self.faults = faults
         self.channel = inner.channel
@@ -130,6 +179,7 @@ class FaultyTransport:
         self._last = {"out": 0.0, "in": 0.0}  # streams: in order
         self._rto = {"out": faults.rto, "in": faults.rto}
         self._events: list[LinkEvent] = []
+        self.max_held = max_held              # frames held per direction; beyond it the link drops them
         self._in_cut: tuple[float, float] | None = None
         self.counts: Counter[str] = Counter()
 
@@ -207,6 +257,9 @@ class FaultyTransport:
         if self.faults.perfect:
             return self.inner.send(msg, **kwargs)
         for due in self._schedule("out", msg.ByteSize() + _OVERHEAD, now):
+            if len(self._out) >= self.max_held:
+                self.counts["overflow_out"] += 1
+                continue
             heapq.heappush(self._out, _Held(due, next(self._order), (msg, kwargs)))
         self._flush()
         return True
@@ -219,6 +272,9 @@ class FaultyTransport:
                 heapq.heappush(self._in, _Held(now, next(self._order), r))
                 continue
             for due in self._schedule("in", r.msg.ByteSize() + _OVERHEAD, now):
+                if len(self._in) >= self.max_held:
+                    self.counts["overflow_in"] += 1
+                    continue
                 heapq.heappush(self._in, _Held(due, next(self._order), r))
         out = []
         while self._in and self._in[0].due <= now:

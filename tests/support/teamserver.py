@@ -4,6 +4,7 @@ from __future__ import annotations
 from rll_bt import msgs, rules
 from rll_bt.clock import SimClock
 from rll_bt.comm import Bus, MessageRegistry, StreamClient, StreamServer
+from rll_bt.comm.reliable import Reliable
 from teamserver.links.refbox_link import RefboxLink
 from teamserver.server import ServerConfig, TeamServer
 
@@ -60,13 +61,16 @@ class FakeRefbox:
 class FakeAgent:
     """A robot agent over a team-protocol transport."""
 
-    def __init__(self, transport, number: int, pose=(4.0, 0.5, 0.0)):
+    def __init__(self, transport, number: int, pose=(4.0, 0.5, 0.0), ack: bool = True):
         self.ms = msgs.message_set("team")
         self.t = transport
         self.number = number
         self.pose = pose
         self.inbox: list = []
         self.seq = 0
+        self.ack = ack                       # acknowledge tasks and cancels, as an agent does
+        self.link = Reliable(SimClock())
+        self.acks: list = []                 # LinkAcks the server sent
 
     def hello(self, restarted=False):
         self.t.send(self.ms.RobotHello(robot_id=self.number, team_name=TEAM,
@@ -87,6 +91,13 @@ class FakeAgent:
 
     def take(self):
         got = [rx.msg for rx in self.t.receive()]
+        if self.ack:
+            self.acks += [m for m in got if m.DESCRIPTOR.name == "LinkAck"]
+            got = [m for m in got if m.DESCRIPTOR.name != "LinkAck"]
+            for m in got:
+                self.link.received("server", m)
+            for _, ack in self.link.acks(lambda _s: self.ms.LinkAck(robot_id=self.number)):
+                self.t.send(ack)
         self.inbox += got
         return got
 

@@ -77,6 +77,13 @@ def test_a_configuration_file_is_checked_against_its_schema(tmp_path):
         assert str(bad) in str(exc.value)
 
 
+def test_a_configuration_file_that_is_not_utf8_text_is_a_clear_error(tmp_path):
+    path = tmp_path / "robot.yaml"
+    path.write_bytes(b"base: {type: robotino3, device: /dev/tty\xf8ACM0}\n")     # found by benchmarks/fuzz.py
+    with pytest.raises(RobotConfigError, match="not UTF-8 text"):
+        load_robot_config(path)
+
+
 def test_every_shipped_tree_builds_on_the_robotino_backend_with_its_parts(rig):
     backend = open_backend("robotino", robot_config=rig.config())
     try:

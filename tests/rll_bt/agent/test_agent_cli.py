@@ -174,3 +174,33 @@ def test_record_to_a_place_that_cannot_be_written_is_a_usage_error(trees, tmp_pa
     blocker.write_text("")
     assert main(base_args(free_port(), trees, "--record", str(blocker / "x.mcap"), "--connect-timeout", "1")) == 2
     assert "--record" in capsys.readouterr().err
+
+
+def test_network_faults_delay_and_cut_the_team_server_link(trees):
+    """--net-cut 0-1.5 --net-delay 0.4: nothing reaches the team server for 1.9 s, then the task runs."""
+    server_t = tcp_server()
+    srv = ScriptedServer(server_t)
+    rc = {}
+    args = base_args(server_t.port, trees, "--seconds", "8", "--net-delay", "0.4", "--net-loss", "0.1",
+                     "--net-cut", "0-1.5", "--net-seed", "3")
+    t0 = time.monotonic()
+    th = threading.Thread(target=lambda: rc.setdefault("rc", main(args)))
+    th.start()
+    try:
+        deadline = time.monotonic() + 20
+        while not srv.of("RobotHello") and time.monotonic() < deadline:
+            server_t.wait(0.02)
+            srv.pump()
+        assert srv.of("RobotHello") and time.monotonic() - t0 >= 1.9      # cut, then delayed
+        assert serve_one_task(srv, server_t, within=20.0) and srv.results(3, "SUCCEEDED")
+    finally:
+        th.join(timeout=30)
+        server_t.close()
+    assert rc.get("rc") == 0
+
+
+@pytest.mark.parametrize("bad", [["--net-loss", "1"], ["--net-cut", "5"], ["--net-jitter", "-0.1"]])
+def test_bad_network_faults_are_usage_errors(trees, bad):
+    with pytest.raises(SystemExit) as exc:
+        main(base_args(1, trees, *bad))
+    assert exc.value.code == 2

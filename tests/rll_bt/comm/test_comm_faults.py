@@ -169,3 +169,27 @@ def test_settings_are_checked_and_cuts_parse():
     for kw in ({"loss": 1.0}, {"loss": -0.1}, {"delay": -1}, {"bandwidth": 0}, {"cuts": ((5.0, 4.0),)}):
         with pytest.raises(ValueError):
             LinkFaults(**kw)
+
+
+def test_a_games_net_faults_give_each_robot_its_link_faults_and_agent_options():
+    from rll_bt.comm.faults import NetFaults
+    net = NetFaults(loss=0.2, delay=2.0, jitter=0.2, cuts=(("R2", 30.0, 45.0), ("all", 100.0, 101.0)))
+    r1, r2 = net.for_robot(1), net.for_robot(2, offset=10.0)
+    assert (r1.loss, r1.delay, r1.jitter, r1.cuts) == (0.2, 2.0, 0.2, ((100.0, 101.0),))
+    assert r2.cuts == ((40.0, 55.0), (110.0, 111.0))            # shifted onto the agent's clock
+    assert NetFaults().for_robot(1) is None and NetFaults().perfect
+    assert NetFaults(cuts=(("2", 1.0, 2.0),)).for_robot(1) is None  # only robot 2 is cut
+    assert net.args(2) == ["--net-loss", "0.2", "--net-delay", "2.0", "--net-jitter", "0.2",
+                           "--net-cut", "30-45", "--net-cut", "100-101"]
+    with pytest.raises(ValueError, match="R<N>"):
+        NetFaults(cuts=(("robot", 1.0, 2.0),))
+    with pytest.raises(ValueError, match="loss"):
+        NetFaults(loss=1.0)
+
+
+def test_what_the_layer_holds_is_bounded(tm):
+    clock, far, robot = datagram(tm, LinkFaults(delay=5.0))
+    robot.max_held = 10
+    for i in range(25):
+        robot.send(tm.Other(x=i))
+    assert len(robot._out) == 10 and robot.counts["overflow_out"] == 15
