@@ -58,6 +58,24 @@ def _positive(text: str) -> float:
 DEFAULT_VIEW_PORT = 8766
 
 
+def _fraction(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 0.0 <= v < 1.0:
+        raise argparse.ArgumentTypeError(f"a share is in [0, 1), not {text}")
+    return v
+
+
+def _cut(text: str) -> tuple[str, float, float]:
+    from rll_bt.comm.faults import parse_cut
+    try:
+        return parse_cut(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def register(cli) -> None:
     from rll_bt import rules
     from rll_bt.plugins import Choices
@@ -160,6 +178,19 @@ def register(cli) -> None:
     g.add_argument("--record-camera", type=_seconds, default=0.0, metavar="HZ",
                    help="also take camera frames for the recording, per robot and second (default 0: only the "
                         "frames the robots' perception reads; a frame costs about 0.2 s of CPU)")
+    g = gp.add_argument_group(
+        "network faults", "a lossy radio on each robot's link to the team server (tasks, results, status, "
+        "observations; both ways, seeded by --seed). The refbox's channels stay perfect. The link is TCP: "
+        "a lost segment costs a retransmission, a cut drops the connection")
+    g.add_argument("--net-loss", type=_fraction, default=0.0, metavar="P",
+                   help="share of segments lost, e.g. 0.2 (default 0)")
+    g.add_argument("--net-delay", type=_seconds, default=0.0, metavar="S", help="one-way delay (default 0)")
+    g.add_argument("--net-jitter", type=_seconds, default=0.0, metavar="S",
+                   help="standard deviation of the delay (default 0)")
+    g.add_argument("--net-bandwidth", type=_positive, metavar="BIT/S", help="bandwidth cap per robot and direction")
+    g.add_argument("--net-cut", type=_cut, action="append", default=[], metavar="ROBOT:T0-T1",
+                   help="robot R<N> (or all) hears nothing and is not heard from T0 to T1 s after the game's "
+                        "start (with --processes: after its agent started), repeatable")
     g = gp.add_argument_group("speed knobs")
     g.add_argument("--dt", type=_positive, default=0.05, metavar="S", help="lockstep step (default 0.05 s)")
     g.add_argument("--hz", type=_positive, default=10.0, help="tree tick rate of the agents (default 10)")
@@ -187,6 +218,8 @@ def register(cli) -> None:
 
 
 def options_from(args):
+    from rll_bt.comm.faults import NetFaults
+
     from .options import GameOptions
     if args.game is not None and not args.game.is_file():
         raise UserError("no such file", where=f"--game {args.game}")
@@ -209,7 +242,9 @@ def options_from(args):
                            refbox_port_offset=args.refbox_port_offset, refbox_control=args.refbox_control,
                            refbox_timeout=args.refbox_timeout,
                            stations=args.stations, mqtt=args.mqtt, opcua_base_port=args.opcua_base_port,
-                           team_name=args.team, key=args.key, cyan=args.cyan, magenta=args.magenta)
+                           team_name=args.team, key=args.key, cyan=args.cyan, magenta=args.magenta,
+                           net=NetFaults(loss=args.net_loss, delay=args.net_delay, jitter=args.net_jitter,
+                                         bandwidth=args.net_bandwidth, cuts=tuple(args.net_cut)))
     except ValueError as exc:
         raise UserError(str(exc)) from None
 

@@ -36,6 +36,7 @@ from pathlib import Path
 from rll_bt import msgs
 from rll_bt.agent import AgentConfig, RobotAgent
 from rll_bt.comm import Bus, MessageRegistry
+from rll_bt.comm.faults import FaultyTransport
 from rll_bt.comm.msglog import MessageLog
 from rll_bt.contracts import GameStatus, TeamServerOptions, load_simulator, load_teamserver
 
@@ -102,6 +103,7 @@ class LockstepGame:
     each sample; ``hooks``: callables ``hook(game)`` run after every round."""
 
     def __init__(self, options: GameOptions, *, progress: Callable | None = None, pace=None):
+        self._links_made = 0
         self.options = o = options
         self.pace = pace              # a wall Clock: keep to ``options.pace`` (real time: 1); None: as fast as possible
         lineup = o.lineup()
@@ -234,9 +236,14 @@ class LockstepGame:
         backend = self.world.backend(color, number)
         watched = self.watch is not None and side is self.home
         rw = self.watch.robot(number) if watched else None
+        link = bus.stream_client(side.stream, registry=self.team_reg, key=t.key, name=name)
+        faults = o.net.for_robot(number)
+        if faults is not None:        # the robot's radio: seeded per game, robot and start of its agent
+            self._links_made += 1
+            link = FaultyTransport(link, faults, seed=f"{o.seed}/{name}/{self._links_made}", clock=self.clock,
+                                   stream=True)
         agent = RobotAgent(
-            cfg, clock=self.clock, backend=backend if rw is None else rw.tap(backend),
-            link=bus.stream_client(side.stream, registry=self.team_reg, key=t.key, name=name),
+            cfg, clock=self.clock, backend=backend if rw is None else rw.tap(backend), link=link,
             public=bus.peer("public", registry=reg, name=name),
             team=lambda c: bus.peer(c.lower(), registry=reg, key=t.key, name=name),
             services={"localisation": o.localisation},

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from rll_bt import plugins, rules
+from rll_bt.comm.faults import NetFaults
 from rll_bt.contracts import SIMULATORS, TEAMSERVERS, TeamServerOptions, check_teamserver
 
 from .teams import Team, TeamSpec, lineup
@@ -86,6 +87,8 @@ class GameOptions:
     refbox_timeout: float = 180.0      # s to wait for the refbox and its field
     game: Path | None = None           # a stored game to play (its field, orders, ring setup, down periods)
     save_game: Path | None = None      # write the game in that form at its start
+    # a lossy radio on every robot's team-server link (both ways), seeded by ``seed``
+    net: NetFaults = field(default_factory=NetFaults)
     extra: dict = field(default_factory=dict)
     # two teams (games.teams): a CONFIG per colour; both None: the single team above plays cyan
     cyan: TeamSpec | str | None = None

@@ -113,6 +113,7 @@ class ProcessGame:
         # (wall time, team, robot) of killed agents: on the clock the team server stamps its lines with,
         # so that a task sent just before the kill starts before it once both are mapped
         self._kills: list[tuple[float, str, int]] = []
+        self._agent_starts = 0
         self.restarts: dict[str, int] = dict.fromkeys(self.ours, 0)
         self._t0 = 0.0                  # sim time the game started (the world runs while processes start)
         self._started = False
@@ -255,7 +256,16 @@ class ProcessGame:
             "--teamserver", f"127.0.0.1:{self._ts_port[t.color]}", "--refbox-host", self.refbox_host, "--layout", "sim",
             "--public-recv", str(pub.recv), "--public-send", str(pub.send),
             "--team-recv", str(chan.recv), "--team-send", str(chan.send), *start, "--hz", str(o.hz),
-            "--localisation", o.localisation, "-q"] + (["--first-start"] if first_start else []) + self._record_args(n))
+            "--localisation", o.localisation, "-q", *self._net_args(n)]
+            + (["--first-start"] if first_start else []) + self._record_args(n))
+
+    def _net_args(self, n: int) -> list[str]:
+        """The --net-* faults of robot ``n``'s agent (its seed: the game's and the agent start's)."""
+        args = self.options.net.args(n)
+        if args:
+            self._agent_starts += 1
+            args += ["--net-seed", f"{self.options.seed}/{self._agent_starts}"]
+        return args
 
     def _record_args(self, n: int) -> list[str]:
         """``--record`` for an agent of a recorded game (a game of one team: ``GameOptions`` refuses two)."""
