@@ -82,6 +82,7 @@ class RobotAgent:
         self.machines: KnownMachines | None = None
         self.map_updates = 0
         self.finished: OrderedDict[int, Any] = OrderedDict()     # task id -> final TaskResult
+        self._issued: dict[int, float] = {}     # task id -> issued_at of the task as this robot ran it
         self._beacon_finished: deque[list] = deque(maxlen=32)    # [task_id, ok, beacons left]
         self.delivery = ServerDelivery(link, clock, lambda: self.tm.LinkAck(robot_id=config.robot_id))
         self._restarted_next = restarted
@@ -219,7 +220,9 @@ class RobotAgent:
         if self.run is not None and self.run.task_id == tid:
             self._send(self._result(tid, "RUNNING"))           # the server re-sent it: still on it
             return
-        if tid in self.finished:
+        if tid in self.finished and self._given_again(tid, task):
+            del self.finished[tid]                             # cancelled, then given out again: a new run
+        elif tid in self.finished:
             self._send(self.finished[tid])                     # already done: tell again
             return
         if self.run is not None and not self.run.done:
@@ -243,6 +246,7 @@ class RobotAgent:
         if len(self.services) != self._n_services:      # the tree's services were made just now
             self._services_changed()
         self.run = TaskRun(task, params, tree, self.clock, max_gap=max(0.5, 5 * self.config.tick_period))
+        self._issued[tid] = float(task.issued_at)
         self._notify("task_started", self.run)
         log.info("robot %d: task %d %s %s", me, tid, kind,
                  {k: v for k, v in params.items() if k not in ("task_id", "robot_id", "kind")})
@@ -336,10 +340,16 @@ class RobotAgent:
         self._record(run.task_id, result, ok=outcome.status == "SUCCEEDED")
         self._send_status(force=True)
 
+    def _given_again(self, tid: int, task) -> bool:
+        """``task`` gives out again a task the server cancelled on this robot (issued after that run)."""
+        result = self.finished[tid]
+        return result.status == self.tm.TaskResult.CANCELLED and \
+            float(task.issued_at) > self._issued.get(tid, float("inf"))
+
     def _record(self, tid: int, result, ok: bool) -> None:
         self.finished[tid] = result
         while len(self.finished) > KEEP_FINISHED:
-            self.finished.popitem(last=False)
+            self._issued.pop(self.finished.popitem(last=False)[0], None)
         self._beacon_finished.append([tid, ok, self.config.finished_beacons])
         self.delivery.send_final(result, self.connected)
 

@@ -175,3 +175,23 @@ def test_a_lost_sensor_fails_the_task_with_its_own_code_and_the_agent_goes_on(ri
     assert code(res) == "SENSOR_LOST" and "laser lost" in res.text
     assert rig.drives()[-1][1] == "stop"
     assert run_task(rig, 41, "get_workpiece", machine="C-BS").status == TM.TaskResult.SUCCEEDED
+
+
+def test_a_cancelled_task_given_out_again_runs_again_and_a_late_copy_does_not(rig):
+    """The team server cancels a task (its station went down) and later gives the same task id out
+    again: the robot runs it, it does not answer with the old CANCELLED (seed 1 lost its product so)."""
+    from tests.support.agents import make_task
+    srv = rig.server
+    first = make_task("mount_cap", 7, machine="C-CS1")
+    first.issued_at = 10.0
+    assert srv.send(first)
+    rig.until(lambda: srv.results(7, "RUNNING"))
+    srv.cancel(7)
+    rig.until(lambda: srv.results(7, "CANCELLED"))
+    assert srv.send(first)                                          # a late copy of the cancelled task
+    rig.until(lambda: len(srv.results(7, "CANCELLED")) >= 2, what="the old result told again")
+    assert rig.agent.run is None
+    again = make_task("get_workpiece", 7, machine="C-BS")
+    again.issued_at = 40.0                                          # given out again after the cancel
+    assert srv.send(again)
+    rig.until(lambda: srv.results(7, "SUCCEEDED"), what="task 7 run again and done")
