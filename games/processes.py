@@ -4,41 +4,31 @@
     result = game.run()                 # or run_until / run_for and faults in between
     game.close()
 
-This process holds the world: PyBullet, the robots and the stations'
-physical state.  It serves each robot's backend over TCP (the serving end
-of the ``remote`` backend, found through its entry point) and the stations
-to the refbox over the simulator's station link (TCP too).  The simulated
-refbox is its own process (for PyBullet ``rll-bt refbox sim --world
-remote:...``): it talks UDP (broadcast to ``127.255.255.255`` on free local
-ports, split send/receive) and sees the stations only through the link.
-The team server runs as ``python -m games.child`` (TCP for the agents,
-UDP to the refbox) and each robot as a real ``rll-bt
-agent --backend remote`` process.  Everything runs on the wall clock: the
-world advances by the wall time that passed (at most 0.1 s a step, so it
-may fall behind), so a game takes its real length.  The refbox's view
-(status, points, awards, deliveries, station states) reaches this process
-through the snapshot file it rewrites (``refbox.json``, 4 times a second),
-the team server's through ``teamserver.json`` (every second).
+This process holds the world: PyBullet, the robots and the stations' physical state.  It serves each robot's
+backend over TCP (the serving end of the ``remote`` backend, found through its entry point) and the stations
+to the refbox over the simulator's station link (TCP too).  The simulated refbox is its own process (for
+PyBullet ``rll-bt refbox sim --world remote:...``): it talks UDP (broadcast to ``127.255.255.255`` on free
+local ports, split send/receive) and sees the stations only through the link. The team server runs as
+``python -m games.child`` (TCP for the agents, UDP to the refbox) and each robot as a real ``rll-bt agent
+--backend remote`` process.  Everything runs on the wall clock: the world advances by the wall time that
+passed (at most 0.1 s a step, so it may fall behind), so a game takes its real length.  The refbox's view
+(status, points, awards, deliveries, station states) reaches this process through the snapshot file it
+rewrites (``refbox.json``, 4 times a second), the team server's through ``teamserver.json`` (every second).
 
-Two teams (``GameOptions(cyan=..., magenta=...)``): each of ours has its
-own team server process (``teamserver-cyan``, ...: its files are named so)
-and agent processes (``agent-cyan1``, ...) on its own team channel and key.
-An ``external`` team is another team's software: the refbox knows its name
-and key and plays it on its channel; nothing of it runs here, and
-``external-<colour>.json`` in the game's folder tells it the refbox's
-UDP host, ports and its key (:meth:`ProcessGame.external`).  The refbox
-comes up first (the recorder needs its light codes), then the rest.
+Two teams (``GameOptions(cyan=..., magenta=...)``): each of ours has its own team server process
+(``teamserver-cyan``, ...: its files are named so) and agent processes (``agent-cyan1``, ...) on its own
+team channel and key. An ``external`` team is another team's software: the refbox knows its name and key and
+plays it on its channel; nothing of it runs here, and ``external-<colour>.json`` in the game's folder tells
+it the refbox's UDP host, ports and its key (:meth:`ProcessGame.external`).  The refbox comes up first (the
+recorder needs its light codes), then the rest.
 
-The message log holds what the refbox sends and receives (logged by the
-refbox process) and every message of the team server's link to the agents
-(logged by the team server process), both on the wall clock, mapped onto
-the simulation clock and merged in time order at the end (:mod:`.teamlog`).
-Each robot's task intervals (busy time, timeline) are read from those team
-messages.  Faults as in lockstep: :meth:`kill_agent` (SIGKILL),
-:meth:`start_agent`, :meth:`restart_teamserver` (SIGKILL and a new process on
-the same database), :meth:`station_down` (an operator command to the refbox
-process over the station link).  Times given to :meth:`run_for` and
-:meth:`run_until` are simulated seconds (about wall seconds).
+The message log holds what the refbox sends and receives (logged by the refbox process) and every message of
+the team server's link to the agents (logged by the team server process), both on the wall clock, mapped
+onto the simulation clock and merged in time order at the end (:mod:`.teamlog`). Each robot's task intervals
+(busy time, timeline) are read from those team messages.  Faults as in lockstep: :meth:`kill_agent`
+(SIGKILL), :meth:`start_agent`, :meth:`restart_teamserver` (SIGKILL and a new process on the same database),
+:meth:`station_down` (an operator command to the refbox process over the station link).  Times given to
+:meth:`run_for` and :meth:`run_until` are simulated seconds (about wall seconds).
 """
 from __future__ import annotations
 
