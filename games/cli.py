@@ -35,17 +35,9 @@ import errno
 import sys
 from pathlib import Path
 
+from rll_bt.cli.argtypes import seconds as _seconds
+from rll_bt.cli.argtypes import share as _fraction
 from rll_bt.errors import Unavailable, UserError
-
-
-def _seconds(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
-    if not v >= 0:
-        raise argparse.ArgumentTypeError(f"seconds must be >= 0, not {text}")
-    return v
 
 
 def _positive(text: str) -> float:
@@ -56,16 +48,6 @@ def _positive(text: str) -> float:
 
 
 DEFAULT_VIEW_PORT = 8766
-
-
-def _fraction(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0.0 <= v < 1.0:
-        raise argparse.ArgumentTypeError(f"a share is in [0, 1), not {text}")
-    return v
 
 
 def _cut(text: str) -> tuple[str, float, float]:

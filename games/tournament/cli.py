@@ -18,31 +18,12 @@ again to retry it), 2 bad arguments or a store of other settings,
 """
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
+from rll_bt.cli.argtypes import count as _count
+from rll_bt.cli.argtypes import seconds as _seconds
 from rll_bt.errors import Unavailable, UserError
-
-
-def _seconds(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
-    if not v >= 0:
-        raise argparse.ArgumentTypeError(f"seconds must be >= 0, not {text}")
-    return v
-
-
-def _count(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, not {text}")
-    return v
 
 
 def register(cli) -> None:

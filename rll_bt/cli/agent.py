@@ -19,6 +19,8 @@ import sys
 from pathlib import Path
 
 from ..errors import Unavailable, UserError
+from .argtypes import seconds as _nonneg_float
+from .argtypes import share as _share
 from .refbox import _port, _positive_float, _positive_int
 from .tree import _kv, _pose
 
@@ -108,26 +110,6 @@ def register(cli) -> None:
                    "trees and every message it sends and receives (team-server link and refbox channels)",
                 camera=True)
     p.set_defaults(func=cmd_agent)
-
-
-def _share(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not 0.0 <= v < 1.0:
-        raise argparse.ArgumentTypeError(f"a share is in [0, 1), not {text}")
-    return v
-
-
-def _nonneg_float(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not v >= 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, not {text}")
-    return v
 
 
 def _interval(text: str) -> tuple[float, float]:
