@@ -59,6 +59,7 @@ def test_a_lockstep_head_to_head_game_both_teams_score_and_never_touch(tmp_path)
     assert all((out / p).stat().st_size > 0 for p in ("field.png", "timeline.png", "score.png"))
 
 
+@pytest.mark.timeout(900)          # nine processes, a whole short game on the wall clock (> 300 s on a 2-core CI)
 def test_a_head_to_head_game_in_processes(tmp_path):
     out = tmp_path / "game"
     rc = main(["sim", "--processes", "--cyan", "baseline", "--magenta", "htn", "--seed", "2", "--setup", "1",
