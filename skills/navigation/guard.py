@@ -18,6 +18,7 @@ import numpy as np
 
 from rll_bt.backend import CapabilityError
 
+from ..errors import NotLocalised
 from .laserview import points_now
 from .safety import scan_points, speed_limit
 
@@ -55,7 +56,7 @@ class MotionGuard:
         ctx = self.ctx
         try:
             pose = ctx.pose()
-        except RuntimeError:
+        except NotLocalised:
             return np.zeros((0, 2))
         rel = ctx.laser_memory.relative(pose, ctx.clock.now())
         c, s = math.cos(-pose.theta), math.sin(-pose.theta)
