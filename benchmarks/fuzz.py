@@ -104,14 +104,13 @@ def refbox_targets() -> list[Target]:
 
 
 def team_targets() -> list[Target]:
-    from rll_bt import msgs
-    from rll_bt.comm import FrameCodec, MessageRegistry
+    from rll_bt.agenttask import link as agent_link
+    from rll_bt.comm import FrameCodec
     from rll_bt.comm.framing import Drop
     from rll_bt.comm.secure import CLIENT, SERVER, SecureSession
 
-    ms = msgs.message_set("team")
-    reg = MessageRegistry.from_message_set(ms)
-    samples = [cls() for cls in ms.classes.values() if cls().IsInitialized()]
+    reg = agent_link.registry()          # the league's AgentTask and BeaconSignal, rll-bt's additions
+    samples = [cls() for _ct, cls in reg if cls().IsInitialized()]
     enc = FrameCodec(reg, key="teamkey")
     seeds = [enc.encode(m) for m in samples] or [b"\x02\x02\x00\x00\x00\x00\x00\x10" + bytes(16)]
     out = [Target("team-server frames", seeds, FrameCodec(reg, key="teamkey").decode,

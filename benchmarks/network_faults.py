@@ -16,7 +16,8 @@ acknowledged) and results repeated by the agents, robots dropped by the team
 server (silent for its heartbeat timeout), tasks lost (a task the server
 sent that its robot never got, or a final result the robot made that the
 server never acknowledged, more than 30 s before the end) and tasks done
-twice (a task id started by a robot more than once, or by two robots).
+twice (an assignment's AgentTask id started more than once: a task given
+to another robot, or again after a cancel, is a new assignment with a new id).
 
     .venv/bin/python benchmarks/network_faults.py [--seeds 10] [--jobs 2] [--json FILE]
                                                   [--profiles rcll2016,rcll2025] [--levels clean,0,10,20]
@@ -42,6 +43,7 @@ from pathlib import Path
 from games.batch import fmt, mean
 from games.options import GameOptions
 from rll_bt.comm.faults import NetFaults
+from rll_bt.comm.reliable import AT_TASK, agent_task_what
 
 DELAY, JITTER = 2.0, 0.2
 LEVELS = {"clean": None, "0": 0.0, "10": 0.1, "20": 0.2}
@@ -70,20 +72,21 @@ class Ledger:
         to_robot = ts.tasks.to_robot
 
         def sending(robot, msg):
-            if robot is not None and msg.DESCRIPTOR.name == "Task":
+            if robot is not None and msg.DESCRIPTOR.name == "AgentTask" and agent_task_what(msg) == AT_TASK:
                 self.sent.setdefault(int(msg.task_id), (robot.number, game.clock.now()))
             to_robot(robot, msg)
         ts.tasks.to_robot = sending
         game.hooks.append(self._round)
 
     def _watch(self, agent) -> None:
-        on_task = agent._on_task
+        on_task = agent._on_agent_task
         number = agent.config.robot_id
 
         def got(task):
-            self.got.add((number, int(task.task_id)))
+            if agent_task_what(task) == AT_TASK:
+                self.got.add((number, int(task.task_id)))
             on_task(task)
-        agent._on_task = got
+        agent._on_agent_task = got
         agent.observers.append(self)
 
     def task_started(self, agent, run) -> None:
@@ -100,11 +103,11 @@ class Ledger:
         end = game.clock.now()
         never_got = [tid for tid, (robot, t) in self.sent.items()
                      if t < end - LATE and (robot, tid) not in self.got]
-        unacked = [r.task_id for a in game.agents.values() for r in a.delivery.unacknowledged
-                   if r.stamp < end - LATE]
+        unacked = [int(m.task_id) for a in game.agents.values() for m in a.server.delivery.unacknowledged
+                   if m.task_id in a.book.finished and a.book.finished[m.task_id].outcome.stamp < end - LATE]
         ts = game.teamserver.server
         return {"tasks_sent": len(self.sent), "task_msgs_repeated": ts.tasks.reliable.counts["repeated"],
-                "results_repeated": sum(a.delivery.reliable.counts["repeated"] for a in game.agents.values()),
+                "results_repeated": sum(a.server.delivery.reliable.counts["repeated"] for a in game.agents.values()),
                 "robots_dropped": self.drops, "lost": len(never_got) + len(unacked),
                 "lost_ids": sorted(never_got + unacked),
                 "done_twice": sum(1 for n in self.starts.values() if n > 1),

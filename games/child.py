@@ -31,8 +31,9 @@ def write_snapshot(path: Path, snap: dict) -> None:
 
 def run(cfg: dict) -> int:
     from rll_bt import msgs
+    from rll_bt.agenttask import link as agent_link
     from rll_bt.clock import WallClock
-    from rll_bt.comm import MessageRegistry, StreamServer, UdpPeer
+    from rll_bt.comm import MessageRegistry, UdpPeer
     from rll_bt.comm.msglog import MessageLog
     from rll_bt.contracts import TeamServerOptions, load_teamserver
 
@@ -40,7 +41,7 @@ def run(cfg: dict) -> int:
 
     clock = WallClock()
     ref_reg = MessageRegistry.from_message_set(msgs.message_set(cfg["profile"]))
-    team_reg = MessageRegistry.from_message_set(msgs.message_set("team"))
+    team_reg = agent_link.registry()
     host = cfg["refbox_host"]
     ports = cfg["ports"]
 
@@ -57,11 +58,11 @@ def run(cfg: dict) -> int:
         msglog = MessageLog(cfg["message_log"], clock, {}, team_reg, line_buffered=True)
 
     def agents():
-        kw = {"registry": team_reg, "key": cfg["key"], "host": "127.0.0.1", "clock": clock}
+        kw = {"key": cfg["key"], "host": "127.0.0.1", "clock": clock}
         if msglog is None:
-            return StreamServer(cfg["listen"], **kw)
+            return agent_link.tcp_server(cfg["listen"], **kw)
         channel = cfg.get("log_channel", "teamserver")
-        return LoggedStreamServer(cfg["listen"], log=msglog, channel=channel, server=channel,
+        return agent_link.tcp_server(cfg["listen"], cls=LoggedStreamServer, log=msglog, channel=channel, server=channel,
                                   prefix=cfg.get("robot_prefix", ""), **kw)
 
     oracle = cfg.get("oracle")

@@ -35,6 +35,7 @@ from pathlib import Path
 
 from rll_bt import msgs
 from rll_bt.agent import AgentConfig, RobotAgent
+from rll_bt.agenttask import link as agent_link
 from rll_bt.comm import Bus, MessageRegistry
 from rll_bt.comm.faults import FaultyTransport
 from rll_bt.comm.msglog import MessageLog
@@ -136,7 +137,7 @@ class LockstepGame:
         self.clock = self.world.clock
         self.bus = Bus(self.clock)
         self.ref_reg = MessageRegistry.from_message_set(msgs.message_set(self.world.profile.name))
-        self.team_reg = MessageRegistry.from_message_set(msgs.message_set("team"))
+        self.team_reg = agent_link.registry()
         self.log: MessageLog | None = None
         if o.out is not None:
             o.out.mkdir(parents=True, exist_ok=True)
@@ -187,7 +188,7 @@ class LockstepGame:
             profile=o.profile, team_name=t.name, key=key, clock=self.clock,
             refbox_public=lambda: bus.peer("public", registry=reg, name=stream),
             refbox_team=lambda color: bus.peer(color.lower(), registry=reg, name=stream),
-            agents=lambda: bus.stream_server(stream, registry=self.team_reg, key=key),
+            agents=lambda: agent_link.bus_server(bus, stream, key=key),
             state=str(self._state_file(side, o)), strategy=t.strategy, seed=o.seed, oracle=truth,
             options=TeamServerOptions(baseline=t.baseline, map_period=o.map_period, extra=t.extra))
 
@@ -236,7 +237,7 @@ class LockstepGame:
         backend = self.world.backend(color, number)
         watched = self.watch is not None and side is self.home
         rw = self.watch.robot(number) if watched else None
-        link = bus.stream_client(side.stream, registry=self.team_reg, key=t.key, name=name)
+        link = agent_link.bus_client(bus, side.stream, key=t.key, name=name)
         faults = o.net.for_robot(number)
         if faults is not None:        # the robot's radio: seeded per game, robot and start of its agent
             self._links_made += 1

@@ -206,7 +206,7 @@ def _messages(out: _Merged, path: Path, profile: str) -> None:
     from mcap_protobuf.schema import build_file_descriptor_set
 
     from rll_bt import msgs
-    sets = {"teamserver": msgs.message_set("team")}
+    team, league = msgs.message_set("team"), msgs.message_set("rcll2025")
     default = msgs.message_set(profile)
     fds: dict[type, bytes] = {}
     with open(path, encoding="utf-8") as fh:
@@ -214,7 +214,9 @@ def _messages(out: _Merged, path: Path, profile: str) -> None:
             e = json.loads(raw)
             if not e.get("type"):
                 continue
-            msg = msgs.from_dict(sets.get(e["channel"], default), e["type"], e.get("msg") or {})
+            # the robots' link: rll-bt's additions and the league's AgentTask / BeaconSignal (rcll2025)
+            ms = (team if e["type"] in team.classes else league) if e["channel"] == "teamserver" else default
+            msg = msgs.from_dict(ms, e["type"], e.get("msg") or {})
             cls = type(msg)
             if cls not in fds:
                 fds[cls] = build_file_descriptor_set(cls).SerializeToString()

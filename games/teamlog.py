@@ -1,4 +1,4 @@
-"""The team protocol in a ``--processes`` game: logged, put on the game's clock, merged.
+"""The team-server link in a ``--processes`` game: logged, put on the game's clock, merged.
 
 In lockstep every frame crosses one in-process bus and one tap logs them
 all.  With ``--processes`` the team server's TCP link to the agents runs
@@ -29,7 +29,6 @@ from rll_bt.comm import StreamServer
 
 CHANNEL = "teamserver"
 SERVER = "teamserver"
-FINAL = ("SUCCEEDED", "FAILED", "CANCELLED")
 
 
 class LoggedStreamServer(StreamServer):
@@ -62,8 +61,10 @@ class LoggedStreamServer(StreamServer):
 
     def _name(self, rx) -> str:
         fields = rx.msg.DESCRIPTOR.fields_by_name
-        if "robot_id" in fields and rx.msg.HasField("robot_id"):
-            self._names[rx.source] = f"{self.prefix}R{int(rx.msg.robot_id)}"
+        for f in ("robot_id", "number"):            # rll-bt's messages and AgentTask; BeaconSignal
+            if f in fields and rx.msg.HasField(f):
+                self._names[rx.source] = f"{self.prefix}R{int(getattr(rx.msg, f))}"
+                break
         return self._names.get(rx.source, f"client{rx.source}")
 
     def _drop(self, cid: int) -> None:
@@ -162,40 +163,47 @@ def _iter_file(path: Path) -> Iterator[dict]:
                 yield json.loads(raw)
 
 
-def _kinds() -> frozenset[str]:
-    """The task kinds: the fields of the team protocol's ``Task.kind`` oneof."""
-    from rll_bt import msgs
-    task = msgs.message_set("team").get("Task")
-    return frozenset(f.name for f in task.DESCRIPTOR.oneofs_by_name["kind"].fields)
+def _league_kind(m: dict) -> str | None:
+    """The tree kind of a task that came without rll-bt's TaskDetail."""
+    from rll_bt.agenttask.read import BODY_KINDS
+    body = next((b for b in BODY_KINDS if b in m), None)
+    return BODY_KINDS[body][0] if body is not None else None
 
 
 def task_runs(lines: Iterable[dict], end: float | None = None, *, channel: str = CHANNEL,
               server: str = SERVER) -> dict[int, list[dict]]:
-    """Each robot's task intervals from team-protocol lines in time order:
-    ``{robot: [{"kind", "id", "start", "end", "outcome"}]}``.  A Task sent
-    to a robot starts a run (a repeat of its open task changes nothing, a
-    different one ends the open run as CANCELLED); the robot's TaskResult
-    SUCCEEDED, FAILED or CANCELLED ends it.  Runs still open are closed at
+    """Each robot's task intervals from team-server link lines in time order:
+    ``{robot: [{"kind", "id", "start", "end", "outcome"}]}``.  An AgentTask
+    the server sends a robot starts a run (its kind from the TaskDetail just
+    before it; a repeat of the open task changes nothing, a different one
+    ends the open run as CANCELLED; a cancel or pause request starts
+    nothing); the robot's AgentTask echoed with ``successful`` / ``canceled``
+    ends it (SUCCEEDED, FAILED or CANCELLED).  Runs still open are closed at
     ``end`` ("running at the end"), or left with ``end`` None.  ``channel`` and
     ``server``: the team's link and its server as the lines name them."""
-    kinds = _kinds()
     runs: dict[int, list[dict]] = {}
+    kinds: dict[tuple[int, int], str] = {}
     for e in lines:
-        if e.get("channel") != channel or e.get("type") not in ("Task", "TaskResult"):
+        if e.get("channel") != channel or e.get("type") not in ("AgentTask", "TaskDetail"):
             continue
         m = e["msg"]
         robot, tid, t = int(m["robot_id"]), int(m["task_id"]), e["t"]
+        if e["type"] == "TaskDetail":
+            if m.get("kind"):
+                kinds[(robot, tid)] = m["kind"]
+            continue
         mine = runs.setdefault(robot, [])
         cur = mine[-1] if mine and mine[-1]["end"] is None else None
-        if e["type"] == "Task" and e["from"] == server:
-            if cur is not None and cur["id"] == tid:
+        if e["from"] == server:
+            if m.get("cancel_task") or "pause_task" in m or cur is not None and cur["id"] == tid:
                 continue
             if cur is not None:
                 cur["end"], cur["outcome"] = t, "CANCELLED"
-            mine.append({"kind": next((k for k in m if k in kinds), None), "id": tid, "start": t,
+            mine.append({"kind": kinds.pop((robot, tid), None) or _league_kind(m), "id": tid, "start": t,
                          "end": None, "outcome": None})
-        elif e["type"] == "TaskResult" and m.get("status") in FINAL and cur is not None and cur["id"] == tid:
-            cur["end"], cur["outcome"] = t, m["status"]
+        elif ("successful" in m or "canceled" in m) and cur is not None and cur["id"] == tid:
+            outcome = "CANCELLED" if m.get("canceled") else "SUCCEEDED" if m.get("successful") else "FAILED"
+            cur["end"], cur["outcome"] = t, outcome
     if end is not None:
         for mine in runs.values():
             for run in mine:

@@ -2,8 +2,15 @@
 
     rll-bt teamserver --profile rcll2016 --team Carologistics --key randomkey \\
         [--listen 0.0.0.0:4460] [--state teamserver.sqlite] [--strategy algorithm1] \\
-        [--planner htn|greedy] \\
+        [--planner htn|greedy] [--robots rll-bt|agenttask] \\
         [--refbox-host 127.0.0.1] [--ports sim|competition]
+
+The robots connect over TCP and take the league's AgentTask.  ``--robots
+rll-bt`` (the default): rll-bt's agents, the link encrypted with the team
+key, rll-bt's additions (machine map, game phase, observations) on it.
+``--robots agenttask``: any robot that speaks the league's AgentTask (the
+league's simulator's robots, ``rll-bt sim --external-team``): plain frames,
+only AgentTask out and BeaconSignal / AgentTask in, default port 2016.
     rll-bt teamserver status [--state teamserver.sqlite]
 """
 from __future__ import annotations
@@ -19,6 +26,8 @@ from rll_bt.errors import Unavailable, UserError
 DEFAULT_STATE = "teamserver.sqlite"
 STRATEGIES = ("algorithm1", "algorithm1-paper", "random", "nearest")
 PLANNER_NAMES = ("htn", "greedy")         # teamserver.planning.planner.PLANNERS
+ROBOT_KINDS = ("rll-bt", "agenttask")
+LISTEN = {"rll-bt": "0.0.0.0:4460", "agenttask": "0.0.0.0:2016"}
 
 
 def register(cli) -> None:
@@ -31,8 +40,12 @@ def register(cli) -> None:
                     help="rules profile (default %(default)s)")
     gp.add_argument("--team", help="our team name, exactly as configured in the refbox")
     gp.add_argument("--key", help="the team's crypto key (team channel and robot link)")
-    gp.add_argument("--listen", default="0.0.0.0:4460", metavar="HOST:PORT",
-                    help="where robots connect (default %(default)s)")
+    gp.add_argument("--listen", metavar="HOST:PORT",
+                    help="where robots connect (default 0.0.0.0:4460, with --robots agenttask 0.0.0.0:2016)")
+    gp.add_argument("--robots", default="rll-bt", choices=ROBOT_KINDS,
+                    help="rll-bt: rll-bt's agents (encrypted link, rll-bt's additions); agenttask: any robot "
+                         "that speaks the league's AgentTask (plain frames, the league's messages only) "
+                         "(default %(default)s)")
     gp.add_argument("--state", default=DEFAULT_STATE, metavar="FILE",
                     help="SQLite state database; a restarted server resumes from it "
                          "(default %(default)s)")
@@ -94,18 +107,18 @@ def run(args: argparse.Namespace) -> int:
         raise UserError("--team and --key are required to run the team server",
                         hint="rll-bt teamserver --team NAME --key KEY  (or: rll-bt teamserver "
                              "status)")
-    from rll_bt import msgs
+    from rll_bt.agenttask import link as agent_link
     from rll_bt.cli.watching import close_watch, open_watch
     from rll_bt.clock import WallClock
-    from rll_bt.comm import MessageRegistry, StreamServer
     from rll_bt.watch.process import watch_links
 
     from .links.refbox_link import udp_refbox_link
     from .server import ServerConfig, TeamServer
 
-    host, port = _host_port(args.listen)
+    listen = args.listen or LISTEN[args.robots]
+    host, port = _host_port(listen)
     clock = WallClock()
-    config = ServerConfig(strategy=args.strategy, seed=args.seed, planner=args.planner)
+    config = ServerConfig(strategy=args.strategy, seed=args.seed, planner=args.planner, robots=args.robots)
     config.dispatch.heartbeat_timeout = args.heartbeat_timeout
     if args.beacon is not None:
         config.beacon, config.beacon_number = True, args.beacon
@@ -115,12 +128,11 @@ def run(args: argparse.Namespace) -> int:
         raise Unavailable(f"cannot open the refbox channels: {exc}",
                           where=f"{args.refbox_host} ({args.ports} ports)") from None
     try:
-        agents = StreamServer(port, host=host, key=args.key, clock=clock,
-                              registry=MessageRegistry.from_message_set(
-                                  msgs.message_set("team")))
+        agents = agent_link.tcp_server(port, host=host, clock=clock,
+                                       key=args.key if args.robots == "rll-bt" else None)
     except OSError as exc:
         refbox.close()
-        raise Unavailable(f"cannot listen for robots: {exc}", where=args.listen) from None
+        raise Unavailable(f"cannot listen for robots: {exc}", where=listen) from None
     try:
         watch = open_watch(args, f"rll-bt teamserver ({args.profile})",
                            {"kind": "teamserver", "team": args.team, "profile": args.profile})
@@ -133,8 +145,8 @@ def run(args: argparse.Namespace) -> int:
             watch, "teamserver", link=agents, public=refbox.public, team=refbox.team_factory)
     server = TeamServer(args.profile, args.team, clock=clock, refbox=refbox, agents=agents,
                         key=args.key, state=args.state, config=config, team_color=args.color)
-    print(f"team server for {args.team} ({args.profile}) listening on {host}:{agents.port}, "
-          f"state in {args.state}", file=sys.stderr)
+    print(f"team server for {args.team} ({args.profile}) listening on {host}:{agents.port} for "
+          f"{args.robots} robots, state in {args.state}", file=sys.stderr)
     start, last = clock.now(), -1e9
     old = signal.signal(signal.SIGTERM, _on_term) if threading.current_thread() is threading.main_thread() else None
     try:

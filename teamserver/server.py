@@ -46,7 +46,7 @@ from .exploration.symmetry import consistent_set
 from .knowledge import model as M
 from .knowledge.kb import KnowledgeBase
 from .knowledge.store import Store
-from .links.agents import AgentLink
+from .links.agents import AgentLink, from_wire
 from .links.refbox import RefboxClient
 from .links.tasks import TaskLink
 from .planning.estimate import Durations
@@ -82,6 +82,7 @@ class ServerConfig:
     dispatch: DispatchConfig = field(default_factory=DispatchConfig)
     phase_period: float = 1.0                   # GamePhase + heartbeats to the robots
     map_period: float = 1.0                     # at most this often a changed MachineMap
+    robots: str = "rll-bt"                      # "agenttask": robots of the league (AgentTask only)
     beacon: bool = False                        # send a BeaconSignal of our own
     beacon_number: int = 0
     beacon_period: float = 1.0
@@ -115,7 +116,7 @@ class TeamServer:
                 self.config.dispatch, stuck_timeout=self.profile.stuck_timeout))
         self.kb = KnowledgeBase.load(self.profile, Store(state))
         self.refbox = RefboxClient(self.kb, team_name, clock=clock)
-        self.link = AgentLink(self.kb, clock)
+        self.link = AgentLink(self.kb, clock, extras=self.config.robots != "agenttask")
         self.tasks = TaskLink(self.kb, self.link, self.refbox, self.send_agent, self.send_refbox)
         self.strategy = make_strategy(self.config.strategy, self.config.seed,
                                       self.config.explore_thresh, oracle)
@@ -225,7 +226,7 @@ class TeamServer:
             return
         for ev in self.agents.events():
             if ev.kind == DISCONNECTED:
-                number = self.link.peers.pop(ev.peer, None)
+                number = self.link.dropped(ev.peer)
                 r = self.kb.robots.get(number) if number is not None else None
                 if r is not None:
                     r.peer = None
@@ -236,56 +237,94 @@ class TeamServer:
 
     def _on_agent(self, m, peer) -> None:
         if not self.tasks.incoming(m):
+            if m.DESCRIPTOR.name == "AgentTask":
+                self.link.drop_outcome(m)     # a result acted on already: its TaskOutcome came again too
             return
         name = m.DESCRIPTOR.name
         if name == "RobotHello":
             r = self.link.on_hello(m, peer)
             self._welcome(r)
-        elif name == "Heartbeat":
-            r, back = self.link.on_heartbeat(m, peer)
+        elif name == "BeaconSignal":
+            r, back = self.link.on_beacon(m, peer)
             if back:
                 self._welcome(r)
+            if not self.link.speaks_rllbt(r):
+                self._league_beacon(r, m)
         elif name == "RobotStatus":
             r, back = self.link.on_status(m, peer)
             if back:
                 self._welcome(r)
-            if m.HasField("current_task_id") and r.task_id != m.current_task_id and \
-                    m.current_task_id in self.kb.tasks and m.state == BUSY:
-                t = self.kb.tasks[m.current_task_id]
-                self.send_agent(r, self.link.cancel_msg(M.Task.from_dict(
-                    {**t.to_dict(), "robot": r.number}), "task no longer yours"))
-        elif name == "TaskResult":
+            if m.HasField("current_task_id") and m.state == BUSY:
+                self._not_yours(r, int(m.current_task_id))
+        elif name == "TaskOutcome":
+            self.link.on_outcome(m)
+        elif name == "AgentTask" and (m.HasField("successful") or m.HasField("canceled")):
             r = self.link.robot(int(m.robot_id), peer)
             self.link.seen(r)
-            if self.dispatcher is not None:
-                status = self.link.ms.enum("TaskResult.Status").Name(m.status)
-                error = self.link.ms.enum("ErrorCode").Name(m.error)
-                holding = m.HasField("holding") if status != "RUNNING" else None
-                self.dispatcher.results.on_result(r.number, int(m.task_id), status, error,
-                                                  holding, m.text)
-                if status in ("FAILED", "SUCCEEDED", "CANCELLED"):
-                    self._replan = self._replan or status != "SUCCEEDED"
+            status, error, holding, text = self.link.result_of(m)
+            t = self.link.task_of(int(m.task_id))
+            if t is None:
+                log.info("robot %d: result of assignment %d, which is over", r.number, m.task_id)
+            else:
+                self._result(r, t.id, status, error, holding, text)
         elif name == "MachineObservation":
             self.link.on_observation(m)
         elif name == "ZoneExplored":
             self.kb.mark_visited(int(m.zone), self.clock.now())
 
+    def _result(self, r: M.Robot, task_id: int, status: str, error: str, holding: bool | None,
+                text: str) -> None:
+        """A task's result from robot ``r``, to the dispatcher."""
+        if self.dispatcher is None:
+            return
+        self.dispatcher.results.on_result(r.number, task_id, status, error, holding, text)
+        self._replan = self._replan or status != "SUCCEEDED"
+
+    def _not_yours(self, r: M.Robot, wire: int) -> None:
+        """``r`` runs an assignment the server has not given it (any more): cancel it there."""
+        tid, _attempt = from_wire(wire)
+        if tid not in self.kb.tasks:
+            return
+        t = self.link.task_of(wire)
+        if t is None or r.task_id != t.id:
+            self.send_agent(r, self.link.cancel_wire(wire, r.number, self.color))
+
+    def _league_beacon(self, r: M.Robot, m) -> None:
+        """A league robot's beacon says what it runs and what it finished: a task
+        it runs that is not its own is cancelled; a finished one still assigned
+        to it counts as its result (when the echoed AgentTask did not come)."""
+        if m.HasField("task"):
+            self._not_yours(r, int(m.task.task_id))
+        for f in m.finished_tasks:
+            t = self.link.task_of(int(f.TaskId))
+            if t is not None and t.state == M.ASSIGNED and t.robot == r.number:
+                self._result(r, t.id, "SUCCEEDED" if f.successful else "FAILED",
+                             "NONE", None, "reported in the robot's beacon")
+
     def _welcome(self, r: M.Robot) -> None:
-        """A robot (re)joined: the game phase, the machine map, and its task at once."""
+        """A robot (re)joined: the game phase and the machine map (to a robot that
+        speaks rll-bt), and its task at once."""
         log.info("robot %d (%s) is with us", r.number, r.name)
-        self.send_agent(r, self._phase_msg())
-        self.send_agent(r, self.link.machine_map_msg(consistent_set(self.profile,
-                                                                    self.kb.machines)))
+        if self.link.speaks_rllbt(r):
+            self.send_agent(r, self._phase_msg())
+            self.send_agent(r, self.link.machine_map_msg(consistent_set(self.profile,
+                                                                        self.kb.machines)))
         self.tasks.welcome(r)
         self._replan = True
 
     def send_agent(self, robot: M.Robot | None, msg) -> None:
-        """To one robot (by its link), or to all when ``robot`` is None."""
+        """To one robot (by its link), or, an rll-bt addition, to every robot that
+        speaks rll-bt when ``robot`` is None."""
+        if robot is None and not self.link.extras:
+            return
         self.sent.append((robot.number if robot else "all", msg))
         if self.agents is None:
             return
-        if robot is None:
+        if robot is None and not self.link.league_peers:
             self.agents.send(msg)
+        elif robot is None:
+            for peer in sorted(self.link.rllbt_peers):
+                self.agents.send(msg, to=peer)
         elif robot.peer is not None:
             self.agents.send(msg, to=robot.peer)
 
@@ -334,7 +373,7 @@ class TeamServer:
             self._last["phase"] = now
             self.send_agent(None, self._phase_msg())
             for r in self.kb.active_robots():
-                if r.peer is not None:
+                if r.peer is not None and self.link.speaks_rllbt(r):
                     self.send_agent(r, self.link.heartbeat_msg(r.number))
         if now - self._last["map"] >= self.config.map_period:
             self._last["map"] = now

@@ -60,6 +60,12 @@ class AgentConfig:
     - ``require_game``: stand still until a game state says RUNNING (set
       False only for bench tests without refbox and team server game state)
     - ``capabilities``: announced in RobotHello
+    - ``league_only``: the team server speaks only the league's messages
+      (AgentTask, BeaconSignal): send it nothing else, do not take its
+      silence for a lost link, and find the stations without its machine
+      map (from the refbox's MachineInfo and the robot's own sightings)
+    - ``beacon_finished``: how many of the last finished tasks every
+      BeaconSignal lists (field 10)
     """
     robot_id: int
     team_name: str
@@ -75,7 +81,8 @@ class AgentConfig:
     game_state_fresh: float = 3.0
     require_game: bool = True
     capabilities: tuple[str, ...] = ("explore", "grip", "shelf")
-    finished_beacons: int = 5       # beacons that repeat a finished task (rcll2025)
+    league_only: bool = False
+    beacon_finished: int = 16
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:

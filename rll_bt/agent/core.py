@@ -1,58 +1,54 @@
-"""The robot agent: team-server link, refbox channels and task trees in one
-stepped object with no threads.
+"""The robot agent: team-server link, refbox channels and task trees, stepped, no threads.
 
     agent = RobotAgent(AgentConfig(robot_id=1, team_name="GRIPS"), clock=clock, backend=robot,
                        link=stream_client, public=public_peer, team=team_peer_or_factory)
-    while True:
-        agent.step()            # lockstep: once per simulation step
+    while True: agent.step()        # lockstep: once per simulation step
 
 ``step()`` polls every transport, handles what arrived, ticks the task's
 tree when a tick is due (``config.hz`` on the agent's clock) and sends what
-is due: Heartbeat, RobotStatus (and on every change), BeaconSignal,
-MachineObservations as they change, and task results.  See the package
-docstring for the messages in each direction.
+is due: BeaconSignal to the team server and to the refbox, RobotStatus (and
+on every change), MachineObservations as they change, and task results
+(the league's AgentTask, :mod:`rll_bt.agenttask`).  A task for a busy robot
+waits for the running one, but rll-bt's team server's (with TaskDetail) is refused.
 """
 from __future__ import annotations
 
 import logging
-from collections import OrderedDict, deque
 from typing import Any
 
 from .. import msgs, rules
+from ..agenttask import TaskRejected, read_task
 from ..backend import Backend, BackendError, Pose2D
 from ..clock import Clock
-from ..comm import CONNECTED, DISCONNECTED
 from . import robotstate
 from .config import AgentConfig
-from .delivery import ServerDelivery
 from .errorcodes import error_code
 from .gamestate import GameGate
+from .localmap import LocalMachines
 from .machinemap import KnownMachines, changed_names, distribute
 from .observations import ObservationFeed
 from .pose import PoseReader
 from .refbox import RefboxLink
-from .runner import Outcome, TaskRun, default_trees_dir, load_task_tree
+from .results import make_result
+from .runner import InvalidTask, Outcome, TaskRun, default_trees_dir, load_task_tree
+from .serverlink import ServerLink
 from .stations import StationStates
-from .tasks import InvalidTask, agent_task, task_kind, task_params
+from .taskbook import Entry, TaskBook
 
 log = logging.getLogger("rll_bt.agent")
-
-KEEP_FINISHED = 1024    # results remembered to answer re-sent tasks and cancels
 
 
 class RobotAgent:
     """One robot's mid-level.
 
     ``clock``: the agent's time; ``backend``: the robot; ``link``: the
-    team-server transport (:class:`~rll_bt.comm.StreamClient` or a bus stream
-    client, encrypted with the team key, registry of the ``team`` message
-    set); ``public``: the refbox public-channel transport (or None);
-    ``team``: the refbox team-channel transport, or a factory
-    ``team(color)`` making it once the colour is known (or None);
-    ``services``: shared objects for the trees (the agent adds
-    ``observations`` and, once received, ``machine_map``);
-    ``registry``: node registry (default: all installed node types);
-    ``start_pose``: field pose at start, for odometry-based poses.
+    team-server transport (a stream client of :mod:`rll_bt.agenttask.link`);
+    ``public``: the refbox public-channel transport (or None); ``team``: the
+    refbox team-channel transport, or a factory ``team(color)`` making it
+    once the colour is known (or None); ``services``: shared objects for
+    the trees (the agent adds ``observations`` and, once known,
+    ``machine_map``); ``registry``: node registry (default: all installed
+    node types); ``start_pose``: field pose at start, for odometry-based poses.
     """
 
     def __init__(self, config: AgentConfig, *, clock: Clock, backend: Backend | None, link,
@@ -61,12 +57,12 @@ class RobotAgent:
         self.config = config
         self.clock = clock
         self.backend = backend
-        self.link = link
         self.registry = registry
         self.profile = rules.profile(config.profile)
         self.tm = msgs.message_set("team")
         self.rm = msgs.message_set(config.profile)
         self.trees_dir = config.trees_dir or default_trees_dir()
+        self.server = ServerLink(link, config, clock, restarted=restarted)
         self.gate = GameGate(config.team_name, clock, config.game_state_fresh, config.require_game)
         self.refbox = RefboxLink(self.rm, clock, config.robot_id, config.team_name, config.peer_name, public, team)
         self.feed = ObservationFeed(self.profile, clock, config.robot_id)
@@ -78,23 +74,15 @@ class RobotAgent:
             self.services.setdefault("start_pose", start_pose)
         self._n_services = len(self.services)
         self.pose = PoseReader(backend, self.services, start_pose)
+        self.book = TaskBook()
         self.run: TaskRun | None = None
         self.machines: KnownMachines | None = None
+        self.local = LocalMachines(self.profile) if config.league_only else None
         self.map_updates = 0
-        self.finished: OrderedDict[int, Any] = OrderedDict()     # task id -> final TaskResult
-        self._issued: dict[int, float] = {}     # task id -> issued_at of the task as this robot ran it
-        self._beacon_finished: deque[list] = deque(maxlen=32)    # [task_id, ok, beacons left]
-        self.delivery = ServerDelivery(link, clock, lambda: self.tm.LinkAck(robot_id=config.robot_id))
-        self._restarted_next = restarted
-        self._hello_due = False
-        self.connected = False
-        self.registrations = 0
-        self.last_server_rx: float | None = None
-        self.server_silent = False
+        self._details: dict[int, Any] = {}          # task id -> TaskDetail not yet matched
         self._moving: bool | None = None
         self.fault: str | None = None
         self._status_sig: tuple | None = None
-        self._hb_seq = 0
         now = clock.now()
         self._next_tick = now
         self._next_hb = now
@@ -103,15 +91,39 @@ class RobotAgent:
         self._attached: set[int] = set()
         self.observers: list = []    # stepped(agent), task_started(agent, run), task_ended(agent, run, outcome)
         if config.color:
-            self.refbox.set_color(config.color)
-        if getattr(link, "connected", False):
-            self._hello_due = True
+            self._set_color(config.color)
         self._attach_observers()
+
+    # -- compatibility views --------------------------------------------------------------
+    @property
+    def link(self):
+        return self.server.t
+
+    @property
+    def connected(self) -> bool:
+        return self.server.connected
+
+    @property
+    def registrations(self) -> int:
+        return self.server.registrations
+
+    @property
+    def server_silent(self) -> bool:
+        return self.server.silent
+
+    @property
+    def finished(self):
+        """task id -> :class:`~.taskbook.Result` of the tasks that ended."""
+        return self.book.finished
 
     # -- the loop ---------------------------------------------------------------------
     def step(self) -> None:
         """Poll, handle, tick if due, send what is due.  Never blocks."""
-        self._poll_link()
+        for rec in self.server.poll(self._on_connect):
+            try:
+                self._on_server_message(rec.msg)
+            except Exception:       # a message the agent chokes on must not stop the robot's loop
+                log.exception("robot %d: handling %s failed", self.config.robot_id, rec.type_name)
         self._poll_refbox()
         self._apply_gate()
         now = self.clock.now()
@@ -122,7 +134,7 @@ class RobotAgent:
                 self._next_tick = now + period
             self.tick()
         self._periodic(self.clock.now())
-        self.delivery.step(self.connected)
+        self.server.step()
         self._flush()
         self._notify("stepped")
 
@@ -133,11 +145,16 @@ class RobotAgent:
             except Exception:       # an observer must never stop the robot
                 log.exception("robot %d: observer %r failed in %s", self.config.robot_id, obs, what)
 
+    def moving_allowed(self) -> bool:
+        """The game lets the robot move and its task is not paused."""
+        cur = self.book.current
+        return self.gate.moving_allowed and not (cur is not None and cur.paused)
+
     def tick(self) -> Outcome | None:
-        """Tick the current task's tree once, if there is one and the game
-        lets the robot move; returns the outcome when the task ended."""
+        """Tick the current task's tree once, if there is one and the robot
+        may move; returns the outcome when the task ended."""
         run = self.run
-        if run is None or run.done or not self.gate.moving_allowed:
+        if run is None or run.done or not self.moving_allowed():
             return None
         outcome = run.tick()
         if len(self.services) != self._n_services:     # a node made a service on first use
@@ -155,131 +172,123 @@ class RobotAgent:
         (wall-clock runs; a lockstep run never calls this)."""
         left = max(0.0, min(max_seconds, self.next_due() - self.clock.now()))
         if left > 0:
-            self.link.wait(left)
+            self.server.wait(left)
 
     # -- team-server link -----------------------------------------------------------------
-    def _poll_link(self) -> None:
-        for ev in self.link.events():
-            if ev.kind == CONNECTED:
-                self.connected = True
-                self._hello_due = True
-                log.info("robot %d: connected to the team server", self.config.robot_id)
-            elif ev.kind == DISCONNECTED:
-                self.connected = False
-                self._hello_due = False
-                log.warning("robot %d: team server link lost; reconnecting", self.config.robot_id)
-        if self._hello_due and getattr(self.link, "connected", True):
-            self._hello()
-        for rec in self.link.receive():
-            self.last_server_rx = self.clock.now()
-            self.server_silent = False
-            if not self.delivery.incoming(rec.msg):
-                continue                        # an acknowledgement
-            try:
-                self._on_server_message(rec.msg)
-            except Exception:       # a message the agent chokes on must not stop the robot's loop
-                log.exception("robot %d: handling %s failed", self.config.robot_id, rec.type_name)
-
-    def _hello(self) -> None:
-        c = self.config
-        hello = self.tm.RobotHello(robot_id=c.robot_id, team_name=c.team_name, peer_name=c.peer_name,
-                                   capabilities=list(c.capabilities), restarted=self._restarted_next)
-        if self.color():
-            hello.team_color = self.tm.enum("TeamColor").Value(self.color())
-        if self.link.send(hello):
-            self.connected = True
-            self._hello_due = False
-            self._restarted_next = False
-            self.registrations += 1
-            self.last_server_rx = self.clock.now()
-            self._send_status(force=True)
-            if self.run is not None and not self.run.done:
-                self._send(self._result(self.run.task_id, "RUNNING"))
-            self.delivery.reconnected()         # final results the server has not acknowledged
+    def _on_connect(self) -> None:
+        self._send_status(force=True)
+        if self.server.league_only:
+            self._beacon_to_server()
 
     def _on_server_message(self, m) -> None:
         name = m.DESCRIPTOR.name
-        if name == "Task":
-            self._on_task(m)
-        elif name == "CancelTask":
-            self._on_cancel(m)
+        if name == "AgentTask":
+            self._on_agent_task(m)
+        elif name == "TaskDetail":
+            self._details[int(m.task_id)] = m
+            while len(self._details) > 64:
+                self._details.pop(next(iter(self._details)))
         elif name == "MachineMap":
-            self._on_machine_map(m)
+            self._on_machine_map(KnownMachines.from_message(m, self.clock.now()))
         elif name == "GamePhase":
             self.gate.on_game_phase(m)
             self._follow_color()
         elif name != "Heartbeat":
             log.debug("robot %d: ignoring %s from the team server", self.config.robot_id, name)
 
-    def _on_task(self, task) -> None:
-        me = self.config.robot_id
-        tid = int(task.task_id)
-        if int(task.robot_id) != me:
-            log.warning("robot %d: ignoring task %d for robot %d", me, tid, task.robot_id)
+    def _on_agent_task(self, at) -> None:
+        me, tid = self.config.robot_id, int(at.task_id)
+        detail = self._details.pop(tid, None)
+        if at.HasField("cancel_task") and at.cancel_task:
+            self._on_cancel(at)
             return
-        if self.run is not None and self.run.task_id == tid:
-            self._send(self._result(tid, "RUNNING"))           # the server re-sent it: still on it
+        where = self.book.where(tid)
+        if at.HasField("pause_task") and where in ("current", "waiting"):
+            self._on_pause(at, where)
             return
-        if tid in self.finished and self._given_again(tid, task):
-            del self.finished[tid]                             # cancelled, then given out again: a new run
-        elif tid in self.finished:
-            self._send(self.finished[tid])                     # already done: tell again
+        if where == "finished" and self.book.given_again(tid, detail):
+            self.book.forget(tid)                           # cancelled, then given out again: a new run
+            where = None
+        elif where == "finished":
+            self.server.again(self.book.result(tid))        # already done: tell again
             return
-        if self.run is not None and not self.run.done:
-            self._send(self._result(tid, "FAILED", "INVALID_TASK",
-                                    f"robot {me} is busy with task {self.run.task_id}; cancel it first"))
-            return
+        if where is not None:
+            return                                          # sent again while it runs or waits
+        if detail is not None and self.run is not None and not self.run.done:
+            busy = f"robot {me} is busy with task {self.run.task_id}; cancel it first"   # rll-bt's server replans
+            return self.server.result(make_result(at, robot_id=me, status="FAILED", code="INVALID_TASK", text=busy,
+                                                  holding=self._holding(), stamp=self.clock.now()))
         try:
-            kind = task_kind(task)
-            params = task_params(task, self.profile)
-            if kind == "report_machines":
-                self._report_machines(task, params)
-                return
+            kind, params = read_task(at, detail, profile=self.profile, robot_id=me, color=self.color(),
+                                     machines=self.machines)
+        except TaskRejected as exc:
+            log.warning("robot %d: task %d rejected: %s", me, tid, exc)
+            self._record(make_result(at, robot_id=me, status="FAILED", code="INVALID_TASK", text=exc.text,
+                                     league_code=exc.code, holding=self._holding(),
+                                     stamp=self.clock.now(), team_color=self._team_value()))
+            return
+        entry = Entry(at, detail, kind, params, paused=bool(at.pause_task))
+        if self.book.take(entry):
+            self._start(entry)
+        else:
+            log.info("robot %d: task %d %s waits for task %d", me, tid, kind, self.book.current.task_id)
+
+    def _start(self, entry: Entry) -> None:
+        """Load and start the tree of ``entry`` (the book's current task)."""
+        me, tid, kind, params = self.config.robot_id, entry.task_id, entry.kind, entry.params
+        try:
             if self.trees_dir is None:
                 raise InvalidTask("no trees directory (give --trees)")
             tree = load_task_tree(self.trees_dir, kind, params, backend=self.backend, clock=self.clock,
                                   services=self.services, registry=self.registry)
-        except (InvalidTask, ValueError) as exc:
+        except ValueError as exc:
             log.warning("robot %d: task %d rejected: %s", me, tid, exc)
-            self._record(tid, self._result(tid, "FAILED", "INVALID_TASK", str(exc)), ok=False)
+            self._record(make_result(entry.task, robot_id=me, status="FAILED", code="INVALID_TASK",
+                                     text=str(exc), league_code="TASK_NOT_SUPPORTED",
+                                     holding=self._holding(), stamp=self.clock.now()))
+            self._start_next()
             return
         if len(self.services) != self._n_services:      # the tree's services were made just now
             self._services_changed()
-        self.run = TaskRun(task, params, tree, self.clock, max_gap=max(0.5, 5 * self.config.tick_period))
-        self._issued[tid] = float(task.issued_at)
+        self.run = TaskRun(entry.task, params, tree, self.clock, max_gap=max(0.5, 5 * self.config.tick_period))
         self._notify("task_started", self.run)
         log.info("robot %d: task %d %s %s", me, tid, kind,
                  {k: v for k, v in params.items() if k not in ("task_id", "robot_id", "kind")})
-        self._send(self._result(tid, "RUNNING"))
         self._send_status(force=True)
 
-    def _report_machines(self, task, params) -> None:
-        tid = int(task.task_id)
-        try:
-            sent = self.refbox.machine_report(params["entries"])
-        except ValueError as exc:           # e.g. a zone the refbox's Zone enum does not have
-            raise InvalidTask(f"cannot build the MachineReport: {exc}") from None
-        if sent:
-            result = self._result(tid, "SUCCEEDED")
-        else:
-            result = self._result(tid, "FAILED", "INTERNAL", "no refbox team channel (colour unknown?)")
-        self._record(tid, result, ok=result.status == self.tm.TaskResult.SUCCEEDED)
+    def _start_next(self) -> None:
+        nxt = self.book.next()
+        if nxt is not None and (self.run is None or self.run.task_id != nxt.task_id):
+            self._start(nxt)
 
-    def _on_cancel(self, c) -> None:
-        tid = int(c.task_id)
-        if int(c.robot_id) != self.config.robot_id:
+    def _on_cancel(self, at) -> None:
+        tid = int(at.task_id)
+        if int(at.robot_id) != self.config.robot_id:
             return
+        where = self.book.where(tid)
         run = self.run
-        if run is not None and run.task_id == tid and not run.done:
-            log.info("robot %d: task %d cancelled (%s)", self.config.robot_id, tid, c.reason or "no reason given")
-            self._finish(run, run.cancel(c.reason))
-        elif tid in self.finished:
-            self._send(self.finished[tid])
+        if where == "current" and run is not None and run.task_id == tid and not run.done:
+            log.info("robot %d: task %d cancelled", self.config.robot_id, tid)
+            self._finish(run, run.cancel("cancelled by the team server"))
+        elif where == "waiting":
+            entry = self.book.drop_waiting(tid)
+            self._record(make_result(entry.task, robot_id=self.config.robot_id, status="CANCELLED",
+                                     text="cancelled before it started", stamp=self.clock.now()))
+        elif where == "finished":
+            self.server.result(self.book.result(tid))
         else:
-            self._send(self._result(tid, "CANCELLED", "CANCELLED", "no such task on this robot"))
+            self.server.result(make_result(at, robot_id=self.config.robot_id, status="CANCELLED",
+                                           text="no such task on this robot", stamp=self.clock.now()))
 
-    def _on_machine_map(self, m) -> None:
-        old, self.machines = self.machines, KnownMachines.from_message(m, self.clock.now())
+    def _on_pause(self, at, where: str) -> None:
+        entry = self.book.entry(int(at.task_id))
+        entry.paused = bool(at.pause_task)
+        entry.task.pause_task = entry.paused
+        log.info("robot %d: task %d %s", self.config.robot_id, entry.task_id,
+                 "paused" if entry.paused else "resumed")
+
+    def _on_machine_map(self, known: KnownMachines) -> None:
+        old, self.machines = self.machines, known
         self.map_updates += 1
         self.machines.updates = self.map_updates
         took = distribute(self.services, self.machines, changed_names(old, self.machines))
@@ -289,28 +298,40 @@ class RobotAgent:
     # -- refbox ---------------------------------------------------------------------------------
     def _poll_refbox(self) -> None:
         for rec in self.refbox.receive():
-            if rec.msg.DESCRIPTOR.name == "GameState":
+            name = rec.msg.DESCRIPTOR.name
+            if name == "GameState":
                 self.gate.on_game_state(rec.msg)
                 self._follow_color()
-            elif rec.msg.DESCRIPTOR.name == "MachineInfo":
+            elif name == "MachineInfo":
                 self.stations.update(rec.msg, self.clock.now())
+                if self.local is not None and self.local.on_machine_info(rec.msg):
+                    self._on_machine_map(self.local.known())
 
     def color(self) -> str | None:
         """Our team colour: as configured, else as the refbox (or the team server) says."""
         return self.config.color or self.gate.color
 
+    def _team_value(self) -> int | None:
+        c = self.color()
+        return ("CYAN", "MAGENTA").index(c) if c else None
+
+    def _set_color(self, color: str) -> None:
+        self.refbox.set_color(color)
+        self.server.color = color
+
     def _follow_color(self) -> None:
         color = self.color()
         if color and color != self.refbox.color:
-            self.refbox.set_color(color)
+            self._set_color(color)
 
     def _apply_gate(self) -> None:
-        moving = self.gate.moving_allowed
+        moving = self.moving_allowed()
         if moving == self._moving:
             return
         self._moving = moving
         if not moving:
-            log.info("robot %d: standing still (%s)", self.config.robot_id, self.gate.describe())
+            log.info("robot %d: standing still (%s)", self.config.robot_id,
+                     self.gate.describe() if not self.gate.moving_allowed else "task paused")
             if self.run is not None and not self.run.done:
                 self.run.halt()
             self._stop_robot()
@@ -325,45 +346,27 @@ class RobotAgent:
         code = "NONE"
         text = outcome.text
         if outcome.status != "SUCCEEDED":
-            value, code = error_code(outcome.code)
+            _value, code = error_code(outcome.code)
             if code != str(outcome.code).upper():
                 text = f"{outcome.code}: {text}" if text else str(outcome.code)
         if outcome.status == "SUCCEEDED" and run.kind == "explore_zone" and \
                 int(run.params["zone"]) not in self.feed.searched:
             found = run.tree.outputs().get("found")         # explore_zone.yaml's declared output
             self.feed.zone_searched(int(run.params["zone"]), found if isinstance(found, list) else None)
-        result = self._result(run.task_id, outcome.status, code, text)
+        holding = self._holding()
+        result = make_result(run.task, robot_id=self.config.robot_id, status=outcome.status, code=code, text=text,
+                             holding=holding, stamp=self.clock.now())
         self._notify("task_ended", run, outcome)
         log.info("robot %d: task %d %s %s%s", self.config.robot_id, run.task_id, run.kind, outcome.status,
                  f" {code} {text}" if code != "NONE" else "")
         self.run = None
-        self._record(run.task_id, result, ok=outcome.status == "SUCCEEDED")
+        self._record(result)
         self._send_status(force=True)
+        self._start_next()
 
-    def _given_again(self, tid: int, task) -> bool:
-        """``task`` gives out again a task the server cancelled on this robot (issued after that run)."""
-        result = self.finished[tid]
-        return result.status == self.tm.TaskResult.CANCELLED and \
-            float(task.issued_at) > self._issued.get(tid, float("inf"))
-
-    def _record(self, tid: int, result, ok: bool) -> None:
-        self.finished[tid] = result
-        while len(self.finished) > KEEP_FINISHED:
-            self._issued.pop(self.finished.popitem(last=False)[0], None)
-        self._beacon_finished.append([tid, ok, self.config.finished_beacons])
-        self.delivery.send_final(result, self.connected)
-
-    def _result(self, tid: int, status: str, code: str = "NONE", text: str = ""):
-        r = self.tm.TaskResult(task_id=tid, robot_id=self.config.robot_id,
-                               status=self.tm.TaskResult.Status.Value(status),
-                               error=self.tm.enum("ErrorCode").Value(code), stamp=self.clock.now())
-        if text:
-            r.text = text[:500]
-        if status != "RUNNING":
-            holding = self._holding()
-            if holding:
-                r.holding.SetInParent()
-        return r
+    def _record(self, result) -> None:
+        self.book.finish(int(result.task.task_id), result)
+        self.server.result(result)
 
     def _holding(self) -> bool | None:
         return robotstate.holding(self.backend)
@@ -372,54 +375,39 @@ class RobotAgent:
         """The RobotStatus state: FAULT, STOPPED, RECOVERING, BUSY or IDLE."""
         if self.fault:
             return "FAULT"
-        if not self.gate.moving_allowed:
+        if not self.moving_allowed():
             return "STOPPED"
         if self.run is not None and not self.run.done:
             return "RECOVERING" if self.run.recovering else "BUSY"
         return "IDLE"
 
     def _send_status(self, force: bool = False) -> None:
+        if not self.server.extras:
+            return
         state = self.state()
         task_id = self.run.task_id if self.run is not None else None
         waiting = getattr(self.stations, "waiting", None) if task_id is not None else None
         sig = (state, task_id, waiting)
         if not force and sig == self._status_sig and self.clock.now() < self._next_status:
             return
-        if not self.connected:
+        if not self.server.connected:
             return
-        c = self.config
-        st = self.tm.RobotStatus(robot_id=c.robot_id, state=self.tm.RobotStatus.State.Value(state),
-                                 stamp=self.clock.now())
         pose, conf = self.pose.read()
-        if pose is not None:
-            st.pose.x, st.pose.y, st.pose.theta = pose.x, pose.y, pose.theta
-            st.pose_confidence = conf
-        if task_id is not None:
-            st.current_task_id = task_id
-        if self._holding():
-            st.holding.SetInParent()
+        st = self.server.status_msg(state, pose, conf, task_id, bool(self._holding()))
         robotstate.fill_battery(st, self.backend)
         if waiting:
             st.waiting_at = waiting
-        if self.link.send(st):
+        if self.server.send(st):
             self._status_sig = sig
-            self._next_status = self.clock.now() + c.status_period
+            self._next_status = self.clock.now() + self.config.status_period
 
     def _periodic(self, now: float) -> None:
         c = self.config
         if now >= self._next_hb:
             self._next_hb = now + c.heartbeat_period
-            if self.connected:
-                self._hb_seq += 1
-                self.link.send(self.tm.Heartbeat(robot_id=c.robot_id, seq=self._hb_seq, stamp=now))
-            if self.connected and self.last_server_rx is not None and \
-                    now - self.last_server_rx > c.server_timeout and not self.server_silent:
-                self.server_silent = True
-                log.warning("robot %d: nothing from the team server for %.1f s; reconnecting",
-                            c.robot_id, now - self.last_server_rx)
-                reconnect = getattr(self.link, "reconnect", None)
-                if reconnect is not None:
-                    reconnect()
+            if self.server.connected:
+                self._beacon_to_server()
+            self.server.check_silence(now)
         if now >= self._next_status:
             self._send_status(force=True)
             self._next_status = max(self._next_status, now + c.status_period)
@@ -427,32 +415,33 @@ class RobotAgent:
             self._send_status()
         if now >= self._next_beacon:
             self._next_beacon = now + c.beacon_period
-            self._beacon()
+            pose, _conf = self.pose.read()
+            self.refbox.beacon(pose, self._current_task(), self._finished_list())
 
-    def _beacon(self) -> None:
+    def _current_task(self):
+        cur = self.book.current
+        return cur.task if cur is not None else None
+
+    def _finished_list(self) -> list[tuple[int, bool]]:
+        n = self.config.beacon_finished
+        return [(tid, r.successful) for tid, r in list(self.book.finished.items())[-n:]] if n else []
+
+    def _beacon_to_server(self) -> None:
         pose, _conf = self.pose.read()
-        task = None
-        run = self.run
-        if run is not None and not run.done and self.refbox.color:
-            task = agent_task(self.rm, run.task, run.params, self.profile, self.refbox.color)
-        finished = [(e[0], e[1]) for e in self._beacon_finished]
-        if self.refbox.beacon(pose, task, finished):
-            for e in self._beacon_finished:
-                e[2] -= 1
-            while self._beacon_finished and self._beacon_finished[0][2] <= 0:
-                self._beacon_finished.popleft()
+        self.server.send(self.server.beacon(pose, self._current_task(), self._finished_list()))
 
     def _flush(self) -> None:
-        if not self.connected or not len(self.feed):
+        if not len(self.feed) or not (self.server.connected or self.local is not None):
             return
         pending = self.feed.drain()
+        if self.local is not None:
+            if self.local.on_observations(pending):
+                self._on_machine_map(self.local.known())
+            return
         for i, m in enumerate(pending):
-            if not self.link.send(m):
+            if not self.server.send(m):
                 self.feed.requeue(pending[i:])
                 return
-
-    def _send(self, msg) -> bool:
-        return bool(self.connected and self.link.send(msg))
 
     # -- robot -------------------------------------------------------------------------------
     def _stop_robot(self) -> None:
@@ -484,6 +473,7 @@ class RobotAgent:
     # -- life cycle ---------------------------------------------------------------------------
     def shutdown(self, reason: str = "agent shut down") -> None:
         """Stop the robot and report a running task as failed (INTERNAL)."""
+        self.book.waiting.clear()
         run = self.run
         if run is not None and not run.done:
             run.halt()
@@ -496,5 +486,5 @@ class RobotAgent:
         try:
             self.shutdown()
         finally:
-            self.link.close()
+            self.server.close()
             self.refbox.close()

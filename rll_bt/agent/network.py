@@ -12,6 +12,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from .. import msgs
+from ..agenttask import link as agent_link
 from ..clock import Clock
 from ..comm import DEFAULT_HOST, TEAM_SERVER_PORT, MessageRegistry, StreamClient, UdpPeer, layout
 
@@ -37,13 +38,13 @@ class RefboxAddress:
         return self.team_send or base.send, self.team_recv or base.recv
 
 
-def team_server_link(host: str, port: int = TEAM_SERVER_PORT, *, key: str, clock: Clock | None = None,
+def team_server_link(host: str, port: int = TEAM_SERVER_PORT, *, key: str | None, clock: Clock | None = None,
                      backoff_initial: float = 0.2, backoff_max: float = 5.0) -> StreamClient:
-    """The agent's end of the team-server link: reconnects with exponential
-    backoff, every frame encrypted with the team key."""
-    registry = MessageRegistry.from_message_set(msgs.message_set("team"))
-    return StreamClient(host, port, registry=registry, key=key, clock=clock, channel="teamserver",
-                        backoff_initial=backoff_initial, backoff_max=backoff_max)
+    """The agent's end of the team-server link (:mod:`rll_bt.agenttask.link`):
+    reconnects with exponential backoff; frames protected with the team key,
+    plain for ``key=None`` (a team server of the league)."""
+    return agent_link.tcp_client(host, port, key=key, clock=clock, backoff_initial=backoff_initial,
+                                 backoff_max=backoff_max)
 
 
 def refbox_channels(address: RefboxAddress, profile: str, *, key: str,

@@ -1,5 +1,6 @@
 """The agent's side of the refbox: the public channel (listen only) and the
-team's encrypted channel (beacons, machine reports).
+team's encrypted channel (beacons; MachineInfo for a robot that finds the
+stations itself).
 
 Robots send only on their own team channel and never on the other team's
 (refbox-protocol §2), so the team channel opens once the colour is known.
@@ -10,7 +11,7 @@ colour becomes known or changes; the transport encrypts with the team key.
 BeaconSignal: ``time`` is the clock's epoch (UTC seconds), ``seq``
 increases per beacon, ``number`` is the jersey, ``pose`` the field pose
 (m, rad).  With the rcll2025 message set it also carries the current task
-as an ``AgentTask`` and the recently finished tasks.
+(the ``AgentTask`` the robot got) and the last finished tasks.
 """
 from __future__ import annotations
 
@@ -91,24 +92,6 @@ class RefboxLink:
         sent = bool(self.team.send(b))
         self.beacons_sent += sent
         return sent
-
-    def machine_report(self, entries: list[dict]) -> bool:
-        """Send a MachineReport with ``entries`` ({name, type, zone, rotation})."""
-        if self.team is None or self.color is None:
-            return False
-        rep = self.ms.MachineReport(team_color=self.ms.enum("Team").Value(self.color))
-        has_rotation = "rotation" in self.ms.get("MachineReportEntry").DESCRIPTOR.fields_by_name
-        for e in entries:
-            m = rep.machines.add()
-            if e.get("name"):
-                m.name = e["name"]
-            if e.get("type"):
-                m.type = e["type"]
-            if e.get("zone"):
-                m.zone = int(e["zone"])
-            if has_rotation and e.get("rotation") is not None and (e.get("zone") or e.get("rotation")):
-                m.rotation = int(e["rotation"])
-        return bool(self.team.send(rep))
 
     def close(self) -> None:
         for t in (self.public, self.team):

@@ -22,9 +22,12 @@ from ..backend import SensorLost
 from ..clock import Clock
 from ..tree import Blackboard, LoadedTree, RunContext, TreeLoadError, load_tree
 from ..tree.recovery import Recovery
-from .tasks import InvalidTask
 
 log = logging.getLogger("rll_bt.agent")
+
+
+class InvalidTask(ValueError):
+    """A task the agent cannot run as given: no tree for it, or the tree does not load."""
 
 
 def default_trees_dir() -> Path | None:

@@ -26,7 +26,7 @@ from ..comm import MessageRegistry, StreamClient, StreamServer
 LEAGUE = ("AgentTask", "WorkpieceDescription", "BeaconSignal")
 #: rll-bt's additions, exchanged only between peers that both speak them
 EXTRAS = ("RobotHello", "Heartbeat", "RobotStatus", "TaskDetail", "TaskOutcome", "MachineObservation",
-          "ZoneExplored", "MachineMap", "GamePhase")
+          "ZoneExplored", "MachineMap", "GamePhase", "LinkAck")
 #: what every side calls the link's channel
 CHANNEL = "teamserver"
 

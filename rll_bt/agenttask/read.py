@@ -232,9 +232,7 @@ def _move(p: dict[str, Any], b, detail, profile: Profile, color: str | None) -> 
         cx, cy = profile.zone_centre(zone)
         target = {"x": float(cx), "y": float(cy), "theta": 0.0}
     p.update(zone=zone, zone_name=profile.zone_name(zone) if zone else "", has_target=has_target,
-             target=target)
-    if machine:
-        p.update(machine=machine, side=side)
+             target=target, machine=machine, side=side)
     return p
 
 

@@ -12,7 +12,8 @@ kind             AgentTask                                     TaskDetail adds
 explore_zone     explore_machine {machine_id: the station      viewpoints
                  looked for or "", machine_point "",
                  waypoint: the zone}
-go_to            move {waypoint: the zone of the pose}         target (the pose), zone
+go_to            move {waypoint: the zone, else the zone of     target (the pose), zone
+                 the pose}
 get_workpiece    retrieve {machine_id, machine_point           shelf_slot (SHELF)
                  output / input / shelf}
 put_workpiece    deliver {machine_id, machine_point            --
@@ -91,10 +92,15 @@ def render_task(kind: str, params: dict[str, Any], *, task_id: int, robot_id: in
         for x, y, theta in p.get("viewpoints", ()):
             detail.viewpoints.add(x=float(x), y=float(y), theta=float(theta))
     elif kind == "go_to":
-        x, y = float(p["x"]), float(p["y"])
-        zone = int(p["zone"]) if p.get("zone") else nearest_zone(profile, x, y)
+        if "x" not in p and not p.get("zone"):
+            raise ValueError("a go_to needs a pose (x, y) or a zone")
+        if "x" in p:
+            x, y = float(p["x"]), float(p["y"])
+            zone = int(p["zone"]) if p.get("zone") else nearest_zone(profile, x, y)
+            detail.target.x, detail.target.y, detail.target.theta = x, y, float(p.get("theta", 0.0))
+        else:
+            zone = int(p["zone"])
         at.move.waypoint = profile.zone_name(zone)
-        detail.target.x, detail.target.y, detail.target.theta = x, y, float(p.get("theta", 0.0))
         if p.get("zone"):
             detail.zone = int(p["zone"])
     elif kind == "get_workpiece":

@@ -2,8 +2,10 @@
 
 It opens the backend, connects to the team server over the encrypted TCP
 link (reconnecting with backoff), joins the refbox's public channel and,
-once the colour is known, its team channel, and runs tasks as trees until
-stopped (Ctrl-C or SIGTERM stop the robot first).
+once the colour is known, its team channel, and runs tasks (the league's
+AgentTask) as trees until stopped (Ctrl-C or SIGTERM stop the robot
+first).  With ``--league`` the team server may be any that speaks the
+league's AgentTask: plain frames, only AgentTask and BeaconSignal.
 
 Exit codes: 0 stopped normally (or ``--seconds`` elapsed), 2 bad arguments
 (a malformed key, port or address, an invalid tree), 3 unreachable (the
@@ -74,6 +76,11 @@ def register(cli) -> None:
     g.add_argument("--first-start", action="store_true",
                    help="the first RobotHello says restarted=false (default: true, the agent has no memory "
                         "of earlier tasks)")
+    g.add_argument("--league", action="store_true",
+                   help="the team server speaks only the league's messages (AgentTask in, BeaconSignal out, "
+                        "plain frames, as the league's simulator's robots): no rll-bt additions, the stations "
+                        "found from the refbox's MachineInfo and the robot's own sightings (with --no-refbox the "
+                        "robot runs every task it gets: nothing else says whether the game runs)")
     g = p.add_argument_group(
         "network faults (testing)", "emulate a lossy radio on this agent's team-server link, both ways "
         "(the refbox channels stay as they are)")
@@ -143,7 +150,10 @@ def _config(args):
         raise UserError("not a directory", where=f"--trees {args.trees}", hint="give the directory of the trees")
     try:
         return AgentConfig(robot_id=args.robot, team_name=args.team, peer_name=args.name or "",
-                           profile=args.profile, color=args.color, trees_dir=args.trees, hz=args.hz)
+                           profile=args.profile, color=args.color, trees_dir=args.trees, hz=args.hz,
+                           league_only=args.league,
+                           # nothing but the refbox could say whether the game runs: the league's team server decides
+                           require_game=not (args.league and args.no_refbox))
     except ValueError as exc:
         raise UserError(str(exc)) from None
 
@@ -218,7 +228,8 @@ def cmd_agent(args) -> int:
     link = public = agent = watch = None
     try:
         public, team = _open_refbox(args, config, clock)
-        link = _faulty(args, team_server_link(host, port, key=args.key, clock=clock), config.robot_id, clock)
+        link = _faulty(args, team_server_link(host, port, key=None if args.league else args.key, clock=clock),
+                       config.robot_id, clock)
         watch = open_watch(args, f"rll-bt agent R{config.robot_id} ({config.profile})",
                            {"kind": "agent", "robot": config.robot_id, "team": config.team_name,
                             "profile": config.profile})

@@ -16,9 +16,10 @@ through a :class:`Reliable` end on each side:
 
 Which messages, and what their id is, is one table (:data:`TEAM_IDS`): a
 message type -> a function giving its id, or None for a copy that needs no
-delivery (a task result that says RUNNING).  The ids are the task protocol's
-own, so another task protocol with task ids (the league's AgentTask) is one
-more line of the table.  Everything is bounded: ``max_pending`` messages
+delivery.  The task protocol is the league's ``AgentTask`` (one message type
+for a task, its cancel, a pause and the result echoed back), so its id is
+the task's (assignment's) id with what the copy says in the low three bits
+(:func:`agent_task_id`).  Everything is bounded: ``max_pending`` messages
 waiting per destination (the oldest is given up and counted), ``remember``
 ids per source for spotting repeats.
 """
@@ -30,22 +31,29 @@ from dataclasses import dataclass
 
 from .registry import require_comp_type
 
-#: TaskResult.Status RUNNING: a progress report, not a final result
-_RUNNING = 1
+#: what an AgentTask says, the low three bits of its id on the link
+AT_TASK, AT_CANCEL, AT_PAUSE, AT_RESUME, AT_SUCCEEDED, AT_FAILED, AT_CANCELLED = range(7)
 
 
-def _task_id(m) -> int:
-    return int(m.task_id)
+def agent_task_what(m) -> int:
+    """What AgentTask ``m`` says: a task, its cancel, a pause or resume, or a
+    final result (the task echoed with ``successful`` / ``canceled``)."""
+    if m.HasField("successful") or m.HasField("canceled"):
+        return AT_CANCELLED if m.canceled else AT_SUCCEEDED if m.successful else AT_FAILED
+    if m.cancel_task:
+        return AT_CANCEL
+    if m.HasField("pause_task"):
+        return AT_PAUSE if m.pause_task else AT_RESUME
+    return AT_TASK
 
 
-def _final_result(m) -> int | None:
-    return None if m.status == _RUNNING else (int(m.task_id) << 3) | int(m.status)
+def agent_task_id(m) -> int:
+    """The link's id of AgentTask ``m``: ``task_id << 3 | what`` (:func:`agent_task_what`)."""
+    return (int(m.task_id) << 3) | agent_task_what(m)
 
 
 #: message name -> its id for the link (None: this copy is not delivered reliably)
-TEAM_IDS: dict[str, Callable[[object], int | None]] = {
-    "Task": _task_id, "CancelTask": _task_id, "TaskResult": _final_result,
-}
+TEAM_IDS: dict[str, Callable[[object], int | None]] = {"AgentTask": agent_task_id}
 
 Key = tuple[int, int, int]          # (comp_id, msg_type, id)
 

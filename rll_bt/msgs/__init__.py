@@ -8,7 +8,8 @@ one process even though both refbox sets define ``llsf_msgs.GameState`` etc.:
 - ``rcll2025``: today's refbox (24 files; zones C_Zxy/M_Zxy, DS by order id,
   ``Order.competitive`` required, AgentTask ...);
 - ``team``: rll-bt's own protocol between team server and robots
-  (package ``rllbt``, COMP_ID 3000): Task/TaskResult/CancelTask,
+  (package ``rllbt``, COMP_ID 3000), what it adds to the league's AgentTask:
+  TaskDetail/TaskOutcome,
   MachineObservation/ZoneExplored, RobotHello/Heartbeat/RobotStatus,
   MachineMap, GamePhase.
 

@@ -18,7 +18,6 @@ import numpy as np
 
 from rll_bt.backend import CapabilityError
 
-from ..errors import NotLocalised
 from .laserview import points_now
 from .safety import scan_points, speed_limit
 
@@ -56,7 +55,7 @@ class MotionGuard:
         ctx = self.ctx
         try:
             pose = ctx.pose()
-        except NotLocalised:
+        except RuntimeError:
             return np.zeros((0, 2))
         rel = ctx.laser_memory.relative(pose, ctx.clock.now())
         c, s = math.cos(-pose.theta), math.sin(-pose.theta)

@@ -13,7 +13,7 @@ given the others it needs:
 - :attr:`~Dispatcher.preparer` (:mod:`.prepare`): PrepareMachine timing;
 - :attr:`~Dispatcher.parking` (:mod:`.parking`): idle robots out of the
   stations' way;
-- :attr:`~Dispatcher.results` (:mod:`.results`): TaskResults, retries;
+- :attr:`~Dispatcher.results` (:mod:`.results`): task results, retries;
 - :attr:`~Dispatcher.discards` (:mod:`.discards`): workpieces nothing
   needs;
 - :attr:`~Dispatcher.dropouts` (:mod:`.dropouts`): silent robots, stations

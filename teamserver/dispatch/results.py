@@ -1,6 +1,6 @@
 """Task results from the robots: done, failed, cancelled.
 
-A TaskResult closes the robot's task.  A success books what the task did
+A task's result (the robot's echoed AgentTask) closes it.  A success books what the task did
 (:mod:`teamserver.production.outcomes`) and starts checking that its
 station took the workpiece (:mod:`teamserver.production.feeding`); a feed
 reported failed although its station took the workpiece counts as done.
@@ -53,7 +53,7 @@ class Results:
 
     def on_result(self, robot_number: int, task_id: int, status: str, error: str = "NONE",
                   holding: bool | None = None, text: str = "") -> None:
-        """A TaskResult: ``status`` RUNNING/SUCCEEDED/FAILED/CANCELLED, ``error`` the
+        """A task's result: ``status`` RUNNING/SUCCEEDED/FAILED/CANCELLED, ``error`` the
         ErrorCode name, ``holding`` whether the gripper holds something afterwards
         (None: not said)."""
         task = self.kb.tasks.get(task_id)

@@ -1,11 +1,22 @@
-"""The agent link: the team protocol (package ``rllbt``) between server and robots.
+"""The agent link: the robots' messages in, the team server's out.
 
-Incoming: RobotHello (register or re-register; answered with GamePhase,
-MachineMap and the robot's current task), Heartbeat and RobotStatus
-(liveness, pose, gripper), TaskResult (to the dispatcher),
-MachineObservation (per-property values with confidence, into the
-knowledge base), ZoneExplored (a zone visited).  Outgoing: Task,
-CancelTask, MachineMap, GamePhase, Heartbeat, built here.
+The task protocol is the league's AgentTask (:mod:`rll_bt.agenttask`):
+tasks and cancels go out as ``AgentTask``; results come back as the task
+echoed with ``successful`` / ``canceled`` / ``error_code``, and every
+robot says ``BeaconSignal`` (liveness; for a league robot also its pose and
+its current and finished tasks).  A robot that opens with ``RobotHello``
+speaks rll-bt: it also gets ``TaskDetail`` before each task, ``GamePhase``,
+``MachineMap`` and ``Heartbeat``, and sends ``RobotStatus``, ``TaskOutcome``
+before each result, ``MachineObservation`` and ``ZoneExplored``.  A robot
+that never says hello (or a server run with ``extras=False``, ``rll-bt
+teamserver --robots agenttask``) gets nothing but the league's messages.
+
+Task ids on the wire name one *assignment* of a planned task: ``task id *
+64 + attempt`` (:func:`wire_id`).  A task that goes back to the pool and
+to a robot again is a new assignment with a new id, so a robot never
+takes it for the one it already ran (and answers with that old result),
+while the same assignment sent again keeps its id and runs at most once.
+A result for an assignment that is over (an older attempt) is ignored.
 """
 from __future__ import annotations
 
@@ -13,7 +24,8 @@ import logging
 import math
 
 from rll_bt import msgs
-from rll_bt.rules import CYAN, Profile, machine_team, machine_type
+from rll_bt.agenttask import from_league, holding_after, render_cancel, render_task
+from rll_bt.rules import Profile, machine_team, machine_type
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
@@ -22,6 +34,17 @@ log = logging.getLogger("teamserver.links.agents")
 
 LIGHT_BITS = (("GREEN", 1), ("YELLOW", 2), ("RED", 4))
 TEAM_VALUE = {"CYAN": 0, "MAGENTA": 1}
+ATTEMPTS = 64                 # wire ids: task id * ATTEMPTS + attempt % ATTEMPTS
+
+
+def wire_id(t: M.Task) -> int:
+    """The id of ``t``'s current assignment on the wire."""
+    return int(t.id) * ATTEMPTS + int(t.attempts) % ATTEMPTS
+
+
+def from_wire(wire: int) -> tuple[int, int]:
+    """(task id, attempt modulo ATTEMPTS) of a wire id."""
+    return divmod(int(wire), ATTEMPTS)
 PHASE_VALUE = {"PRE_GAME": 0, "SETUP": 10, "EXPLORATION": 20, "PRODUCTION": 30, "POST_GAME": 40}
 STATE_VALUE = {"INIT": 0, "WAIT_START": 1, "RUNNING": 2, "PAUSED": 3}
 
@@ -32,15 +55,33 @@ def lights_of_pattern(pattern: int) -> tuple[str, ...]:
 
 
 class AgentLink:
-    """Turns team-protocol messages into knowledge-base updates and back."""
+    """Turns the robots' messages into knowledge-base updates and back.
+    ``extras``: rll-bt's additions go to robots that speak rll-bt (False:
+    nothing but the league's messages to anyone)."""
 
-    def __init__(self, kb: KnowledgeBase, clock):
+    def __init__(self, kb: KnowledgeBase, clock, extras: bool = True):
         self.kb = kb
         self.profile: Profile = kb.profile
         self.clock = clock
+        self.extras = extras
         self.ms = msgs.message_set("team")
         self.peers: dict = {}            # transport peer -> robot number
+        self.rllbt_peers: set = set()    # peers that said RobotHello
+        self.league_peers: set = set()   # peers that spoke without it
+        self._outcomes: dict[tuple[int, int], object] = {}   # (robot, task id) -> TaskOutcome
         self.hb_seq = 0
+
+    def speaks_rllbt(self, robot: M.Robot | None) -> bool:
+        """Whether rll-bt's additions may go to ``robot`` (None: to every robot)."""
+        if not self.extras:
+            return False
+        return robot is None or robot.peer not in self.league_peers
+
+    def dropped(self, peer) -> int | None:
+        """A link closed: forget its peer; the robot number it had, if any."""
+        self.rllbt_peers.discard(peer)
+        self.league_peers.discard(peer)
+        return self.peers.pop(peer, None)
 
     # -- incoming ----------------------------------------------------------------------
     def robot(self, number: int, peer=None) -> M.Robot:
@@ -60,6 +101,8 @@ class AgentLink:
         return back
 
     def on_hello(self, m, peer) -> M.Robot:
+        self.rllbt_peers.add(peer)
+        self.league_peers.discard(peer)
         r = self.robot(int(m.robot_id), peer)
         r.name = m.peer_name or r.name
         self.seen(r)
@@ -68,14 +111,56 @@ class AgentLink:
         self.kb.save_robot(r)
         return r
 
-    def on_heartbeat(self, m, peer) -> tuple[M.Robot, bool]:
-        r = self.robot(int(m.robot_id), peer)
-        back = self.seen(r)
-        if back:
+    def on_beacon(self, m, peer) -> tuple[M.Robot, bool]:
+        """A robot's BeaconSignal: a sign of life (``back``: it was lost, or is
+        new on this link).  A robot that never said hello is a league robot:
+        the beacon is all it says about itself (name, pose)."""
+        league = peer not in self.rllbt_peers
+        new = league and peer not in self.league_peers
+        if league:
+            self.league_peers.add(peer)
+        r = self.robot(int(m.number), peer)
+        back = self.seen(r) or new
+        if league:
+            r.name = m.peer_name or r.name
+            if m.HasField("pose"):
+                r.pose = (m.pose.x, m.pose.y, m.pose.ori)
+            r.state = "BUSY" if m.HasField("task") else "IDLE"
+            self.kb.save_robot(r)
+        elif back:
             self.kb.save_robot(r)
         else:
-            self.kb.robots[r.number] = r        # liveness only: no write per heartbeat
+            self.kb.robots[r.number] = r        # liveness only: no write per beacon
         return r, back
+
+    def task_of(self, wire: int) -> M.Task | None:
+        """The planned task whose current assignment ``wire`` names (None: no such
+        task, or an assignment that is over)."""
+        tid, attempt = from_wire(wire)
+        t = self.kb.tasks.get(tid)
+        return t if t is not None and int(t.attempts) % ATTEMPTS == attempt else None
+
+    def on_outcome(self, m) -> None:
+        """rll-bt's TaskOutcome: kept for the result that follows it."""
+        self._outcomes[(int(m.robot_id), int(m.task_id))] = m
+        while len(self._outcomes) > 256:
+            self._outcomes.pop(next(iter(self._outcomes)))
+
+    def drop_outcome(self, at) -> None:
+        """Forget the TaskOutcome kept for the result ``at`` (a repeat, not acted on)."""
+        self._outcomes.pop((int(at.robot_id), int(at.task_id)), None)
+
+    def result_of(self, at) -> tuple[str, str, bool | None, str]:
+        """(status, error, holding, text) of a robot's echoed AgentTask: status
+        SUCCEEDED / FAILED / CANCELLED, error rll-bt's ErrorCode name (from the
+        TaskOutcome before it, else the league's code in rll-bt's words)."""
+        status = "CANCELLED" if at.canceled else "SUCCEEDED" if at.successful else "FAILED"
+        out = self._outcomes.pop((int(at.robot_id), int(at.task_id)), None)
+        code = int(at.error_code) if at.HasField("error_code") else None
+        if out is not None:
+            return status, self.ms.enum("ErrorCode").Name(out.error), bool(out.holding), out.text
+        error = "CANCELLED" if status == "CANCELLED" else "NONE" if status == "SUCCEEDED" else from_league(code)
+        return status, error, holding_after(code), ""
 
     def on_status(self, m, peer) -> tuple[M.Robot, bool]:
         r = self.robot(int(m.robot_id), peer)
@@ -124,55 +209,55 @@ class AgentLink:
         return out
 
     # -- outgoing --------------------------------------------------------------------------
-    def task_msg(self, t: M.Task, color: str | None):
-        ms = self.ms
-        msg = ms.Task(team_color=TEAM_VALUE.get(color or CYAN, 0), task_id=t.id, robot_id=t.robot,
-                      issued_at=self.clock.now())
-        p = t.params
-        side = ms.enum("MachineSide")
-        if t.kind == M.EXPLORE_ZONE:
-            msg.explore_zone.zone = int(p["zone"])
-            for x, y, theta in p.get("viewpoints", ()):
-                msg.explore_zone.viewpoints.add(x=float(x), y=float(y), theta=float(theta))
-        elif t.kind == M.GET_WORKPIECE:
-            msg.get_workpiece.machine = p["machine"]
-            msg.get_workpiece.side = side.Value(p.get("side", M.OUTPUT))
-        elif t.kind == M.PUT_WORKPIECE:
-            msg.put_workpiece.machine = p["machine"]
-            msg.put_workpiece.side = side.Value(p.get("side", M.INPUT))
-        elif t.kind == M.RETRIEVE_CAP:
-            msg.retrieve_cap.machine = p["machine"]
-            msg.retrieve_cap.shelf_slot = int(p.get("shelf_slot", 0))
-        elif t.kind == M.MOUNT_RING:
-            msg.mount_ring.machine = p["machine"]
-            msg.mount_ring.ring_color = ms.enum("RingColor").Value(p["ring_color"])
-        elif t.kind == M.MOUNT_CAP:
-            msg.mount_cap.machine = p["machine"]
-            if p.get("cap_color"):
-                msg.mount_cap.cap_color = ms.enum("CapColor").Value(p["cap_color"])
-        elif t.kind == M.DELIVER:
-            msg.deliver.machine = p["machine"]
-            if "gate" in p:
-                msg.deliver.gate = int(p["gate"])
-            else:
-                msg.deliver.order_id = int(p["order_id"])
-        elif t.kind == M.DISCARD:
-            msg.discard.SetInParent()
-            if p.get("machine"):
-                msg.discard.machine = p["machine"]
-                msg.discard.side = ms.enum("MachineSide").Value(p.get("side", M.INPUT))
-        elif t.kind == M.GO_TO:
-            msg.go_to.target.x, msg.go_to.target.y = float(p["x"]), float(p["y"])
-            msg.go_to.target.theta = float(p.get("theta", 0.0))
-            if p.get("zone"):
-                msg.go_to.zone = int(p["zone"])
-        else:
-            raise ValueError(f"no team-protocol task for {t.kind!r}")
-        return msg
+    def task_msgs(self, t: M.Task, color: str | None, robot: M.Robot | None = None) -> list:
+        """The messages that give task ``t`` to its robot: the AgentTask, after
+        rll-bt's TaskDetail for a robot that speaks rll-bt.  A robot that knows
+        only the league's tasks is sent a discard onto a slide instead of one
+        where it stands."""
+        params, extras = dict(t.params), self.speaks_rllbt(robot)
+        if t.kind == M.DISCARD and not params.get("machine") and not extras:
+            params.update(machine=self._slide_for(robot, color), side=M.SLIDE)
+        zone = None
+        if robot is not None and robot.pose is not None:
+            zone = self.profile.zone_at(robot.pose[0], robot.pose[1])
+        at, detail = render_task(t.kind, params, task_id=wire_id(t), robot_id=int(t.robot or 0), color=color,
+                                 profile=self.profile, robot_zone=zone, issued_at=self.clock.now(),
+                                 **self._workpiece(t))
+        return [detail, at] if extras else [at]
 
-    def cancel_msg(self, t: M.Task, reason: str, robot: int | None = None):
-        number = t.robot if robot is None else robot
-        return self.ms.CancelTask(task_id=t.id, robot_id=int(number or 0), reason=reason)
+    def _workpiece(self, t: M.Task) -> dict:
+        """The order and the workpiece colours of ``t``'s product, for the AgentTask."""
+        p = self.kb.products.get(t.product or "")
+        if p is None:
+            return {}
+        out: dict = {"order_id": p.order_id or None}
+        wp = self.kb.workpieces.get(p.workpiece or "")
+        if wp is not None and wp.base:
+            out["workpiece"] = (wp.base, tuple(wp.rings), wp.cap)
+        return out
+
+    def _slide_for(self, robot: M.Robot | None, color: str | None) -> str:
+        """The own ring station nearest ``robot`` (whose place is known)."""
+        prefix = "M-" if color == "MAGENTA" else "C-"
+        names = [f"{prefix}RS1", f"{prefix}RS2"]
+        if robot is None or robot.pose is None:
+            return names[0]
+
+        def dist(name):
+            est = self.kb.estimate(name, M.POSE)
+            if est is None:
+                return math.inf
+            return math.hypot(est.value[0] - robot.pose[0], est.value[1] - robot.pose[1])
+        return min(names, key=dist)
+
+    def cancel_msg(self, t: M.Task, reason: str, color: str | None = None, robot: int | None = None):
+        """The AgentTask that stops ``t`` (its current assignment) on robot ``robot``
+        (default: the task's; ``reason`` only for logs)."""
+        return render_cancel(wire_id(t), int(robot if robot is not None else t.robot or 0), color)
+
+    def cancel_wire(self, wire: int, robot: int, color: str | None = None):
+        """The AgentTask that stops the assignment ``wire`` on robot ``robot``."""
+        return render_cancel(wire, robot, color)
 
     def heartbeat_msg(self, number: int):
         self.hb_seq += 1

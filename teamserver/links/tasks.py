@@ -4,27 +4,30 @@ The dispatcher, the exploration and production decide during a tick; they
 hand their word to a :class:`TaskLink` (a task for its robot, a cancel, a
 PrepareMachine for the refbox) and never build or send a message
 themselves.  The link queues what it is given and :meth:`TaskLink.flush`
-sends it at the end of the tick, in the order it was decided, through the
-team protocol (:class:`~teamserver.links.agents.AgentLink`) and the refbox
-client (:class:`~teamserver.links.refbox.RefboxClient`).  A task protocol
-other than ours (the league's AgentTask) belongs here, not in the dispatcher.
+sends it at the end of the tick, in the order it was decided, as the
+league's AgentTask (:class:`~teamserver.links.agents.AgentLink`, with
+rll-bt's TaskDetail for robots that speak rll-bt) and through the refbox
+client (:class:`~teamserver.links.refbox.RefboxClient`).
 
-Under network faults tasks and cancels are delivered reliably
-(:mod:`rll_bt.comm.reliable`): kept per robot until the robot acknowledges
-them, repeated meanwhile and at once when the robot comes back
-(:meth:`TaskLink.welcome`); a task is no longer repeated once it is not
-that robot's (cancelled, finished, given to another robot).  The robots'
-final results are acknowledged (:meth:`TaskLink.incoming`) and acted on once.
+Under network faults tasks and cancels to a robot that speaks rll-bt are
+delivered reliably (:mod:`rll_bt.comm.reliable`): kept per robot until the
+robot acknowledges them (``LinkAck``), repeated meanwhile (a task with its
+TaskDetail) and at once when the robot comes back (:meth:`TaskLink.welcome`);
+a task is no longer repeated once it is not that robot's (cancelled,
+finished, given to another robot).  The robots' final results are
+acknowledged (:meth:`TaskLink.incoming`) and acted on once.  A robot of the
+league knows no ``LinkAck``: it gets each task once, and again when it
+comes back; its beacons say what it finished.
 """
 from __future__ import annotations
 
 from collections.abc import Callable
 
-from rll_bt.comm.reliable import Reliable
+from rll_bt.comm.reliable import AT_TASK, Reliable, agent_task_what
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
-from .agents import AgentLink
+from .agents import AgentLink, wire_id
 from .refbox import RefboxClient
 
 TASK, CANCEL, PREPARE = "task", "cancel", "prepare"
@@ -44,6 +47,7 @@ class TaskLink:
         self.to_refbox = to_refbox
         self.queue: list[tuple] = []     # (TASK, task), (CANCEL, task, reason, robot), (PREPARE, task)
         self.reliable = Reliable(codec.clock)
+        self._before: dict[tuple, list] = {}     # (robot, link key) -> the TaskDetail that goes before that task
 
     def send(self, task: M.Task) -> None:
         """Give ``task`` to its robot (``task.robot``)."""
@@ -66,33 +70,52 @@ class TaskLink:
             number = item[3] if kind == CANCEL else t.robot
             robot = self.kb.robots.get(number) if number is not None else None
             if kind == TASK:
-                self._deliver(robot, self.codec.task_msg(t, color))
+                self._deliver(robot, self.codec.task_msgs(t, color, robot))
             elif kind == CANCEL:
-                self._deliver(robot, self.codec.cancel_msg(t, item[2], number))
+                self._deliver(robot, [self.codec.cancel_msg(t, item[2], color, robot=number)])
             elif kind == PREPARE:
                 self.to_refbox(self.refbox.prepare_machine(t.prepare))
         self.queue.clear()
         for number, ack in self.reliable.acks(lambda n: self.codec.ms.LinkAck(robot_id=n)):
             robot = self.kb.robots.get(number)
-            if robot is not None:
+            if robot is not None and self.codec.speaks_rllbt(robot):     # a league robot knows no LinkAck
                 self.to_robot(robot, ack)
         for number, msg in self.reliable.due():
             robot = self.kb.robots.get(number)
             if robot is not None and robot.peer is not None and self._still_due(number, msg):
-                self.to_robot(robot, msg)
+                self._repeat(robot, msg)
+        self._prune()
 
-    def _deliver(self, robot: M.Robot | None, msg) -> None:
-        if robot is not None:
+    def _deliver(self, robot: M.Robot | None, msgs: list) -> None:
+        """Send ``msgs`` (an AgentTask last, what goes with it before), and keep the
+        AgentTask until an rll-bt robot acknowledges it."""
+        msg = msgs[-1]
+        if robot is not None and self.codec.speaks_rllbt(robot):
             # a cancel or a new copy of a task supersedes what was waiting for that task
-            self.reliable.forget(robot.number, lambda m: int(m.task_id) != int(msg.task_id))
-            self.reliable.track(robot.number, msg)
+            wire = int(msg.task_id)
+            self.reliable.forget(robot.number, lambda m: int(m.task_id) != wire)
+            if self.reliable.track(robot.number, msg) and len(msgs) > 1:
+                self._before[(robot.number, self.reliable.key(msg))] = msgs[:-1]
+        for m in msgs:
+            self.to_robot(robot, m)
+
+    def _repeat(self, robot: M.Robot, msg) -> None:
+        """A copy of ``msg`` that was not acknowledged, after what goes with it."""
+        for m in self._before.get((robot.number, self.reliable.key(msg)), ()):
+            self.to_robot(robot, m)
         self.to_robot(robot, msg)
+
+    def _prune(self) -> None:
+        if len(self._before) > 32 and len(self._before) > len(self.reliable.pending()):
+            live = {(n, self.reliable.key(m)) for n in list(self.kb.robots) for m in self.reliable.pending(n)}
+            for k in [k for k in self._before if k not in live]:
+                del self._before[k]
 
     def _still_due(self, number: int, msg) -> bool:
         """Whether to repeat ``msg`` to robot ``number``: a task only while it is that robot's."""
-        if msg.DESCRIPTOR.name != "Task":
+        if agent_task_what(msg) != AT_TASK:
             return True
-        t = self.kb.tasks.get(int(msg.task_id))
+        t = self.codec.task_of(int(msg.task_id))
         if t is not None and t.state == M.ASSIGNED and t.robot == number:
             return True
         self.reliable.forget(number, lambda m: m is not msg)
@@ -102,13 +125,16 @@ class TaskLink:
         """``robot`` (re)joined (on a new connection: what was on the old one is
         gone): everything unacknowledged, in the order it was decided (a cancel
         before the task that follows it), then its current task."""
-        for msg in self.reliable.resend_now(robot.number):
-            current = msg.DESCRIPTOR.name == "Task" and int(msg.task_id) == robot.task_id
-            if not current and self._still_due(robot.number, msg):
-                self.to_robot(robot, msg)
         t = self.kb.tasks.get(robot.task_id) if robot.task_id is not None else None
-        if t is not None and t.state == M.ASSIGNED and t.robot == robot.number:
-            self._deliver(robot, self.codec.task_msg(t, self.kb.get("team_color")))
+        if t is None or t.state != M.ASSIGNED or t.robot != robot.number:
+            t = None
+        if self.codec.speaks_rllbt(robot):
+            for msg in self.reliable.resend_now(robot.number):
+                current = t is not None and agent_task_what(msg) == AT_TASK and int(msg.task_id) == wire_id(t)
+                if not current and self._still_due(robot.number, msg):
+                    self._repeat(robot, msg)
+        if t is not None:
+            self._deliver(robot, self.codec.task_msgs(t, self.kb.get("team_color"), robot))
 
     def incoming(self, msg) -> bool:
         """A message from a robot: whether to act on it (an acknowledgement, or the

@@ -52,7 +52,8 @@ def test_a_short_game_writes_the_report_the_log_and_the_pictures(tmp_path, capsy
     assert len(lines) >= rep["messages"] > 0      # + what the agents say when they shut down
     types = {x["type"] for x in lines}
     # refbox broadcasts, the encrypted team channel and the encrypted team-server link all decode
-    assert {"GameState", "BeaconSignal", "MachineReport", "Task", "TaskResult", "RobotStatus"} <= types
+    assert {"GameState", "BeaconSignal", "MachineReport", "AgentTask", "TaskDetail", "TaskOutcome",
+            "RobotStatus"} <= types
     assert all(x["type"] is not None for x in lines)
     reports = [x for x in lines if x["type"] == "MachineReport"]
     assert reports[0]["channel"] == "cyan" and reports[0]["msg"]["team_color"] == "CYAN"

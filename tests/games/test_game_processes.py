@@ -121,12 +121,13 @@ def test_a_short_game_in_processes_scores_exploration_and_logs_both_links(tmp_pa
             ("public", "refbox", "GameState")} <= got
     assert {f for _, f, _ in got} == {"refbox", "teamserver", "R1"}     # senders named as in lockstep
     # and the team server's TCP link to the agent, both ways, in the lockstep schema
-    assert {("teamserver", "R1", "RobotHello"), ("teamserver", "R1", "TaskResult"),
-            ("teamserver", "teamserver", "Task"), ("teamserver", "teamserver", "GamePhase")} <= got
+    assert {("teamserver", "R1", "RobotHello"), ("teamserver", "R1", "AgentTask"), ("teamserver", "R1", "BeaconSignal"),
+            ("teamserver", "teamserver", "AgentTask"), ("teamserver", "teamserver", "GamePhase")} <= got
     assert all(x["type"] is not None and set(x) == {"t", "channel", "from", "type", "msg"} for x in log)
     assert [x["t"] for x in log] == sorted(x["t"] for x in log)
     # the robot's task intervals come from those messages, on the game's clock
-    sent = [x for x in log if x["type"] == "Task"]
+    sent = [x for x in log
+            if x["type"] == "AgentTask" and x["from"] == "teamserver" and not x["msg"].get("cancel_task")]
     assert rep["robot_stats"]["1"]["tasks"] == len({x["msg"]["task_id"] for x in sent}) > 0
     assert 0 < rep["robot_stats"]["1"]["busy_time"] <= rep["sim_time"]
     assert sent[0]["t"] >= next(x["t"] for x in log if x["type"] == "GameState"
@@ -161,7 +162,8 @@ def _the_recording_holds_every_process(out, rep, log):
     assert schemas["/robot1/pose"] == schemas["/robot1/true_pose"] == "foxglove.PoseInFrame"    # agent, world
     assert schemas["/robot1/scan"] == "foxglove.LaserScan" and schemas["/robot1/tree"] == "rllbt.TreeTick"
     assert schemas["/refbox/public/GameState"] == "llsf_msgs.GameState"
-    assert schemas["/teamserver/link/Task"] == "rllbt.Task" and schemas["/robot1/link/RobotHello"] == "rllbt.RobotHello"
+    assert schemas["/teamserver/link/AgentTask"] == "llsf_msgs.AgentTask"
+    assert schemas["/robot1/link/RobotHello"] == "rllbt.RobotHello"
     assert schemas["/robot1/cyan/BeaconSignal"] == "llsf_msgs.BeaconSignal"
     # every message of the game's log once (the agent's own copies left out), on the game's clock
     proto = sum(n for t, n in counts.items()
@@ -170,7 +172,8 @@ def _the_recording_holds_every_process(out, rep, log):
     by_topic = {}
     for t, sec, d in msgs:
         by_topic.setdefault(t, []).append((sec, d))
-    assert abs(by_topic["/teamserver/link/Task"][0][0] - next(x["t"] for x in log if x["type"] == "Task")) < 1e-3
+    assert abs(by_topic["/teamserver/link/AgentTask"][0][0]
+               - next(x["t"] for x in log if x["type"] == "AgentTask" and x["from"] == "teamserver")) < 1e-3
     # the agent's estimate (its clock mapped onto the game's) follows the world's truth
     est, truth = by_topic["/robot1/pose"], by_topic["/robot1/true_pose"]
     assert rep["sim_time"] - 1.5 < est[-1][0] <= rep["sim_time"] + 1.0

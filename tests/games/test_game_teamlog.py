@@ -8,14 +8,16 @@ import pytest
 
 from games.teamlog import LoggedStreamServer, WallToSim, merge_into, read_lines, task_runs
 from rll_bt import msgs
+from rll_bt.agenttask import link as agent_link
 from rll_bt.clock import SimClock
-from rll_bt.comm import MessageRegistry, StreamClient
+from rll_bt.comm import StreamClient
 from rll_bt.comm.msglog import MessageLog
 
 pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
 
 KEY = "rll-bt-test-key"
 TEAM = msgs.message_set("team")
+LEAGUE = msgs.message_set("rcll2025")
 
 
 def test_wall_stamps_follow_the_world_when_it_falls_behind():
@@ -36,7 +38,7 @@ def test_wall_stamps_follow_the_world_when_it_falls_behind():
 
 
 def test_the_team_servers_side_of_the_link_is_logged_with_robot_names(tmp_path):
-    reg = MessageRegistry.from_message_set(TEAM)
+    reg = agent_link.registry()
     clock = SimClock(start=42.0)
     log = MessageLog(tmp_path / "team.jsonl", clock, {}, reg, line_buffered=True)
     server = LoggedStreamServer(0, registry=reg, key=KEY, host="127.0.0.1", log=log)
@@ -54,8 +56,9 @@ def test_the_team_servers_side_of_the_link_is_logged_with_robot_names(tmp_path):
         while len(got) < 2 and time.monotonic() < deadline:
             server.wait(0.02)
             got += server.receive()
-        task = TEAM.get("Task")(team_color=0, task_id=7, robot_id=2)
-        task.explore_zone.zone = 5
+        task = LEAGUE.AgentTask(team_color=0, task_id=7, robot_id=2)
+        task.explore_machine.machine_id, task.explore_machine.machine_point = "", ""
+        task.explore_machine.waypoint = "Z5"
         assert server.send(task, to=got[1].source)
         assert server.send(TEAM.get("Heartbeat")(robot_id=0, seq=1))      # to both: two lines
     finally:
@@ -65,28 +68,39 @@ def test_the_team_servers_side_of_the_link_is_logged_with_robot_names(tmp_path):
         log.close()
     lines = read_lines(tmp_path / "team.jsonl")
     assert [(x["from"], x["type"]) for x in lines] == [
-        ("R1", "RobotHello"), ("R2", "RobotHello"), ("teamserver", "Task"),
+        ("R1", "RobotHello"), ("R2", "RobotHello"), ("teamserver", "AgentTask"),
         ("teamserver", "Heartbeat"), ("teamserver", "Heartbeat")]
     assert all(x["channel"] == "teamserver" and x["t"] == 42.0 for x in lines)
-    assert lines[2]["msg"]["explore_zone"] == {"zone": 5} and lines[2]["msg"]["robot_id"] == 2
+    assert lines[2]["msg"]["explore_machine"]["waypoint"] == "Z5" and lines[2]["msg"]["robot_id"] == 2
 
 
-def _line(t, sender, kind, **msg):
-    return {"t": t, "channel": "teamserver", "from": sender, "type": kind, "msg": msg}
+def _line(t, sender, type_name, **msg):
+    return {"t": t, "channel": "teamserver", "from": sender, "type": type_name, "msg": msg}
 
 
 def test_task_intervals_come_from_tasks_sent_and_results_received():
+    def task(t, robot, tid, kind=None, **body):
+        out = [_line(t, "teamserver", "AgentTask", robot_id=robot, task_id=tid, team_color="CYAN", **body)]
+        if kind is not None:
+            out.insert(0, _line(t, "teamserver", "TaskDetail", robot_id=robot, task_id=tid, kind=kind))
+        return out
+
+    def result(t, robot, tid, ok, canceled=False, **extra):
+        return _line(t, f"R{robot}", "AgentTask", robot_id=robot, task_id=tid, team_color="CYAN", successful=ok,
+                     canceled=canceled, **extra)
+
+    explore = {"explore_machine": {"machine_id": "", "machine_point": "", "waypoint": "Z3"}}
     lines = [
-        _line(1.0, "teamserver", "Task", robot_id=1, task_id=1, team_color="CYAN", explore_zone={"zone": 3}),
-        _line(1.1, "R1", "TaskResult", robot_id=1, task_id=1, status="RUNNING"),
-        _line(2.0, "teamserver", "Task", robot_id=1, task_id=1, team_color="CYAN", explore_zone={"zone": 3}),
-        _line(5.0, "R1", "TaskResult", robot_id=1, task_id=1, status="SUCCEEDED"),
-        _line(5.5, "teamserver", "Task", robot_id=2, task_id=2, team_color="CYAN", discard={}),
-        _line(6.0, "teamserver", "Task", robot_id=1, task_id=3, team_color="CYAN",
-              get_workpiece={"machine": "C-BS"}),
-        _line(8.0, "R1", "TaskResult", robot_id=1, task_id=3, status="FAILED", error="GRAB_FAILED"),
-        _line(9.0, "teamserver", "Task", robot_id=2, task_id=4, team_color="CYAN", go_to={"zone": 7}),
-        _line(9.2, "R2", "TaskResult", robot_id=2, task_id=2, status="CANCELLED"),      # too late: replaced
+        *task(1.0, 1, 1, "explore_zone", **explore),
+        _line(1.5, "R1", "BeaconSignal", number=1, task={"task_id": 1}),
+        *task(2.0, 1, 1, "explore_zone", **explore),                          # sent again: the same run
+        result(5.0, 1, 1, True, **explore),
+        *task(5.5, 2, 2, "discard", move={"waypoint": "Z4"}),
+        *task(6.0, 1, 3, None, retrieve={"machine_id": "C-BS", "machine_point": "output"}),   # a league server
+        result(8.0, 1, 3, False, error_code=206),
+        *task(9.0, 2, 4, "go_to", move={"waypoint": "Z7"}),
+        result(9.2, 2, 2, False, canceled=True),                                 # too late: replaced
+        _line(9.3, "teamserver", "AgentTask", robot_id=2, task_id=4, team_color="CYAN", cancel_task=True),
         {"t": 9.5, "channel": "cyan", "from": "teamserver", "type": "MachineReport", "msg": {}},
     ]
     runs = task_runs(lines, end=20.0)

@@ -129,7 +129,8 @@ def test_the_recording_holds_every_channel(played):
         assert counts[f"/robot{n}/tree"] >= 5 * result.sim_time
         assert 0.2 * result.sim_time + 2 >= counts[f"/robot{n}/camera"] >= 0.2 * result.sim_time - 2
     assert schemas["/refbox/public/GameState"] == "llsf_msgs.GameState"
-    assert schemas["/teamserver/link/Task"] == "rllbt.Task"
+    assert schemas["/teamserver/link/AgentTask"] == "llsf_msgs.AgentTask"
+    assert schemas["/teamserver/link/TaskDetail"] == "rllbt.TaskDetail"
     assert schemas["/teamserver/cyan/MachineReport"] == "llsf_msgs.MachineReport"
     assert schemas["/field"] == "foxglove.SceneUpdate"
     # every frame that crossed the bus is on a protobuf topic (none failed to decode)

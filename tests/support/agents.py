@@ -10,13 +10,15 @@ from py_trees.common import Status
 from backends.scripted import ScriptedBackend
 from rll_bt import msgs
 from rll_bt.agent import AgentConfig, RobotAgent
+from rll_bt.agenttask import link as agent_link
 from rll_bt.clock import SimClock
-from rll_bt.comm import CONNECTED, DISCONNECTED, MessageRegistry, StreamServer
+from rll_bt.comm import CONNECTED, DISCONNECTED, StreamServer
 from rll_bt.tree import Input, Node, default_registry
 
 TEAM, KEY = "Testers", "s3cret-key"
 TM = msgs.message_set("team")
-TEAM_REG = MessageRegistry.from_message_set(TM)
+LM = msgs.message_set("rcll2025")
+TEAM_REG = agent_link.registry()
 TREES = Path(__file__).parent / "agent_trees"
 
 
@@ -81,40 +83,61 @@ REGISTRY.register(TestSensorLost, "test_sensor_lost")
 
 # -- the scripted team server -----------------------------------------------------------------
 
-def make_task(kind: str, task_id: int = 1, robot: int = 1, color: int = 0, timeout: float | None = None, **fields):
-    """A team-protocol Task of ``kind`` with the given body fields."""
-    t = TM.Task(team_color=color, task_id=task_id, robot_id=robot)
-    body = getattr(t, kind)
-    body.SetInParent()
-    for k, v in fields.items():
-        if isinstance(v, list):
-            getattr(body, k).extend(v)
-        elif hasattr(v, "DESCRIPTOR"):
-            getattr(body, k).CopyFrom(v)
-        else:
-            setattr(body, k, v)
+def make_task(kind: str, task_id: int = 1, robot: int = 1, color: int = 0, timeout: float | None = None,
+              profile: str = "rcll2016", **params):
+    """``(AgentTask, TaskDetail)`` of an rll-bt task ``kind`` with ``params`` (as
+    rll-bt's team server plans them: ``machine``, ``side`` "SLIDE", ``ring_color``
+    "RING_BLUE", ``zone``, go_to's ``x``/``y``/``theta`` ...)."""
+    from rll_bt import rules
+    from rll_bt.agenttask import render_task
     if timeout is not None:
-        t.timeout = timeout
-    return t
+        params["timeout"] = timeout
+    return render_task(kind, params, task_id=task_id, robot_id=robot, color=("CYAN", "MAGENTA")[color],
+                       profile=rules.profile(profile))
+
+
+class Res:
+    """A result as the scripted server saw it: the echoed AgentTask and the TaskOutcome before it."""
+
+    def __init__(self, task, outcome):
+        self.task, self.outcome = task, outcome
+        self.task_id, self.robot_id = int(task.task_id), int(task.robot_id)
+        self.status = "CANCELLED" if task.canceled else "SUCCEEDED" if task.successful else "FAILED"
+        self.league_code = int(task.error_code) if task.HasField("error_code") else None
+        if outcome is not None:
+            self.code = TM.ErrorCode.Name(outcome.error)
+            self.text, self.stamp = outcome.text, outcome.stamp
+            self.holding = outcome.holding if outcome.HasField("holding") else None
+        else:
+            from rll_bt.agenttask import from_league
+            self.code, self.text, self.stamp, self.holding = from_league(self.league_code), "", None, None
+
+    def __repr__(self) -> str:
+        return f"Res({self.task_id} {self.status} {self.code} {self.text!r})"
 
 
 class ScriptedServer:
-    """Records what agents send; answers a RobotHello with GamePhase and MachineMap."""
+    """Records what agents send; answers a RobotHello with GamePhase and MachineMap.
+    ``league``: send tasks as a league team server does (AgentTask only)."""
 
     def __init__(self, transport, machines=(("C-CS1", 1.5, 3.0, 0.0), ("C-BS", 5.0, 0.75, 1.57)),
-                 state="RUNNING", phase="PRODUCTION", color=0):
+                 state="RUNNING", phase="PRODUCTION", color=0, league=False, profile="rcll2016"):
         self.t = transport
+        self.profile = profile
         self.machines = list(machines)
         self.state, self.phase, self.color = state, phase, color
+        self.league = league
         self.got: list[tuple[object, object]] = []      # (client, msg)
         self.events: list = []
         self.client = None
         self.pumps = 0
         self.heartbeat_every = 20       # pumps between the server's heartbeats
+        self._outcomes: dict[int, object] = {}
+        self._results: list[Res] = []
 
     def pump(self) -> None:
         self.pumps += 1
-        if self.client is not None and self.pumps % self.heartbeat_every == 0:
+        if self.client is not None and self.pumps % self.heartbeat_every == 0 and not self.league:
             self.send(TM.Heartbeat(robot_id=0, seq=self.pumps))
         for ev in self.t.events():
             self.events.append(ev)
@@ -124,23 +147,31 @@ class ScriptedServer:
                 self.client = None
         for rx in self.t.receive():
             self.got.append((rx.source, rx.msg))
-            if rx.msg.DESCRIPTOR.name == "RobotHello":
+            name = rx.msg.DESCRIPTOR.name
+            if name == "RobotHello":
                 self.client = rx.source
                 self.send_phase()
                 self.send_map()
+            elif name == "TaskOutcome":
+                self._outcomes[int(rx.msg.task_id)] = rx.msg
+            elif name == "AgentTask" and (rx.msg.HasField("successful") or rx.msg.HasField("canceled")):
+                self._results.append(Res(rx.msg, self._outcomes.pop(int(rx.msg.task_id), None)))
 
     def of(self, name: str) -> list:
         return [m for _c, m in self.got if m.DESCRIPTOR.name == name]
 
-    def results(self, task_id: int | None = None, status: str | None = None) -> list:
-        out = []
-        for r in self.of("TaskResult"):
-            if task_id is not None and r.task_id != task_id:
-                continue
-            if status is not None and TM.TaskResult.Status.Name(r.status) != status:
-                continue
-            out.append(r)
-        return out
+    def results(self, task_id: int | None = None, status: str | None = None) -> list[Res]:
+        return [r for r in self._results if (task_id is None or r.task_id == task_id)
+                and (status is None or r.status == status)]
+
+    def final(self, task_id: int) -> Res | None:
+        out = self.results(task_id)
+        return out[-1] if out else None
+
+    def running(self, task_id: int) -> bool:
+        """A beacon (or status) said the robot runs ``task_id``."""
+        return any(b.HasField("task") and b.task.task_id == task_id for b in self.of("BeaconSignal")) or \
+            any(s.HasField("current_task_id") and s.current_task_id == task_id for s in self.of("RobotStatus"))
 
     def send(self, msg) -> bool:
         return self.t.send(msg, to=self.client) if self.client is not None else False
@@ -157,15 +188,25 @@ class ScriptedServer:
             k.pose.x, k.pose.y, k.pose.theta = x, y, th
         self.send(mm)
 
-    def task(self, task_id: int, kind: str, robot: int = 1, timeout: float | None = None, **fields) -> None:
-        assert self.send(make_task(kind, task_id, robot, self.color, timeout, **fields))
+    def task(self, task_id: int, kind: str, robot: int = 1, timeout: float | None = None, detail: bool = True,
+             **params) -> None:
+        """Send a task: AgentTask, after its TaskDetail unless ``detail`` is False
+        or the server is a league one."""
+        at, d = make_task(kind, task_id, robot, self.color, timeout, profile=self.profile, **params)
+        if detail and not self.league:
+            assert self.send(d)
+        assert self.send(at)
+
+    def send_agent_task(self, at) -> None:
+        assert self.send(at)
 
     def cancel(self, task_id: int, robot: int = 1) -> None:
-        assert self.send(TM.CancelTask(task_id=task_id, robot_id=robot, reason="test"))
+        from rll_bt.agenttask import render_cancel
+        assert self.send(render_cancel(task_id, robot, ("CYAN", "MAGENTA")[self.color]))
 
 
-def tcp_server(port: int = 0, key: str = KEY) -> StreamServer:
-    return StreamServer(port, host="127.0.0.1", registry=TEAM_REG, key=key)
+def tcp_server(port: int = 0, key: str | None = KEY) -> StreamServer:
+    return agent_link.tcp_server(port, host="127.0.0.1", key=key)
 
 
 # -- stepping ---------------------------------------------------------------------------------
@@ -213,10 +254,10 @@ class Rig:
             self.round()
 
     def start_task(self, task_id: int, kind: str, **fields) -> None:
-        """Once the game runs, send a task and round until the robot says RUNNING."""
+        """Once the game runs, send a task and round until the robot says it runs it."""
         self.until(lambda: self.agent.gate.moving_allowed, what="game running")
         self.server.task(task_id, kind, **fields)
-        self.until(lambda: self.server.results(task_id, "RUNNING"), what=f"task {task_id} RUNNING")
+        self.until(lambda: self.server.running(task_id), what=f"task {task_id} running")
 
     def drives(self) -> list[tuple]:
         """(t, method) of the base commands, in order."""

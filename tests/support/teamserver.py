@@ -1,10 +1,15 @@
 """Scripted refbox and robots for the team-server tests (lockstep, one clock)."""
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 from rll_bt import msgs, rules
+from rll_bt.agenttask import link as agent_link
+from rll_bt.agenttask import read_task
 from rll_bt.clock import SimClock
-from rll_bt.comm import Bus, MessageRegistry, StreamClient, StreamServer
+from rll_bt.comm import Bus, MessageRegistry, StreamClient
 from rll_bt.comm.reliable import Reliable
+from teamserver.links.agents import from_wire
 from teamserver.links.refbox_link import RefboxLink
 from teamserver.server import ServerConfig, TeamServer
 
@@ -58,11 +63,33 @@ class FakeRefbox:
         return got
 
 
-class FakeAgent:
-    """A robot agent over a team-protocol transport."""
+class TaskView:
+    """A task as a robot reads it (:func:`rll_bt.agenttask.read_task` of the
+    AgentTask and the TaskDetail before it): ``task_id`` (the team server's
+    task; ``wire_id`` the assignment's id on the wire), ``kind``
+    (``WhichOneof("kind")``), the parameters as ``view.<kind>.<name>``, and
+    the messages themselves (``agent_task``, ``detail``)."""
 
-    def __init__(self, transport, number: int, pose=(4.0, 0.5, 0.0), ack: bool = True):
+    def __init__(self, at, detail, profile):
+        self.agent_task, self.detail = at, detail
+        self.wire_id, self.robot_id, self.team_color = int(at.task_id), int(at.robot_id), int(at.team_color)
+        self.task_id = from_wire(self.wire_id)[0]
+        self.kind, self.params = read_task(at, detail, profile=profile, robot_id=at.robot_id)
+        setattr(self, self.kind, SimpleNamespace(**{k: SimpleNamespace(**v) if isinstance(v, dict) else v
+                                                    for k, v in self.params.items()}))
+
+    def WhichOneof(self, _name: str) -> str:     # the protobuf name the tests use
+        return self.kind
+
+
+class FakeAgent:
+    """A robot agent speaking rll-bt over the team-server link: the league's
+    AgentTask and BeaconSignal plus rll-bt's additions."""
+
+    def __init__(self, transport, number: int, pose=(4.0, 0.5, 0.0), profile="rcll2016", ack: bool = True):
         self.ms = msgs.message_set("team")
+        self.lm = msgs.message_set("rcll2025")
+        self.profile = rules.profile(profile)
         self.t = transport
         self.number = number
         self.pose = pose
@@ -71,6 +98,8 @@ class FakeAgent:
         self.ack = ack                       # acknowledge tasks and cancels, as an agent does
         self.link = Reliable(SimClock())
         self.acks: list = []                 # LinkAcks the server sent
+        self._views: list[TaskView] = []
+        self._details: dict[int, object] = {}
 
     def hello(self, restarted=False):
         self.t.send(self.ms.RobotHello(robot_id=self.number, team_name=TEAM,
@@ -78,7 +107,9 @@ class FakeAgent:
 
     def beat(self):
         self.seq += 1
-        self.t.send(self.ms.Heartbeat(robot_id=self.number, seq=self.seq))
+        b = self.lm.BeaconSignal(seq=self.seq, number=self.number, team_name=TEAM, peer_name=f"robot{self.number}")
+        b.time.sec, b.time.nsec = 0, 0
+        self.t.send(b)
 
     def status(self, state=1, holding=False, waiting_at=None):
         st = self.ms.RobotStatus(robot_id=self.number, state=state)
@@ -99,26 +130,41 @@ class FakeAgent:
             for _, ack in self.link.acks(lambda _s: self.ms.LinkAck(robot_id=self.number)):
                 self.t.send(ack)
         self.inbox += got
+        for m in got:
+            if m.DESCRIPTOR.name == "TaskDetail":
+                self._details[int(m.task_id)] = m
+            elif m.DESCRIPTOR.name == "AgentTask" and not m.cancel_task:
+                self._views.append(TaskView(m, self._details.pop(int(m.task_id), None), self.profile))
         return got
 
     def tasks(self):
         """Tasks with real work (parking GO_TOs: :meth:`parks`)."""
-        return [m for m in self.inbox if m.DESCRIPTOR.name == "Task" and m.WhichOneof("kind") != "go_to"]
+        return [v for v in self._views if v.kind != "go_to"]
 
     def parks(self):
         """GO_TO tasks (parking) this robot got."""
-        return [m for m in self.inbox if m.DESCRIPTOR.name == "Task" and m.WhichOneof("kind") == "go_to"]
+        return [v for v in self._views if v.kind == "go_to"]
 
     def cancels(self):
-        return [m for m in self.inbox if m.DESCRIPTOR.name == "CancelTask"]
+        """The cancels it got (``task_id``: the team server's task, ``wire_id``)."""
+        return [SimpleNamespace(task_id=from_wire(m.task_id)[0], wire_id=int(m.task_id))
+                for m in self.inbox if m.DESCRIPTOR.name == "AgentTask" and m.cancel_task]
 
     def result(self, task_id, status="SUCCEEDED", error="NONE", holding=None):
-        r = self.ms.TaskResult(task_id=task_id, robot_id=self.number,
-                               status=self.ms.enum("TaskResult.Status").Value(status),
-                               error=self.ms.enum("ErrorCode").Value(error))
+        """The robot's result (of the last assignment of the team server's task
+        ``task_id`` it got): rll-bt's TaskOutcome, then the echoed AgentTask."""
+        from rll_bt.agenttask import league_value, to_league
+        task_id = next((v.wire_id for v in reversed(self._views) if v.task_id == task_id), task_id)
+        code = error if status != "CANCELLED" else "CANCELLED"
+        out = self.ms.TaskOutcome(task_id=task_id, robot_id=self.number, error=self.ms.enum("ErrorCode").Value(code))
         if holding:
-            r.holding.SetInParent()
-        self.t.send(r)
+            out.holding = True
+        at = self.lm.AgentTask(team_color=0, task_id=task_id, robot_id=self.number,
+                               successful=status == "SUCCEEDED", canceled=status == "CANCELLED")
+        if status == "FAILED":
+            at.error_code = league_value(to_league(error))
+        self.t.send(out)
+        self.t.send(at)
 
     def observe(self, name, zone=None, zconf=0.9, lights=None, lconf=0.9, orientation=None,
                 oconf=0.9, pose=None, pconf=0.9):
@@ -150,9 +196,9 @@ class Lockstep:
         self.state = state
         self.config = config or ServerConfig()
         self.kw = kw
-        self.team_reg = MessageRegistry.from_message_set(msgs.message_set("team"))
+        self.team_reg = agent_link.registry()
         self.server = self._server()
-        self.agents = [FakeAgent(self._client(f"robot{i}"), i) for i in range(1, robots + 1)]
+        self.agents = [FakeAgent(self._client(f"robot{i}"), i, profile=profile) for i in range(1, robots + 1)]
         if tcp:
             for a in self.agents:
                 assert a.t.wait_connected(5.0), "loopback TCP connect failed"
@@ -168,10 +214,9 @@ class Lockstep:
         link = RefboxLink(self.bus.peer("public", registry=reg, name="ts"),
                           lambda color: self.bus.peer(color, registry=reg, name="ts"))
         if self.tcp:
-            agents = StreamServer(0, host="127.0.0.1", registry=self.team_reg, key=KEY,
-                                  clock=self.clock)
+            agents = agent_link.tcp_server(0, host="127.0.0.1", key=KEY, clock=self.clock)
         else:
-            agents = self.bus.stream_server("teamserver", registry=self.team_reg, key=KEY)
+            agents = agent_link.bus_server(self.bus, "teamserver", key=KEY)
         return TeamServer(self.profile_name, TEAM, key=KEY, clock=self.clock, refbox=link,
                           agents=agents, state=self.state, config=self.config, **self.kw)
 
@@ -253,7 +298,7 @@ def task_kinds(agent):
 
 
 FEEDS = ("mount_ring", "mount_cap", "retrieve_cap", "deliver")
-SLIDE = msgs.message_set("team").enum("MachineSide").Value("SLIDE")
+SLIDE = "SLIDE"                   # a put onto a ring station's slide (the task's side)
 
 
 class Stations:
@@ -345,7 +390,7 @@ class Stations:
 def play(ls, until, *, t0=0.0, dt=0.5, steps=800, fail=None, drop=None, drive=3):
     """Run the game from production time ``t0``: each robot drives to the station of a
     task it gets (``drive`` steps), then reports it done; ``fail(agent, task)`` may
-    return a failure (TaskResult fields; ``fed=True``: the feed's workpiece reached
+    return a failure (result fields: status, error, holding; ``fed=True``: the feed's workpiece reached
     the station all the same), ``drop(agent, task)`` True makes a feed's
     workpiece fall beside the station (reported done all the same).  True once
     ``until(gt)`` holds.  ``ls.stations`` is the scripted :class:`Stations`."""

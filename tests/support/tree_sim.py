@@ -18,9 +18,7 @@ from rll_bt.agent import AgentConfig, RobotAgent
 from rll_bt.backend import Pose2D, open_backend
 from rll_bt.comm import Bus
 from tests.support import TREES
-from tests.support.agents import KEY, TEAM, TEAM_REG, TM, ScriptedServer
-
-SIDE = TM.MachineSide.Value
+from tests.support.agents import KEY, TEAM, TEAM_REG, TM, ScriptedServer  # noqa: F401 (TM for the tests)
 
 #: cyan stations: zone, x, y, rotation (degrees); magenta mirrors them
 ROOMY_2016 = {
@@ -77,16 +75,16 @@ class SimTaskRig:
             h(self)
 
     def task(self, kind: str, limit: float = 240.0, **fields):
-        """Send a task and run until its final result; returns that TaskResult."""
+        """Send a task and run until its final result; returns it (:class:`tests.support.agents.Res`)."""
         self.next_id += 1
         tid = self.next_id
         self.server.task(tid, kind, **fields)
         end = self.world.time + limit
         while self.world.time < end:
             self.round()
-            final = [r for r in self.server.results(tid) if TM.TaskResult.Status.Name(r.status) != "RUNNING"]
-            if final:
-                return final[-1]
+            final = self.server.final(tid)
+            if final is not None:
+                return final
         raise AssertionError(f"task {tid} {kind} {fields} did not finish within {limit} s of sim time")
 
     def held(self):
@@ -97,8 +95,8 @@ class SimTaskRig:
 
 
 def status(result) -> str:
-    return TM.TaskResult.Status.Name(result.status)
+    return result.status
 
 
 def error(result) -> str:
-    return TM.ErrorCode.Name(result.error)
+    return result.code

@@ -52,7 +52,7 @@ def test_team_server_and_agent_record_both_ends_of_their_link(tmp_path):
         return [(t.rsplit("/", 1)[1], d.SerializeToString()) for t, d in msgs if t.startswith(f"/{sender}/link/")]
     robot_sent, robot_heard = link(ag_msgs, "robot2"), link(ts_msgs, "robot2")
     server_sent, server_heard = link(ts_msgs, "teamserver"), link(ag_msgs, "teamserver")
-    assert {"RobotHello", "Heartbeat"} <= {n for n, _ in robot_sent}
+    assert {"RobotHello", "BeaconSignal"} <= {n for n, _ in robot_sent}
     assert server_sent and server_heard
     # what one end heard is what the other end sent (the agent may stop before the last ones arrive)
     assert [m for m in robot_heard if m in robot_sent] == robot_heard and len(robot_heard) >= len(robot_sent) - 3

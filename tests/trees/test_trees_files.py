@@ -6,7 +6,9 @@ from __future__ import annotations
 import pytest
 
 from rll_bt import msgs, rules
-from rll_bt.agent import TREE_KINDS, TREE_OUTPUTS, default_trees_dir, output_problems, task_params
+from rll_bt.agent import TREE_OUTPUTS, default_trees_dir, output_problems
+from rll_bt.agenttask import KINDS as TREE_KINDS
+from rll_bt.agenttask import read_task
 from rll_bt.cli import main
 from rll_bt.tree import default_registry, parse_tree
 from tests.support import TREES
@@ -18,19 +20,20 @@ TM = msgs.message_set("team")
 #: one sample task per kind, as the team server sends them
 SAMPLES = {
     "explore_zone": {"zone": 6},
-    "get_workpiece": {"machine": "C-CS1", "side": TM.MachineSide.Value("SHELF"), "shelf_slot": 1},
-    "put_workpiece": {"machine": "C-RS1", "side": TM.MachineSide.Value("SLIDE")},
+    "get_workpiece": {"machine": "C-CS1", "side": "SHELF", "shelf_slot": 1},
+    "put_workpiece": {"machine": "C-RS1", "side": "SLIDE"},
     "retrieve_cap": {"machine": "C-CS1", "shelf_slot": 0},
-    "mount_ring": {"machine": "C-RS1", "ring_color": 2},
-    "mount_cap": {"machine": "C-CS2", "cap_color": 1},
+    "mount_ring": {"machine": "C-RS1", "ring_color": "RING_GREEN"},
+    "mount_cap": {"machine": "C-CS2", "cap_color": "CAP_BLACK"},
     "deliver": {"machine": "C-DS", "gate": 3},
     "discard": {},
-    "go_to": {"zone": 5},
+    "go_to": {"x": 1.0, "y": 1.0, "zone": 5},
 }
 
 
 def sample_params(kind: str) -> dict:
-    return task_params(make_task(kind, **SAMPLES[kind]), rules.profile("rcll2016"))
+    at, detail = make_task(kind, **SAMPLES[kind])
+    return read_task(at, detail, profile=rules.profile("rcll2016"), robot_id=1)[1]
 
 
 def test_the_agent_finds_these_trees():

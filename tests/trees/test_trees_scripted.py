@@ -10,10 +10,8 @@ from backends.scripted import ScriptedBackend
 from rll_bt.clock import SimClock
 from rll_bt.comm import Bus
 from tests.support import TREES
-from tests.support.agents import KEY, TEAM_REG, TM, Rig, ScriptedServer
+from tests.support.agents import KEY, LM, TEAM_REG, Rig, ScriptedServer
 from tests.support.tree_doubles import CALLS, REGISTRY, Hands, calls
-
-SIDE = TM.MachineSide.Value
 
 
 def make(holding=False, misses=0, stuck=0, **script):
@@ -34,13 +32,12 @@ def run(rig, kind, seconds=120.0, **fields):
     rig.server.next = getattr(rig.server, "next", 0) + 1
     tid = rig.server.next
     rig.server.task(tid, kind, **fields)
-    rig.until(lambda: [r for r in rig.server.results(tid) if r.status != TM.TaskResult.RUNNING],
-              seconds=seconds, what=f"{kind} finished")
-    return [r for r in rig.server.results(tid) if r.status != TM.TaskResult.RUNNING][-1]
+    rig.until(lambda: rig.server.final(tid) is not None, seconds=seconds, what=f"{kind} finished")
+    return rig.server.final(tid)
 
 
 def outcome(res) -> tuple[str, str]:
-    return TM.TaskResult.Status.Name(res.status), TM.ErrorCode.Name(res.error)
+    return res.status, res.code
 
 
 def skills_called() -> list[str]:
@@ -50,22 +47,22 @@ def skills_called() -> list[str]:
 @pytest.mark.parametrize("kind, fields, holding, after", [
     ("explore_zone", {"zone": 6}, False, False),
     ("get_workpiece", {"machine": "C-BS"}, False, True),
-    ("get_workpiece", {"machine": "C-CS1", "side": SIDE("SHELF"), "shelf_slot": 2}, False, True),
-    ("put_workpiece", {"machine": "C-RS1", "side": SIDE("SLIDE")}, True, False),
+    ("get_workpiece", {"machine": "C-CS1", "side": "SHELF", "shelf_slot": 2}, False, True),
+    ("put_workpiece", {"machine": "C-RS1", "side": "SLIDE"}, True, False),
     ("retrieve_cap", {"machine": "C-CS2", "shelf_slot": 1}, False, False),
-    ("mount_ring", {"machine": "C-RS2", "ring_color": 1}, True, False),
+    ("mount_ring", {"machine": "C-RS2", "ring_color": "RING_BLUE"}, True, False),
     ("mount_cap", {"machine": "C-CS1"}, True, False),
     ("deliver", {"machine": "C-DS", "gate": 1}, True, False),
     ("discard", {}, True, False),
-    ("discard", {"machine": "C-RS1", "side": SIDE("SLIDE")}, True, False),
+    ("discard", {"machine": "C-RS1", "side": "SLIDE"}, True, False),
     ("go_to", {"zone": 7}, False, False),
-    ("go_to", {"target": TM.Pose2D(x=1.5, y=3.0, theta=0.5)}, True, True),
+    ("go_to", {"x": 1.5, "y": 3.0, "theta": 0.5}, True, True),
 ])
 def test_every_task_kind_succeeds(kind, fields, holding, after):
     rig = make(holding=holding)
     res = run(rig, kind, **fields)
     assert outcome(res) == ("SUCCEEDED", "NONE"), res.text
-    assert rig.backend.holding() is after and res.HasField("holding") is after
+    assert rig.backend.holding() is after and bool(res.holding) is after
     assert rig.drives()[-1][1] == "stop"
 
 
@@ -93,7 +90,7 @@ def test_a_grab_that_never_holds_escalates_and_reports_grab_failed():
                                "back_off", "approach_station", "grab",                 # re-align and retry
                                "back_off", "relocalise", "approach_station", "grab"]   # back off, re-localise
     assert [v["distance"] for _k, v in calls("back_off")] == [0.2, 0.5]
-    assert not res.HasField("holding") and rig.drives()[-1][1] == "stop"
+    assert not res.holding and rig.drives()[-1][1] == "stop"
 
 
 def test_a_navigation_failure_backs_off_and_replans():
@@ -139,7 +136,7 @@ def test_a_put_that_does_not_let_go_reports_put_failed():
     rig = make(holding=True, stuck=99)
     res = run(rig, "mount_cap", machine="C-CS1")
     assert outcome(res) == ("FAILED", "PUT_FAILED")
-    assert skills_called().count("put") == 3 and res.HasField("holding")
+    assert skills_called().count("put") == 3 and res.holding
 
 
 def test_a_lost_workpiece_is_reported_before_driving():
@@ -157,7 +154,7 @@ def test_the_wrong_kind_of_station_is_an_invalid_task(kind, machine):
     if kind == "retrieve_cap":
         fields["shelf_slot"] = 0
     if kind == "mount_ring":
-        fields["ring_color"] = 1
+        fields["ring_color"] = "RING_BLUE"
     res = run(rig, kind, **fields)
     assert outcome(res) == ("FAILED", "INVALID_TASK") and skills_called() == []
 
@@ -177,7 +174,7 @@ def test_a_pause_after_the_grab_does_not_grab_again():
 
 def test_go_to_drives_to_the_pose_it_was_given():
     rig = make()
-    res = run(rig, "go_to", target=TM.Pose2D(x=-2.5, y=4.0, theta=1.0), zone=3)
+    res = run(rig, "go_to", x=-2.5, y=4.0, theta=1.0, zone=3)
     assert outcome(res) == ("SUCCEEDED", "NONE")
     assert skills_called() == ["navigate_to_pose"]
     goal = calls("navigate_to_pose")[0][1]["goal"]
@@ -199,16 +196,21 @@ def test_go_to_that_never_arrives_backs_off_relocalises_and_fails():
                                "relocalise", "relocalise", "navigate_to_zone"]
 
 
-def test_go_to_without_zone_or_target_is_an_invalid_task():
+def test_a_move_to_nowhere_is_refused():
     rig = make()
-    res = run(rig, "go_to")
+    nowhere = LM.AgentTask(team_color=0, task_id=99, robot_id=1)
+    nowhere.move.waypoint = "Z99"
+    rig.server.send_agent_task(nowhere)
+    rig.until(lambda: rig.server.final(99) is not None, what="refused")
+    res = rig.server.final(99)
     assert outcome(res) == ("FAILED", "INVALID_TASK") and skills_called() == []
+    assert LM.AgentTask.ErrorCode.Name(res.league_code) == "INVALID_TARGET"
 
 
 def test_a_discard_without_a_station_never_drives():
     rig = make(holding=True)
     res = run(rig, "discard")
-    assert outcome(res) == ("SUCCEEDED", "NONE") and not res.HasField("holding")
+    assert outcome(res) == ("SUCCEEDED", "NONE") and not res.holding
     assert skills_called() == []
     assert all(d[1] == "stop" for d in rig.drives()), rig.drives()
 
@@ -220,10 +222,10 @@ def _machine_info(**states):
 
 
 @pytest.mark.parametrize("kind, fields, machine", [
-    ("mount_ring", {"machine": "C-RS2", "ring_color": 1}, "C-RS2"),
+    ("mount_ring", {"machine": "C-RS2", "ring_color": "RING_BLUE"}, "C-RS2"),
     ("mount_cap", {"machine": "C-CS1"}, "C-CS1"),
     ("retrieve_cap", {"machine": "C-CS2", "shelf_slot": 1}, "C-CS2"),
-    ("put_workpiece", {"machine": "C-CS1", "side": SIDE("INPUT")}, "C-CS1"),
+    ("put_workpiece", {"machine": "C-CS1", "side": "INPUT"}, "C-CS1"),
 ])
 def test_a_feed_waits_docked_until_the_refbox_shows_the_station_prepared(kind, fields, machine):
     """Never a workpiece on a station that is not PREPARED for it: the robot docks, then
@@ -240,10 +242,8 @@ def test_a_feed_waits_docked_until_the_refbox_shows_the_station_prepared(kind, f
     rig.until(lambda: rig.server.of("RobotStatus")[-1].waiting_at == machine, seconds=5,
               what="waiting_at in the RobotStatus")
     rig.agent.stations.update(_machine_info(**{machine.replace("-", "_"): "PREPARED"}), rig.clock.now())
-    rig.until(lambda: [r for r in rig.server.results(tid) if r.status != TM.TaskResult.RUNNING],
-              seconds=60, what="fed")
-    res = [r for r in rig.server.results(tid) if r.status != TM.TaskResult.RUNNING][-1]
-    assert outcome(res) == ("SUCCEEDED", "NONE") and [v for k, v in CALLS if k == "put"]
+    rig.until(lambda: rig.server.final(tid) is not None, seconds=60, what="fed")
+    assert outcome(rig.server.final(tid)) == ("SUCCEEDED", "NONE") and [v for k, v in CALLS if k == "put"]
     rig.until(lambda: not rig.server.of("RobotStatus")[-1].HasField("waiting_at"), seconds=5,
               what="no waiting_at once fed")
 
@@ -258,6 +258,6 @@ def test_a_delivery_takes_a_ds_waiting_for_its_window_or_delivering():
 def test_a_station_never_prepared_ends_the_feed_without_putting(state, code):
     rig = make(holding=True)
     rig.agent.stations.update(_machine_info(C_RS1=state), rig.clock.now())
-    res = run(rig, "mount_ring", seconds=300, machine="C-RS1", ring_color=1)
+    res = run(rig, "mount_ring", seconds=300, machine="C-RS1", ring_color="RING_BLUE")
     assert outcome(res)[1] == code and not [v for k, v in CALLS if k == "put"]
     assert rig.backend.holding()

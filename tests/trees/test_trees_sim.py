@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.support.tree_sim import SIDE, TM, SimTaskRig, error, status
+from tests.support.tree_sim import TM, SimTaskRig, error, status
 
 
 @pytest.fixture
@@ -39,17 +39,17 @@ def test_explore_zone_finds_the_station_and_reports_it(rig):
 def test_a_product_from_base_to_delivery(rig):
     w = rig.world
     w.spawn_workpiece("C-BS", "output", "BASE_RED")
-    assert ok(rig.task("get_workpiece", machine="C-BS", side=SIDE("OUTPUT")))
+    assert ok(rig.task("get_workpiece", machine="C-BS", side="OUTPUT"))
     base = rig.held()
     assert base is not None and base.base == "BASE_RED"
-    assert ok(rig.task("mount_ring", machine="C-RS1", ring_color=TM.RingColor.Value("RING_BLUE")))
+    assert ok(rig.task("mount_ring", machine="C-RS1", ring_color="RING_BLUE"))
     assert rig.held() is None and w.workpiece_at("C-RS1", "input").id == base.id
     w.move_workpiece("C-RS1", "input", "output")                    # the station did its work
-    assert ok(rig.task("get_workpiece", machine="C-RS1", side=SIDE("OUTPUT")))
-    assert ok(rig.task("mount_cap", machine="C-CS1", cap_color=TM.CapColor.Value("CAP_GREY")))
+    assert ok(rig.task("get_workpiece", machine="C-RS1", side="OUTPUT"))
+    assert ok(rig.task("mount_cap", machine="C-CS1", cap_color="CAP_GREY"))
     assert w.workpiece_at("C-CS1", "input").id == base.id
     w.move_workpiece("C-CS1", "input", "output")
-    assert ok(rig.task("get_workpiece", machine="C-CS1", side=SIDE("OUTPUT")))
+    assert ok(rig.task("get_workpiece", machine="C-CS1", side="OUTPUT"))
     assert ok(rig.task("deliver", machine="C-DS", gate=2))
     assert w.workpiece_at("C-DS", "input").id == base.id
     assert w.collision_count == 0
@@ -62,9 +62,9 @@ def test_caps_from_the_shelf(rig):
     assert ok(rig.task("retrieve_cap", machine="C-CS1", shelf_slot=1))
     assert w.workpiece_at("C-CS1", "input").cap == "CAP_GREY" and w.workpiece_at("C-CS1", "shelf1") is None
     w.spawn_workpiece("C-CS2", "shelf0", "BASE_BLACK", cap="CAP_BLACK")
-    assert ok(rig.task("get_workpiece", machine="C-CS2", side=SIDE("SHELF"), shelf_slot=0))
+    assert ok(rig.task("get_workpiece", machine="C-CS2", side="SHELF", shelf_slot=0))
     assert rig.held().cap == "CAP_BLACK"
-    assert ok(rig.task("put_workpiece", machine="C-CS2", side=SIDE("INPUT")))
+    assert ok(rig.task("put_workpiece", machine="C-CS2", side="INPUT"))
     assert w.workpiece_at("C-CS2", "input").cap == "CAP_BLACK"
     assert w.collision_count == 0
 
@@ -74,15 +74,15 @@ def test_slides_and_discards(rig):
     w = rig.world
     for base in ("BASE_BLACK", "BASE_SILVER", "BASE_RED"):
         w.spawn_workpiece("C-BS", "output", base)
-        assert ok(rig.task("get_workpiece", machine="C-BS", side=SIDE("OUTPUT")))
+        assert ok(rig.task("get_workpiece", machine="C-BS", side="OUTPUT"))
         if base == "BASE_BLACK":
-            assert ok(rig.task("put_workpiece", machine="C-RS2", side=SIDE("SLIDE")))
+            assert ok(rig.task("put_workpiece", machine="C-RS2", side="SLIDE"))
             assert [wp.base for wp in w.workpieces_at("C-RS2", "slide")] == ["BASE_BLACK"]
         elif base == "BASE_SILVER":
             assert ok(rig.task("discard"))                            # anywhere: let go where it stands
             assert rig.held() is None
         else:
-            assert ok(rig.task("discard", machine="C-RS1", side=SIDE("SLIDE")))
+            assert ok(rig.task("discard", machine="C-RS1", side="SLIDE"))
             assert [wp.base for wp in w.workpieces_at("C-RS1", "slide")] == ["BASE_RED"]
     assert ok(rig.task("discard"))                                    # nothing held: nothing to do
     assert w.collision_count == 0
@@ -109,7 +109,7 @@ def test_a_missed_grab_is_retried_after_re_aligning():
                 robot.config = robot.config.with_options(grab_failure=0.0)   # the next close works
         rig.hooks.append(heal)
         rig.world.spawn_workpiece("C-BS", "output", "BASE_RED")
-        res = rig.task("get_workpiece", machine="C-BS", side=SIDE("OUTPUT"))
+        res = rig.task("get_workpiece", machine="C-BS", side="OUTPUT")
         assert ok(res), res
         assert seen["level"] == 1                                      # re-align and retry, then it worked
         assert seen["history"] == ["action@0", "recovery1.1", "action@1"]
@@ -126,10 +126,10 @@ def test_a_grab_that_never_works_ends_in_grab_failed():
         levels = set()
         rig.hooks.append(lambda r: _grab_recovery(r) is not None and levels.add(_grab_recovery(r).level))
         rig.world.spawn_workpiece("C-BS", "output", "BASE_RED")
-        res = rig.task("get_workpiece", machine="C-BS", side=SIDE("OUTPUT"))
+        res = rig.task("get_workpiece", machine="C-BS", side="OUTPUT")
         assert status(res) == "FAILED" and error(res) == "GRAB_FAILED"
         assert levels == {0, 1, 2}                                   # both recovery levels ran
-        assert not res.HasField("holding") and rig.held() is None
+        assert not res.holding and rig.held() is None
         v = rig.robot.odometry()
         assert (v.vx, v.vy, v.omega) == (0.0, 0.0, 0.0)              # stopped
     finally:

@@ -12,8 +12,9 @@ import yaml
 from backends.robotino.config import RobotConfigError, load_robot_config, parse_robot_config
 from backends.robotino.rig import EmulatedRobot
 from backends.robotino_rest.standin import RestStandIn
-from rll_bt import msgs, rules
-from rll_bt.agent import TREE_KINDS, default_trees_dir, load_task_tree, task_params
+from rll_bt import rules
+from rll_bt.agent import TREE_KINDS, default_trees_dir, load_task_tree
+from rll_bt.agenttask import read_task, render_task
 from rll_bt.backend import Capability, Pose2D, SensorLost, open_backend
 from rll_bt.cli import main
 from rll_bt.clock import WallClock
@@ -21,28 +22,26 @@ from skills.context import SkillContext
 from skills.errors import SkillError
 from skills.navigation.motions import MoveRelative
 
-TM = msgs.message_set("team")
+#: one sample task per kind, as rll-bt's team server plans them
 SAMPLES = {
     "explore_zone": dict(zone=6),
-    "get_workpiece": dict(machine="C-CS1", side=TM.MachineSide.Value("SHELF"), shelf_slot=1),
-    "put_workpiece": dict(machine="C-RS1", side=TM.MachineSide.Value("SLIDE")),
+    "get_workpiece": dict(machine="C-CS1", side="SHELF", shelf_slot=1),
+    "put_workpiece": dict(machine="C-RS1", side="SLIDE"),
     "retrieve_cap": dict(machine="C-CS1", shelf_slot=0),
-    "mount_ring": dict(machine="C-RS1", ring_color=2),
-    "mount_cap": dict(machine="C-CS2", cap_color=1),
+    "mount_ring": dict(machine="C-RS1", ring_color="RING_GREEN"),
+    "mount_cap": dict(machine="C-CS2", cap_color="CAP_BLACK"),
     "deliver": dict(machine="C-DS", gate=3),
     "discard": dict(),
-    "go_to": dict(zone=5),
+    "go_to": dict(x=1.5, y=2.5, zone=5),
 }
 ALL = Capability.DRIVE | Capability.ODOMETRY | Capability.LASER | Capability.CAMERA | Capability.GRIPPER
 
 
-def _task(kind):
-    t = TM.Task(team_color=0, task_id=1, robot_id=1)
-    body = getattr(t, kind)
-    body.SetInParent()
-    for k, v in SAMPLES[kind].items():
-        setattr(body, k, v)
-    return t
+def _params(kind):
+    """The tree parameters the agent reads from the AgentTask (+ TaskDetail) of ``kind``."""
+    profile = rules.profile("rcll2016")
+    at, detail = render_task(kind, SAMPLES[kind], task_id=1, robot_id=1, color="CYAN", profile=profile)
+    return read_task(at, detail, profile=profile, robot_id=1, color="CYAN")[1]
 
 
 @pytest.fixture(params=["urg", "tim"])
@@ -116,7 +115,7 @@ def _every_tree_builds(backend):
     clock = WallClock()
     services = {"start_pose": Pose2D(1.0, 1.0, 0.0), "localisation": "cheap", "profile": "rcll2016"}
     for kind in TREE_KINDS:
-        params = task_params(_task(kind), rules.profile("rcll2016"))
+        params = _params(kind)
         tree = load_task_tree(default_trees_dir(), kind, params, backend=backend, clock=clock,
                               services=dict(services))
         assert tree.nodes, kind

@@ -156,17 +156,45 @@ def test_record_holds_the_robots_trees_and_both_directions_of_its_link(trees, tm
         msgs_ = [(ch.topic, d) for _s, ch, _m, d in reader.iter_decoded_messages(log_time_order=True)]
     assert meta["kind"] == "agent" and meta["robot"] == "2" and meta["clock"] == "wall"
     topics = {t for t, _d in msgs_}
-    assert {"/robot2/link/RobotHello", "/robot2/link/TaskResult", "/teamserver/link/Task",
+    assert {"/robot2/link/RobotHello", "/robot2/link/AgentTask", "/robot2/link/TaskOutcome",
+            "/robot2/link/BeaconSignal", "/teamserver/link/AgentTask", "/teamserver/link/TaskDetail",
             "/robot2/tree/structure", "/robot2/tree"} <= topics, sorted(topics)
-    task = next(d for t, d in msgs_ if t == "/teamserver/link/Task")
-    assert task.task_id == 3 and task.get_workpiece.machine == "C-BS"
+    task = next(d for t, d in msgs_ if t == "/teamserver/link/AgentTask")
+    assert task.task_id == 3 and task.retrieve.machine_id == "C-BS" and task.retrieve.machine_point == "output"
     structure = next(d for t, d in msgs_ if t == "/robot2/tree/structure")
     assert structure["kind"] == "get_workpiece" and {n["type"] for n in structure["nodes"]} >= {"log", "wait"}
     ticks = [d for t, d in msgs_ if t == "/robot2/tree"]
     assert ticks[-1]["outcome"]["status"] == "SUCCEEDED" and any(d["status"] == "RUNNING" for d in ticks)
-    results = [d for t, d in msgs_ if t == "/robot2/link/TaskResult"]
-    status = results[0].DESCRIPTOR.fields_by_name["status"].enum_type.values_by_number
-    assert any(r.task_id == 3 and status[r.status].name == "SUCCEEDED" for r in results)
+    results = [d for t, d in msgs_ if t == "/robot2/link/AgentTask"]
+    assert any(r.task_id == 3 and r.successful for r in results)
+
+
+def test_with_league_a_plain_agenttask_team_server_drives_it(trees):
+    server_t = tcp_server(key=None)                   # a league team server: plain frames
+    srv = ScriptedServer(server_t, league=True)
+    rc = {}
+    th = threading.Thread(target=lambda: rc.setdefault(
+        "rc", main(base_args(server_t.port, trees, "--seconds", "4", "--league"))))
+    th.start()
+    try:
+        deadline = time.monotonic() + 10
+        while srv.client is None and time.monotonic() < deadline:
+            server_t.wait(0.05)
+            srv.pump()
+        while not srv.of("BeaconSignal") and time.monotonic() < deadline:
+            server_t.wait(0.05)
+            srv.pump()
+        assert srv.of("BeaconSignal")[0].number == 2 and not srv.of("RobotHello")
+        srv.task(3, "get_workpiece", robot=2, machine="C-BS")
+        while not srv.results(3, "SUCCEEDED") and time.monotonic() < deadline:
+            server_t.wait(0.05)
+            srv.pump()
+        assert srv.results(3, "SUCCEEDED")
+    finally:
+        th.join(timeout=15)
+        server_t.close()
+    assert rc.get("rc") == 0
+    assert {m.DESCRIPTOR.name for _c, m in srv.got} == {"BeaconSignal", "AgentTask"}
 
 
 def test_record_to_a_place_that_cannot_be_written_is_a_usage_error(trees, tmp_path, capsys):

@@ -1,5 +1,5 @@
-"""The agent's parts: task parameters, error codes, the game gate, the
-observation stream and the machine map."""
+"""The agent's parts: error codes, the game gate, the observation stream and
+the machine map (task parameters: tests/rll_bt/agenttask)."""
 from __future__ import annotations
 
 import math
@@ -10,96 +10,19 @@ from rll_bt import msgs, rules
 from rll_bt.agent import (
     AgentConfig,
     GameGate,
-    InvalidTask,
     KnownMachines,
     ObservationFeed,
     changed_names,
     check_team_key,
     distribute,
     error_code,
-    task_params,
 )
 from rll_bt.backend import Pose2D
 from rll_bt.clock import SimClock
 from tests.support.agents import TM
-from tests.support.agents import make_task as build_task
 
 P16 = rules.profile("rcll2016")
 P25 = rules.profile("rcll2025")
-SIDE = TM.MachineSide.Value
-
-
-def make_task(kind, **fields):
-    return build_task(kind, task_id=3, robot=2, color=1, timeout=60.0, **fields)
-
-
-# -- task parameters ---------------------------------------------------------------------------
-
-def test_common_parameters():
-    p = task_params(make_task("get_workpiece", machine="M-BS"), P16)
-    assert p["task_id"] == 3 and p["robot_id"] == 2 and p["team_color"] == "MAGENTA"
-    assert p["kind"] == "get_workpiece" and p["timeout"] == 60.0
-
-
-def test_explore_zone_parameters_by_profile():
-    t = make_task("explore_zone", zone=12)
-    t.explore_zone.viewpoints.add(x=1.0, y=2.0, theta=0.5)
-    p = task_params(t, P16)
-    assert p["zone"] == 12 and p["zone_name"] == "Z12" and p["viewpoints"] == [[1.0, 2.0, 0.5]]
-    assert task_params(make_task("explore_zone", zone=1023), P25)["zone_name"] == "M_Z23"
-    with pytest.raises(InvalidTask, match="zone 25"):
-        task_params(make_task("explore_zone", zone=25), P16)
-
-
-@pytest.mark.parametrize("fields, face, place", [
-    ({"side": SIDE("OUTPUT")}, "OUTPUT", "conveyor"),
-    ({"side": SIDE("INPUT")}, "INPUT", "conveyor"),
-    ({"side": SIDE("SHELF"), "shelf_slot": 2}, "INPUT", "shelf2"),
-])
-def test_get_workpiece_places(fields, face, place):
-    p = task_params(make_task("get_workpiece", machine="C-CS1", **fields), P16)
-    assert (p["face"], p["place"], p["machine_type"]) == (face, place, "CS")
-
-
-def test_default_sides_follow_the_protocol():
-    assert task_params(make_task("get_workpiece", machine="C-BS"), P16)["side"] == "OUTPUT"
-    assert task_params(make_task("put_workpiece", machine="C-RS1"), P16)["side"] == "INPUT"
-    slide = task_params(make_task("put_workpiece", machine="C-RS1", side=SIDE("SLIDE")), P16)
-    assert (slide["side"], slide["face"], slide["place"]) == ("SLIDE", "INPUT", "slide")
-
-
-def test_kind_specific_parameters():
-    assert task_params(make_task("retrieve_cap", machine="C-CS2", shelf_slot=1), P16)["place"] == "shelf1"
-    assert task_params(make_task("mount_ring", machine="C-RS2", ring_color=3), P16)["ring_color"] == "RING_ORANGE"
-    assert task_params(make_task("mount_cap", machine="C-CS1"), P16)["cap_color"] == ""
-    assert task_params(make_task("mount_cap", machine="C-CS1", cap_color=2), P16)["cap_color"] == "CAP_GREY"
-    d = task_params(make_task("deliver", machine="C-DS", gate=2), P16)
-    assert (d["gate"], d["order_id"]) == (2, 0)
-    d = task_params(make_task("deliver", machine="C-DS", order_id=7), P25)
-    assert (d["gate"], d["order_id"]) == (0, 7)
-    anywhere = task_params(make_task("discard"), P16)
-    assert anywhere["machine"] == "" and anywhere["machine_type"] == ""
-    rep = make_task("report_machines")
-    rep.report_machines.entries.add(name="C-CS1", type="CS", zone=6)
-    assert task_params(rep, P16)["entries"] == [{"name": "C-CS1", "type": "CS", "zone": 6, "rotation": 0}]
-
-
-@pytest.mark.parametrize("kind, fields, match", [
-    ("get_workpiece", {"machine": "C-XX"}, "no machine"),
-    ("get_workpiece", {"machine": "C-CS1", "side": SIDE("SLIDE")}, "slide"),
-    ("get_workpiece", {"machine": "C-CS1", "side": SIDE("SHELF"), "shelf_slot": 3}, "shelf slot 3"),
-    ("put_workpiece", {"machine": "C-RS1", "side": SIDE("OUTPUT")}, "output"),
-    ("retrieve_cap", {"machine": "C-CS1", "shelf_slot": 5}, "shelf slot 5"),
-    ("get_workpiece", {"machine": "C-SS"}, "no machine"),     # rcll2016 has no storage station
-])
-def test_invalid_tasks(kind, fields, match):
-    with pytest.raises(InvalidTask, match=match):
-        task_params(make_task(kind, **fields), P16)
-
-
-def test_task_without_kind_is_invalid():
-    with pytest.raises(InvalidTask, match="no kind"):
-        task_params(TM.Task(team_color=0, task_id=1, robot_id=1), P16)
 
 
 # -- error codes --------------------------------------------------------------------------------

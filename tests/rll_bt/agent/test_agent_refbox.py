@@ -46,7 +46,7 @@ def bus_rig():
         clock = SimClock()
         bus = Bus(clock)
         refbox = BusRefbox(bus, profile)
-        srv = ScriptedServer(bus.stream_server("ts", registry=TEAM_REG, key=KEY), state=server_state)
+        srv = ScriptedServer(bus.stream_server("ts", registry=TEAM_REG, key=KEY), state=server_state, profile=profile)
         link = bus.stream_client("ts", registry=TEAM_REG, key=KEY)
         public = bus.peer("public", registry=refbox.reg, name="R1")
         rig = Rig(link, srv, clock, public=public,
@@ -110,11 +110,12 @@ def test_rcll2025_beacons_carry_the_task_and_the_finished_tasks(bus_rig):
     srv.task(31, "explore_zone", zone=23)
     rig.until(lambda: srv.results(31, "SUCCEEDED"), what="explore done")
     during = [b for b in refbox.of("BeaconSignal") if b.HasField("task")]
-    assert during and during[0].task.task_id == 31 and during[0].task.move.waypoint == "C_Z23"
-    rig.run(7.0)
-    after = [b for b in refbox.of("BeaconSignal") if [(f.TaskId, f.successful) for f in b.finished_tasks]]
-    assert after and all([(f.TaskId, f.successful) for f in b.finished_tasks] == [(31, True)] for b in after)
-    assert len(after) == rig.agent.config.finished_beacons                # repeated a few times, then dropped
+    assert during and during[0].task.task_id == 31                  # the AgentTask the robot got
+    assert during[0].task.explore_machine.waypoint == "C_Z23" and not during[0].task.HasField("successful")
+    rig.run(4.0)
+    after = [b for b in refbox.of("BeaconSignal") if b.finished_tasks]
+    assert len(after) >= 3 and all([(f.TaskId, f.successful) for f in b.finished_tasks] == [(31, True)]
+                                   for b in after)                    # every beacon since lists it
     assert not refbox.of("BeaconSignal")[-1].HasField("task")
 
 
@@ -160,7 +161,7 @@ def test_stands_still_unless_running(bus_rig):
     srv.task(41, "mount_cap", machine="C-CS1")
     rig.run(2.0)
     assert rig.drives() == [(0.0, "stop")] or all(m == "stop" for _t, m in rig.drives())   # never drove
-    assert srv.results(41, "RUNNING") and STATE.Name(srv.of("RobotStatus")[-1].state) == "STOPPED"
+    assert srv.running(41) and STATE.Name(srv.of("RobotStatus")[-1].state) == "STOPPED"
     refbox.state = "RUNNING"
     rig.until(lambda: rig.drives()[-1][1] == "drive", what="driving once RUNNING")
     ticks = rig.agent.run.ticks
@@ -189,29 +190,3 @@ def test_a_fresh_refbox_pause_outranks_the_team_server(bus_rig):
     srv.send_phase("RUNNING")
     rig.run(0.5)
     assert not rig.agent.gate.moving_allowed and rig.agent.gate.view.source == "refbox"
-
-
-def test_report_machines_task_sends_a_machine_report(bus_rig):
-    rig, refbox, srv = bus_rig()
-    rig.run(1.5)
-    t = TM.Task(team_color=0, task_id=51, robot_id=1)
-    t.report_machines.entries.add(name="C-CS1", type="ABCDEFGH", zone=6)
-    t.report_machines.entries.add(name="C-RS1", type="QWERTYUI", zone=10)
-    srv.send(t)
-    rig.until(lambda: srv.results(51, "SUCCEEDED"), what="report sent")
-    rig.run(0.2)
-    rep = refbox.of("MachineReport")
-    assert len(rep) == 1 and rep[0].team_color == refbox.ms.Team.Value("CYAN")
-    assert [(m.name, m.type, m.zone) for m in rep[0].machines] == [("C-CS1", "ABCDEFGH", 6), ("C-RS1", "QWERTYUI", 10)]
-
-
-def test_a_report_the_refbox_cannot_take_is_refused(bus_rig):
-    rig, refbox, srv = bus_rig()
-    rig.run(1.5)
-    t = TM.Task(team_color=0, task_id=52, robot_id=1)
-    t.report_machines.entries.add(name="C-CS1", zone=99)          # no such rcll2016 zone
-    srv.send(t)
-    rig.until(lambda: srv.results(52, "FAILED"), what="refused")
-    assert TM.ErrorCode.Name(srv.results(52, "FAILED")[0].error) == "INVALID_TASK"
-    rig.run(0.5)
-    assert refbox.of("MachineReport") == []

@@ -1,16 +1,16 @@
 """How the agent runs tasks (lockstep, over the in-process bus): outcomes and
-their error codes, timeouts, bugs in nodes, refused tasks, re-sent tasks,
-observations, results kept while the link is down."""
+their error codes (rll-bt's and the league's), timeouts, bugs in nodes,
+refused tasks, tasks that wait, re-sent tasks, pause, observations, results
+kept while the link is down."""
 from __future__ import annotations
 
 import pytest
 
 from rll_bt.clock import SimClock
 from rll_bt.comm import Bus
-from tests.support.agents import KEY, TEAM_REG, TM, Rig, ScriptedServer
+from tests.support.agents import KEY, LM, TEAM_REG, TM, Rig, ScriptedServer, make_task
 
 STATE = TM.RobotStatus.State
-SIDE = TM.MachineSide.Value
 
 
 @pytest.fixture
@@ -24,86 +24,133 @@ def rig():
     return r
 
 
-def final(srv, tid):
-    out = [r for r in srv.results(tid) if TM.TaskResult.Status.Name(r.status) != "RUNNING"]
-    return out[-1] if out else None
-
-
 def run_task(rig, tid, kind, seconds=20.0, **fields):
     rig.server.task(tid, kind, **fields)
-    rig.until(lambda: final(rig.server, tid) is not None, seconds=seconds, what=f"task {tid} {kind} finished")
-    return final(rig.server, tid)
+    rig.until(lambda: rig.server.final(tid) is not None, seconds=seconds, what=f"task {tid} {kind} finished")
+    return rig.server.final(tid)
 
 
-def code(result) -> str:
-    return TM.ErrorCode.Name(result.error)
+def league(value) -> str:
+    return LM.AgentTask.ErrorCode.Name(value)
 
 
 def test_recovery_runs_and_its_error_code_is_reported(rig):
     res = run_task(rig, 1, "put_workpiece", machine="C-RS1")
-    assert TM.TaskResult.Status.Name(res.status) == "FAILED" and code(res) == "PUT_FAILED"
+    assert res.status == "FAILED" and res.code == "PUT_FAILED"
     assert res.text == "the workpiece is still in the gripper"
+    # the league's word for it: the put did not work, the workpiece is still held
+    assert league(res.league_code) == "MACHINE_POINT_OCCUPIED" and res.task.successful is False
+    assert (res.task.deliver.machine_id, res.task.deliver.machine_point) == ("C-RS1", "input")
     seen = [STATE.Name(s.state) for s in rig.server.of("RobotStatus")]
     assert "RECOVERING" in seen and seen[-1] == "IDLE"
 
 
 def test_task_timeout_counts_running_time(rig):
+    started = rig.clock.now()
     res = run_task(rig, 2, "deliver", machine="C-DS", gate=1, timeout=2.0)
-    assert code(res) == "TIMEOUT" and "2 s" in res.text
-    assert res.stamp == pytest.approx(rig.server.results(2, "RUNNING")[0].stamp + 2.0, abs=0.25)
+    assert res.code == "TIMEOUT" and "2 s" in res.text and league(res.league_code) == "UNKNOWN"
+    assert res.stamp == pytest.approx(started + 2.0, abs=0.25)
 
 
 def test_a_node_that_raises_fails_the_task_not_the_agent(rig):
-    res = run_task(rig, 3, "mount_ring", machine="C-RS1", ring_color=1)
-    assert code(res) == "INTERNAL" and "node bug" in res.text
+    res = run_task(rig, 3, "mount_ring", machine="C-RS1", ring_color="RING_BLUE")
+    assert res.code == "INTERNAL" and "node bug" in res.text and league(res.league_code) == "INTERNAL_ERROR"
     assert rig.drives()[-1][1] == "stop"
-    assert run_task(rig, 4, "get_workpiece", machine="C-BS").status == TM.TaskResult.SUCCEEDED
+    assert run_task(rig, 4, "get_workpiece", machine="C-BS").status == "SUCCEEDED"
 
 
 def test_a_tree_failing_without_a_code_reports_internal(rig):
     res = run_task(rig, 5, "discard")
-    assert code(res) == "INTERNAL" and "without an error code" in res.text
+    assert res.code == "INTERNAL" and "without an error code" in res.text
 
 
-@pytest.mark.parametrize("kind, fields, text", [
-    ("get_workpiece", {"machine": "C-ZZ"}, "no machine"),
-    ("retrieve_cap", {"machine": "C-CS1", "shelf_slot": 0}, "no tree"),     # the test trees have none
-])
-def test_tasks_that_cannot_run_are_refused(rig, kind, fields, text):
-    res = run_task(rig, 6, kind, **fields)
-    assert code(res) == "INVALID_TASK" and text in res.text
+def test_tasks_that_cannot_run_are_refused_with_the_leagues_code(rig):
+    srv = rig.server
+    bad = LM.AgentTask(team_color=0, task_id=6, robot_id=1)
+    bad.retrieve.machine_id, bad.retrieve.machine_point = "C-ZZ", "output"
+    srv.send_agent_task(bad)
+    rig.until(lambda: srv.final(6) is not None)
+    res = srv.final(6)
+    assert res.status == "FAILED" and league(res.league_code) == "INVALID_TARGET" and "no station" in res.text
+    res = run_task(rig, 61, "retrieve_cap", machine="C-CS1", shelf_slot=0)     # the test trees have none
+    assert res.code == "INVALID_TASK" and "no tree" in res.text
+    assert league(res.league_code) == "TASK_NOT_SUPPORTED"
+    other = LM.AgentTask(team_color=1, task_id=62, robot_id=1)
+    other.move.waypoint = "Z3"
+    srv.send_agent_task(other)
+    rig.until(lambda: srv.final(62) is not None)
+    assert league(srv.final(62).league_code) == "WRONG_TEAM"
     assert rig.agent.run is None
 
 
-def test_one_task_at_a_time_and_resent_tasks(rig):
+def test_a_task_sent_while_another_runs_waits_and_a_task_id_runs_once(rig):
+    """As a league team server expects: the next task (without rll-bt's TaskDetail) waits."""
     srv = rig.server
     srv.task(7, "mount_cap", machine="C-CS1")
-    rig.until(lambda: srv.results(7, "RUNNING"))
-    srv.task(8, "get_workpiece", machine="C-BS")
-    rig.until(lambda: final(srv, 8) is not None)
-    assert code(final(srv, 8)) == "INVALID_TASK" and "busy with task 7" in final(srv, 8).text
+    rig.until(lambda: srv.running(7))
+    srv.task(8, "get_workpiece", machine="C-BS", detail=False)      # waits for 7
+    rig.run(1.0)
+    assert srv.final(8) is None and rig.agent.book.where(8) == "waiting"
     node = rig.agent.run.tree.root
     srv.task(7, "mount_cap", machine="C-CS1")                       # the server re-sends the running task
-    rig.until(lambda: len(srv.results(7, "RUNNING")) == 2)
+    srv.task(8, "get_workpiece", machine="C-BS", detail=False)      # ... and the waiting one
+    rig.run(1.0)
     assert rig.agent.run.tree.root is node and node.starts == 1    # not restarted
+    assert len(rig.agent.book.waiting) == 1
     srv.cancel(7)
-    rig.until(lambda: final(srv, 7) is not None)
-    srv.task(8, "get_workpiece", machine="C-BS")                    # accepted once the robot is free
-    rig.until(lambda: srv.results(8, "SUCCEEDED"), what="task 8 done")
-    srv.task(8, "get_workpiece", machine="C-BS")                    # re-sent after it finished
+    rig.until(lambda: srv.final(7) is not None)
+    assert srv.final(7).status == "CANCELLED" and srv.final(7).task.canceled
+    rig.until(lambda: srv.results(8, "SUCCEEDED"), what="task 8 done")   # then the waiting one
+    srv.task(8, "get_workpiece", machine="C-BS", detail=False)      # re-sent after it finished
     rig.until(lambda: len(srv.results(8, "SUCCEEDED")) == 2)
     assert rig.agent.run is None
+    assert [e.task_id for e in rig.agent.book.waiting] == []
 
 
-def test_tasks_for_other_robots_are_ignored(rig):
+def test_rll_bts_team_server_gets_a_refusal_from_a_busy_robot(rig):
+    """rll-bt's team server (it sends TaskDetail) plans again on a refusal, as it always did."""
+    srv = rig.server
+    srv.task(21, "mount_cap", machine="C-CS1")
+    rig.until(lambda: srv.running(21))
+    srv.task(22, "go_to", x=1.0, y=2.0)
+    rig.until(lambda: srv.final(22) is not None)
+    res = srv.final(22)
+    assert res.status == "FAILED" and res.code == "INVALID_TASK"
+    assert res.text == "robot 1 is busy with task 21; cancel it first"
+    assert rig.agent.run.task_id == 21 and rig.agent.book.where(22) is None
+
+
+def test_a_waiting_task_can_be_cancelled_and_a_task_paused(rig):
+    srv = rig.server
+    srv.task(14, "mount_cap", machine="C-CS1")
+    srv.task(15, "get_workpiece", machine="C-BS", detail=False)
+    rig.until(lambda: srv.running(14))
+    srv.cancel(15)
+    rig.until(lambda: srv.final(15) is not None)
+    assert srv.final(15).status == "CANCELLED" and rig.agent.book.where(15) == "finished"
+    from rll_bt.agenttask import render_pause
+    srv.send_agent_task(render_pause(14, 1, "CYAN"))
+    rig.until(lambda: rig.drives()[-1][1] == "stop", what="paused robot stops")
+    ticks = rig.agent.run.ticks
+    rig.run(1.0)
+    assert rig.agent.run.ticks == ticks and rig.agent.state() == "STOPPED"
+    beacon = srv.of("BeaconSignal")[-1]
+    assert beacon.task.task_id == 14 and beacon.task.pause_task is True
+    srv.send_agent_task(render_pause(14, 1, "CYAN", pause=False))
+    rig.run(1.0)
+    assert rig.agent.run.ticks > ticks and rig.drives()[-1][1] == "drive"
+
+
+def test_tasks_for_other_robots_are_refused(rig):
     rig.server.task(9, "get_workpiece", robot=2, machine="C-BS")
-    rig.run(2.0)
-    assert rig.server.results(9) == [] and rig.agent.run is None
+    rig.until(lambda: rig.server.final(9) is not None)
+    res = rig.server.final(9)
+    assert league(res.league_code) == "WRONG_ROBOT" and res.robot_id == 1 and rig.agent.run is None
 
 
 def test_observations_stream_and_zone_explored_on_success(rig):
     res = run_task(rig, 10, "explore_zone", zone=6)
-    assert res.status == TM.TaskResult.SUCCEEDED
+    assert res.status == "SUCCEEDED"
     rig.run(0.2)
     obs = [m for m in rig.server.of("MachineObservation") if m.HasField("name")]
     assert len(obs) == 1 and obs[0].name.value == "C-CS1" and obs[0].lights.pattern == 5
@@ -121,7 +168,7 @@ def test_observations_stream_and_zone_explored_on_success(rig):
 def test_results_wait_for_the_link(rig):
     srv = rig.server
     srv.task(12, "get_workpiece", machine="C-BS")
-    rig.until(lambda: srv.results(12, "RUNNING"))
+    rig.until(lambda: srv.running(12))
     srv.t.close()                                                   # the team server is gone
     rig.run(3.0)
     assert rig.agent.run is None and not rig.agent.connected
@@ -137,8 +184,8 @@ def test_shutdown_reports_the_running_task_and_stops(rig):
     rig.until(lambda: rig.drives()[-1][1] == "drive")
     rig.agent.shutdown("maintenance")
     rig.run(0.2)
-    res = final(srv, 13)
-    assert code(res) == "INTERNAL" and "maintenance" in res.text
+    res = srv.final(13)
+    assert res.code == "INTERNAL" and "maintenance" in res.text
     assert rig.drives()[-1][1] == "stop"
 
 
@@ -155,43 +202,42 @@ def test_a_silent_team_server_link_is_dropped_and_reconnected(rig):
     assert not rig.agent.server_silent
 
 
-def test_go_to_parameters_from_a_zone_or_a_pose():
-    from rll_bt import rules
-    from rll_bt.agent import InvalidTask, task_params
-    from tests.support.agents import make_task
-    prof = rules.profile("rcll2016")
-    p = task_params(make_task("go_to", zone=7), prof)
-    cx, cy = prof.zone_centre(7)
-    assert p["has_target"] is False and p["zone_name"] == prof.zone_name(7)
-    assert (p["target"]["x"], p["target"]["y"]) == (cx, cy)
-    p = task_params(make_task("go_to", target=TM.Pose2D(x=1.0, y=2.0, theta=0.5)), prof)
-    assert p["has_target"] is True and p["zone"] == 0 and p["target"] == {"x": 1.0, "y": 2.0, "theta": 0.5}
-    with pytest.raises(InvalidTask):
-        task_params(make_task("go_to", zone=99), prof)
-
-
 def test_a_lost_sensor_fails_the_task_with_its_own_code_and_the_agent_goes_on(rig):
     res = run_task(rig, 40, "go_to", zone=5)
-    assert code(res) == "SENSOR_LOST" and "laser lost" in res.text
+    assert res.code == "SENSOR_LOST" and "laser lost" in res.text and league(res.league_code) == "INTERNAL_ERROR"
     assert rig.drives()[-1][1] == "stop"
-    assert run_task(rig, 41, "get_workpiece", machine="C-BS").status == TM.TaskResult.SUCCEEDED
+    assert run_task(rig, 41, "get_workpiece", machine="C-BS").status == "SUCCEEDED"
+
+
+def test_beacons_to_the_team_server_carry_the_current_and_the_finished_tasks(rig):
+    srv = rig.server
+    srv.task(20, "get_workpiece", machine="C-BS")
+    rig.until(lambda: [b for b in srv.of("BeaconSignal") if b.HasField("task")], what="a beacon with the task")
+    during = [b for b in srv.of("BeaconSignal") if b.HasField("task")]
+    assert during[-1].task.task_id == 20 and during[-1].task.retrieve.machine_id == "C-BS" and during[-1].number == 1
+    rig.until(lambda: srv.final(20) is not None)
+    rig.run(1.5)
+    last = srv.of("BeaconSignal")[-1]
+    assert not last.HasField("task")
+    assert [(f.TaskId, f.successful) for f in last.finished_tasks][-1] == (20, True)
+    assert last.team_name == "Testers" and last.peer_name == "R1" and last.HasField("pose")
 
 
 def test_a_cancelled_task_given_out_again_runs_again_and_a_late_copy_does_not(rig):
     """The team server cancels a task (its station went down) and later gives the same task id out
     again: the robot runs it, it does not answer with the old CANCELLED (seed 1 lost its product so)."""
-    from tests.support.agents import make_task
     srv = rig.server
-    first = make_task("mount_cap", 7, machine="C-CS1")
-    first.issued_at = 10.0
-    assert srv.send(first)
-    rig.until(lambda: srv.results(7, "RUNNING"))
+    rig.until(lambda: rig.agent.gate.moving_allowed, what="game running")
+    at, detail = make_task("mount_cap", 7, machine="C-CS1")
+    detail.issued_at = 10.0
+    assert srv.send(detail) and srv.send(at)
+    rig.until(lambda: srv.running(7), what="task 7 running")
     srv.cancel(7)
     rig.until(lambda: srv.results(7, "CANCELLED"))
-    assert srv.send(first)                                          # a late copy of the cancelled task
+    assert srv.send(detail) and srv.send(at)                        # a late copy of the cancelled task
     rig.until(lambda: len(srv.results(7, "CANCELLED")) >= 2, what="the old result told again")
     assert rig.agent.run is None
-    again = make_task("get_workpiece", 7, machine="C-BS")
-    again.issued_at = 40.0                                          # given out again after the cancel
-    assert srv.send(again)
+    at, detail = make_task("get_workpiece", 7, machine="C-BS")
+    detail.issued_at = 40.0                                         # given out again after the cancel
+    assert srv.send(detail) and srv.send(at)
     rig.until(lambda: srv.results(7, "SUCCEEDED"), what="task 7 run again and done")

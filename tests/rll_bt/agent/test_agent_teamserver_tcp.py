@@ -9,7 +9,6 @@ from rll_bt.agent import team_server_link
 from rll_bt.clock import SimClock
 from tests.support.agents import KEY, TEAM, TM, Rig, ScriptedServer, tcp_server
 
-SIDE = TM.MachineSide.Value
 STATE = TM.RobotStatus.State
 
 
@@ -46,18 +45,18 @@ def test_register_task_running_result(tcp):
     assert (hello.robot_id, hello.team_name, hello.peer_name, hello.restarted) == (1, TEAM, "R1", True)
     assert "grip" in hello.capabilities
     rig.until(lambda: rig.agent.gate.moving_allowed, what="GamePhase RUNNING")
-    srv.task(5, "get_workpiece", machine="C-BS", side=SIDE("OUTPUT"))
-    rig.until(lambda: srv.results(5, "RUNNING"), what="RUNNING")
+    srv.task(5, "get_workpiece", machine="C-BS", side="OUTPUT")
+    rig.until(lambda: srv.running(5), what="running")
     rig.until(lambda: srv.results(5, "SUCCEEDED"), what="SUCCEEDED")
     done = srv.results(5, "SUCCEEDED")[0]
-    assert done.robot_id == 1 and done.error == TM.ErrorCode.Value("NONE")
+    assert done.robot_id == 1 and done.code == "NONE" and done.task.successful and done.league_code is None
     busy = [s for s in srv.of("RobotStatus") if s.state == STATE.Value("BUSY")]
     assert busy and all(s.current_task_id == 5 for s in busy)
     assert states(srv)[-1] == "IDLE"
     drives = rig.drives()
     assert [m for _t, m in drives].count("drive") == 1 and drives[-1][1] == "stop"
     rig.run(2.0)
-    seqs = [h.seq for h in srv.of("Heartbeat")]
+    seqs = [h.seq for h in srv.of("BeaconSignal")]
     assert len(seqs) >= 3 and seqs == sorted(seqs) and len(set(seqs)) == len(seqs)
     assert srv.of("RobotHello") == [hello]                # one registration on one connection
 
@@ -80,7 +79,7 @@ def test_cancel_stops_the_robot(tcp):
     srv.cancel(9)
     rig.until(lambda: srv.results(9, "CANCELLED"), what="CANCELLED")
     res = srv.results(9, "CANCELLED")[0]
-    assert TM.ErrorCode.Name(res.error) == "CANCELLED"
+    assert res.code == "CANCELLED" and res.task.canceled and not res.task.successful
     after = [m for t, m in rig.drives() if t >= t_cancel]
     assert after and set(after) == {"stop"}               # stopped, and no drive since
     rig.run(1.0)

@@ -1,19 +1,27 @@
 """Reliable delivery on a link: kept and repeated until acknowledged, by id, bounded."""
 from rll_bt import msgs
 from rll_bt.clock import SimClock
-from rll_bt.comm.reliable import Reliable
+from rll_bt.comm.reliable import AT_CANCEL, AT_FAILED, AT_SUCCEEDED, Reliable
 
 TM = msgs.message_set("team")
+LM = msgs.message_set("rcll2025")
+AT = 502                                    # AgentTask's MSG_TYPE (COMP_ID 8000)
 
 
 def task(tid):
-    m = TM.Task(task_id=tid, robot_id=1)
-    m.go_to.zone = 3
+    m = LM.AgentTask(team_color=0, task_id=tid, robot_id=1)
+    m.move.waypoint = "C_Z33"
     return m
 
 
+def cancel(tid):
+    return LM.AgentTask(team_color=0, task_id=tid, robot_id=1, cancel_task=True)
+
+
 def result(tid, status):
-    return TM.TaskResult(task_id=tid, robot_id=1, status=TM.TaskResult.Status.Value(status))
+    m = task(tid)
+    m.successful, m.canceled = status == "SUCCEEDED", status == "CANCELLED"
+    return m
 
 
 def test_kept_and_repeated_with_backoff_until_acknowledged():
@@ -21,7 +29,6 @@ def test_kept_and_repeated_with_backoff_until_acknowledged():
     rel = Reliable(clock, retry=1.0, retry_max=4.0)
     assert rel.track(1, task(5))
     assert not rel.track(1, TM.Heartbeat(robot_id=1, seq=1))       # not delivered reliably
-    assert not rel.track(1, result(5, "RUNNING"))                   # a progress report: neither
     times = []
     for _ in range(48):
         clock.advance(0.25)
@@ -29,7 +36,7 @@ def test_kept_and_repeated_with_backoff_until_acknowledged():
             times.append(round(clock.now(), 1))
     assert times == [1.0, 3.0, 7.0, 11.0]                           # 1, 2, 4, then at most 4 s apart
     ack = TM.LinkAck(robot_id=1)
-    ack.items.add(comp_id=3000, msg_type=10, id=5)
+    ack.items.add(comp_id=8000, msg_type=AT, id=5 << 3)
     assert rel.on_ack(1, ack) == 1 and rel.pending(1) == []
     clock.advance(20.0)
     assert rel.due() == []
@@ -40,14 +47,18 @@ def test_the_receiver_acknowledges_every_copy_and_spots_repeats():
     assert rel.received("srv", result(7, "SUCCEEDED"))
     assert not rel.received("srv", result(7, "SUCCEEDED"))          # the same result again
     assert rel.received("srv", result(7, "FAILED"))                 # another status is another message
-    assert rel.received("srv", result(7, "RUNNING"))                # progress: no ack, always acted on
+    assert rel.received("srv", TM.Heartbeat(robot_id=1, seq=1))     # not delivered reliably: no ack, acted on
+    assert rel.received("srv", cancel(7)) and rel.received("srv", task(7))     # a task, its cancel: two messages
     [(src, ack)] = rel.acks(lambda s: TM.LinkAck(robot_id=1))
-    assert src == "srv" and [(i.msg_type, i.id) for i in ack.items] == [(11, (7 << 3) | 2), (11, (7 << 3) | 3)]
+    assert src == "srv" and [(i.comp_id, i.msg_type, i.id) for i in ack.items] == [
+        (8000, AT, (7 << 3) | AT_SUCCEEDED), (8000, AT, (7 << 3) | AT_FAILED), (8000, AT, (7 << 3) | AT_CANCEL),
+        (8000, AT, 7 << 3)]
     assert rel.acks(lambda s: TM.LinkAck(robot_id=1)) == []         # owed once
     sender = Reliable(SimClock())
     sender.track("srv", result(7, "SUCCEEDED"))
     sender.track("srv", result(7, "FAILED"))
-    assert sender.on_ack("srv", ack) == 2
+    sender.track("srv", task(8))
+    assert sender.on_ack("srv", ack) == 2 and [m.task_id for m in sender.pending("srv")] == [8]
 
 
 def test_superseded_and_resent_at_once_when_the_link_is_back():
@@ -79,7 +90,7 @@ def test_the_first_repeat_waits_for_twice_the_round_trip():
     clock = SimClock()
     rel = Reliable(clock, retry=1.0, retry_max=8.0)
     ack = TM.LinkAck(robot_id=1)
-    ack.items.add(comp_id=3000, msg_type=10, id=1)
+    ack.items.add(comp_id=8000, msg_type=AT, id=1 << 3)
     rel.track(1, task(1))
     clock.advance(0.5)                      # acknowledged before any repeat ...
     rel.on_ack(1, ack)
@@ -88,6 +99,6 @@ def test_the_first_repeat_waits_for_twice_the_round_trip():
         rel.track(1, task(i))
         clock.advance(3.0)
         assert rel.due() == [] or i < 4     # 3 s round trips: the waits grow to cover them
-        ack.items[0].id = i
+        ack.items[0].id = i << 3
         rel.on_ack(1, ack)
     assert 2.9 < rel.rtt[1] <= 3.0 and 5.8 < rel.first_wait(1) <= 6.0

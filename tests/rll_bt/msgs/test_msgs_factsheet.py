@@ -243,7 +243,6 @@ COMP_TYPES = {
                  "NavigationRoutes": (2000, 250), "AgentTask": (8000, 502),
                  "WorkpieceDescription": (8000, 510)},
     "team": {"RobotHello": (3000, 1), "Heartbeat": (3000, 2), "RobotStatus": (3000, 3), "LinkAck": (3000, 4),
-             "Task": (3000, 10), "TaskResult": (3000, 11), "CancelTask": (3000, 12),
              "TaskDetail": (3000, 13), "TaskOutcome": (3000, 14),
              "MachineObservation": (3000, 20), "ZoneExplored": (3000, 21),
              "MachineMap": (3000, 30), "GamePhase": (3000, 40)},

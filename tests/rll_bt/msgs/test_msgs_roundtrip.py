@@ -57,14 +57,11 @@ def test_enums_are_written_by_name_and_fields_by_original_name():
 
 
 def test_explicit_cases_json_to_message():
-    team = msgs.message_set("team")
-    task = msgs.from_dict(team, "Task", {
+    task = msgs.from_dict("rcll2025", "AgentTask", {
         "team_color": "MAGENTA", "task_id": 7, "robot_id": 2,
-        "get_workpiece": {"machine": "M-CS1", "side": "SHELF", "shelf_slot": 1}})
-    assert task.WhichOneof("kind") == "get_workpiece"
-    assert task.get_workpiece.side == team.enum("MachineSide").Value("SHELF")
-    assert msgs.to_dict(task)["get_workpiece"] == {"machine": "M-CS1", "side": "SHELF",
-                                                   "shelf_slot": 1}
+        "retrieve": {"machine_id": "M-CS1", "machine_point": "shelf"}, "error_code": 206})
+    assert task.retrieve.machine_point == "shelf" and task.team_color == 1
+    assert msgs.to_dict(task)["retrieve"] == {"machine_id": "M-CS1", "machine_point": "shelf"}
 
     r25 = msgs.message_set("rcll2025")
     pm = msgs.from_dict("rcll2025", "PrepareMachine", {

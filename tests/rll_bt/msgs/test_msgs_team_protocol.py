@@ -1,4 +1,5 @@
-"""The team protocol (package rllbt): what the team server and the robots rely on."""
+"""The team protocol (package rllbt, what rll-bt adds to the league's AgentTask):
+what the team server and the robots rely on."""
 from __future__ import annotations
 
 import pytest
@@ -11,43 +12,25 @@ TEAM = msgs.message_set("team")
 def test_package_and_comp_id():
     assert TEAM.package == "rllbt"
     assert {ct[0] for ct in TEAM.by_comp_type} == {3000}
-    for name in ("Task", "TaskResult", "CancelTask", "MachineObservation", "ZoneExplored",
+    for name in ("TaskDetail", "TaskOutcome", "MachineObservation", "ZoneExplored",
                  "RobotHello", "Heartbeat", "RobotStatus", "MachineMap", "GamePhase"):
         assert TEAM.comp_type(TEAM.get(name)) is not None, name
+    for gone in ("Task", "TaskResult", "CancelTask"):        # the league's AgentTask does their work
+        assert gone not in TEAM
 
 
-def test_task_holds_exactly_one_kind():
-    t = TEAM.Task(team_color=0, task_id=1, robot_id=1)
-    assert t.WhichOneof("kind") is None
-    t.explore_zone.zone = 1054
-    assert t.WhichOneof("kind") == "explore_zone"
-    t.mount_ring.machine = "C-RS1"
-    t.mount_ring.ring_color = TEAM.enum("RingColor").Value("RING_GREEN")
-    assert t.WhichOneof("kind") == "mount_ring"
-    assert not t.HasField("explore_zone")
-    kinds = {f.name for f in TEAM.Task.DESCRIPTOR.oneofs_by_name["kind"].fields}
-    assert kinds == {"explore_zone", "get_workpiece", "put_workpiece", "retrieve_cap",
-                     "mount_ring", "mount_cap", "deliver", "discard", "report_machines", "go_to"}
+def test_task_detail_and_outcome_ride_beside_an_agent_task():
+    d = TEAM.TaskDetail(task_id=7, robot_id=2, kind="go_to", zone=0, timeout=30.0)
+    d.target.x, d.target.y, d.target.theta = 1.0, 2.0, 0.5
+    d.viewpoints.add(x=1.0, y=1.0, theta=0.0)
+    assert d.IsInitialized() and TEAM.TaskDetail.FromString(d.SerializeToString()) == d
+    o = TEAM.TaskOutcome(task_id=7, robot_id=2, error=TEAM.enum("ErrorCode").Value("GRAB_FAILED"),
+                         text="gripper empty after grab", holding=False)
+    assert msgs.to_dict(o)["error"] == "GRAB_FAILED"
+    assert TEAM.TaskOutcome(task_id=1, robot_id=1).error == TEAM.enum("ErrorCode").Value("NONE")
 
 
-def test_deliver_by_gate_or_order():
-    d = TEAM.Deliver(machine="C-DS", gate=2)
-    assert d.WhichOneof("target") == "gate"
-    d.order_id = 7
-    assert d.WhichOneof("target") == "order_id" and not d.HasField("gate")
-
-
-def test_side_defaults():
-    side = TEAM.enum("MachineSide")
-    assert TEAM.GetWorkpiece(machine="C-BS").side == side.Value("OUTPUT")
-    assert TEAM.PutWorkpiece(machine="C-CS1").side == side.Value("INPUT")
-    assert set(side.keys()) == {"INPUT", "OUTPUT", "SHELF", "SLIDE"}
-
-
-def test_task_result_status_and_error_codes():
-    status = TEAM.enum("TaskResult.Status")
-    assert {k: status.Value(k) for k in status.keys()} == {
-        "RUNNING": 1, "SUCCEEDED": 2, "FAILED": 3, "CANCELLED": 4}
+def test_error_codes():
     codes = TEAM.enum("ErrorCode")
     for name in ("NONE", "NAVIGATION_FAILED", "LOCALISATION_LOST", "MACHINE_NOT_FOUND",
                  "ALIGN_FAILED", "GRAB_FAILED", "PUT_FAILED", "GRIPPER_ERROR", "TIMEOUT",
@@ -55,10 +38,6 @@ def test_task_result_status_and_error_codes():
         assert name in codes.keys()
     assert codes.Value("NONE") == 0
     assert len(set(codes.values())) == len(codes.keys())
-    r = TEAM.TaskResult(task_id=3, robot_id=1, status=status.Value("FAILED"),
-                        error=codes.Value("GRAB_FAILED"), text="gripper empty after grab")
-    assert msgs.to_dict(r)["error"] == "GRAB_FAILED"
-    assert TEAM.TaskResult(task_id=1, robot_id=1, status=2).error == codes.Value("NONE")
 
 
 def test_machine_observation_per_property_confidence():

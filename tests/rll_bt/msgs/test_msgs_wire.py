@@ -170,8 +170,8 @@ def test_machine_info_2025_tags_and_rotation():
                                      + vi(12, 270))
 
 
-def test_team_task_bytes():
-    t = TEAM.Task(team_color=0, task_id=1, robot_id=2)
-    t.deliver.machine = "C-DS"
-    t.deliver.order_id = 4
-    assert t.SerializeToString() == vi(1, 0) + vi(2, 1) + vi(3, 2) + ld(11, ld(1, "C-DS") + vi(3, 4))
+def test_agent_task_bytes():
+    t = R25.AgentTask(team_color=0, task_id=1, robot_id=2, order_id=4)
+    t.deliver.machine_id, t.deliver.machine_point = "C-DS", "input"
+    assert t.SerializeToString() == (vi(1, 0) + vi(2, 1) + vi(3, 2) + ld(6, ld(1, "C-DS") + ld(2, "input"))
+                                     + vi(10, 4))

@@ -12,13 +12,15 @@ from mcap_protobuf.decoder import DecoderFactory
 
 from games.replay import JsonDecoderFactory
 from rll_bt import msgs
+from rll_bt.agenttask import link as agent_link
 from rll_bt.comm import Bus, MessageRegistry, StreamClient, StreamServer
 from rll_bt.watch import LinkRecorder, wall_watch, watch_links
 from rll_bt.watch.links import udp_sender
 
 KEY = "link-key-42"
 TM = msgs.message_set("team")
-TEAM_REG = MessageRegistry.from_message_set(TM)
+TEAM_REG = agent_link.registry()          # the robots' link: rll-bt's additions and AgentTask
+LM = msgs.message_set("rcll2025")
 RM = msgs.message_set("rcll2016")
 REF_REG = MessageRegistry.from_message_set(RM)
 
@@ -60,23 +62,23 @@ def test_each_end_of_the_secured_tcp_link_records_what_it_sent_and_received(tmp_
             assert time.monotonic() < deadline
         got = pump(server, client, until=lambda g: any(rx.msg.DESCRIPTOR.name == "RobotHello" for _t, rx in g))
         cid = next(rx.source for t, rx in got if t is server)
-        task = TM.get("Task")(team_color=1, task_id=7, robot_id=2)
-        task.get_workpiece.machine = "C-BS"
+        task = LM.get("AgentTask")(team_color=1, task_id=7, robot_id=2)
+        task.retrieve.machine_id, task.retrieve.machine_point = "C-BS", "output"
         assert server.send(task, to=cid)
-        pump(server, client, until=lambda g: any(rx.msg.DESCRIPTOR.name == "Task" for _t, rx in g))
+        pump(server, client, until=lambda g: any(rx.msg.DESCRIPTOR.name == "AgentTask" for _t, rx in g))
     finally:
         client.close()
         server.close()
         ts_watch.close()
         ag_watch.close()
-    for path, sent, received in ((tmp_path / "agent.mcap", "/robot2/link/RobotHello", "/teamserver/link/Task"),
-                                 (tmp_path / "ts.mcap", "/teamserver/link/Task", "/robot2/link/RobotHello")):
+    for path, sent, received in ((tmp_path / "agent.mcap", "/robot2/link/RobotHello", "/teamserver/link/AgentTask"),
+                                 (tmp_path / "ts.mcap", "/teamserver/link/AgentTask", "/robot2/link/RobotHello")):
         meta, messages = read(path)
         topics = {t: d for t, _ns, d in messages}
         assert meta["clock"] == "wall" and {sent, received} <= set(topics), (path.name, sorted(topics))
         assert topics["/robot2/link/RobotHello"].peer_name == "R2"           # decoded, with its schema
-        assert topics["/teamserver/link/Task"].get_workpiece.machine == "C-BS"
-        assert topics["/teamserver/link/Task"].DESCRIPTOR.full_name == "rllbt.Task"
+        assert topics["/teamserver/link/AgentTask"].retrieve.machine_id == "C-BS"
+        assert topics["/teamserver/link/AgentTask"].DESCRIPTOR.full_name == "llsf_msgs.AgentTask"
         # message times are Unix time: recordings of several processes of one machine line up
         assert all(abs(ns / 1e9 - t_start) < 60 for _t, ns, _d in messages)
 

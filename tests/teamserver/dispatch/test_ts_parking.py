@@ -137,6 +137,5 @@ def test_a_workpiece_nothing_needs_goes_on_the_nearest_slide_with_room():
     kb.save_robot(r)
     ls.step(n=2)
     [d] = [t for t in ls.agents[0].tasks() if t.WhichOneof("kind") == "discard"]
-    assert d.discard.machine == other and d.discard.side == ls.agents[0].ms.enum(
-        "MachineSide").Value("SLIDE")
+    assert d.discard.machine == other and d.discard.side == "SLIDE"
     ls.close()
