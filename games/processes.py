@@ -27,7 +27,8 @@ the team server's link to the agents (logged by the team server process), both o
 onto the simulation clock and merged in time order at the end (:mod:`.teamlog`). Each robot's task intervals
 (busy time, timeline) are read from those team messages.  Faults as in lockstep: :meth:`kill_agent`
 (SIGKILL), :meth:`start_agent`, :meth:`restart_teamserver` (SIGKILL and a new process on the same database),
-:meth:`station_down` (an operator command to the refbox process over the station link).  Times given to
+:meth:`restart_refbox` (SIGKILL and a new refbox process on the same ports), :meth:`station_down` (an operator
+command to the refbox process over the station link).  Times given to
 :meth:`run_for` and :meth:`run_until` are simulated seconds (about wall seconds).
 """
 from __future__ import annotations
@@ -46,13 +47,13 @@ from rll_bt.contracts import load_simulator
 
 from .lockstep import TEAM, GameResult, legacy_single
 from .options import GameOptions
-from .processlog import shift_recording, udp_sender
+from .proccommands import CLI_MAIN, agent_command, teamserver_config
+from .processlog import game_logs
 from .recorder import Recorder
-from .teamlog import WallToSim, merge_into, read_lines, task_runs
+from .teamlog import WallToSim
 from .teams import Team, joining
 
 BROADCAST = "127.255.255.255"
-CLI_MAIN = "import sys; from rll_bt.cli import main; sys.exit(main())"
 
 
 class ChildExited(RuntimeError):
@@ -95,6 +96,7 @@ class ProcessGame:
         self.snapshot_file = self.dir / f"{self._ts_name(home.color)}.json"
         self.refbox_file = self.dir / "refbox.json"
         self._refbox_log = self.dir / "refbox-messages.jsonl" if o.out is not None or o.record else None
+        self._refbox_logs = [self._refbox_log] if self._refbox_log is not None else []    # one per refbox process
         self._snap: dict[str, dict] = {}
         self.procs: dict[str, subprocess.Popen] = {}
         self.recorders: dict[str, Recorder] = {}
@@ -105,6 +107,7 @@ class ProcessGame:
         self._kills: list[tuple[float, str, int]] = []
         self._agent_starts = 0
         self.restarts: dict[str, int] = dict.fromkeys(self.ours, 0)
+        self.refbox_restarts = 0
         self._t0 = 0.0                  # sim time the game started (the world runs while processes start)
         self._started = False
         self._result_made = False
@@ -139,9 +142,12 @@ class ProcessGame:
 
     def _start_refbox(self) -> None:
         """The refbox process, up before anything else (the recorder needs its truth)."""
-        self._spawn("refbox", [sys.executable, "-c", CLI_MAIN, *self.refbox.command(
-            host=BROADCAST, layout=self.layout, snapshot=self.refbox_file, message_log=self._refbox_log)])
+        self._spawn_refbox(self._refbox_log)
         self._wait_for(self.refbox.ready, "the refbox")
+
+    def _spawn_refbox(self, message_log: Path | None) -> None:
+        self._spawn("refbox", [sys.executable, "-c", CLI_MAIN, *self.refbox.command(
+            host=BROADCAST, layout=self.layout, snapshot=self.refbox_file, message_log=message_log)])
 
     # -- names -----------------------------------------------------------------------------------
     def _ts_name(self, color: str) -> str:
@@ -191,20 +197,12 @@ class ProcessGame:
                                          snapshot=None if t.external else (lambda c=c: self.snapshot(c)))
             if t.external:
                 (self.dir / f"external-{c.lower()}.json").write_text(json.dumps(self.external(c), indent=2))
-        robot = {ch: (self.layout.robot(ch).send, self.layout.robot(ch).recv) for ch in ("public", "cyan", "magenta")}
         truth = {n: s.zone for n, s in self.refbox.stations().items()}
         self._ts_cfg = {}
         for c, t in self.ours.items():
-            name = self._ts_name(c)
-            self._ts_cfg[c] = {
-                "profile": o.profile, "team": t.name, "key": t.key, "refbox_host": self.refbox_host,
-                "ports": {ch: [robot[ch][0], robot[ch][1]] for ch in robot}, "listen": self._ts_port[c],
-                "state": str(self.dir / f"{name}.sqlite"), "strategy": t.strategy, "seed": o.seed,
-                "baseline": t.baseline, "map_period": o.map_period, "snapshot": str(self.dir / f"{name}.json"),
-                "teamserver": t.teamserver, "oracle": truth if t.strategy == "oracle" else None,
-                "extra": t.spec.server_settings if t.spec is not None else {},
-                "log_channel": "teamserver" if self.legacy else name,
-                "robot_prefix": "" if self.legacy else f"{t.prefix}-"}
+            self._ts_cfg[c] = teamserver_config(o, t, self._ts_name(c), folder=self.dir, refbox_host=self.refbox_host,
+                                                layout=self.layout, listen=self._ts_port[c], truth=truth,
+                                                legacy=self.legacy)
             self._spawn_teamserver(c)
         for c, n in self.backends:
             self._spawn_agent(n, first_start=True, team=c)
@@ -234,20 +232,12 @@ class ProcessGame:
                 "--backend-opt", f"robot={n}" if team == TEAM else f"robot={team}/{n}"]
 
     def _spawn_agent(self, n: int, first_start: bool, known_pose: bool = True, team: str | None = None) -> None:
-        o = self.options
         t = self._team(team)
-        pub, chan = self.layout.robot("public"), self.layout.robot(t.color.lower())
-        pose = self.world.robot_pose(t.color, n)
-        start = [f"--start-pose={pose.x},{pose.y},{pose.theta}"] if known_pose else []
-        peer = [] if self.legacy else ["--name", f"{t.prefix}-R{n}"]
-        self._spawn(self._agent_name(t.color, n), [
-            sys.executable, "-c", CLI_MAIN, "agent", "--robot", str(n), "--team", t.name,
-            "--key", t.key, "--profile", o.profile, *self._agent_backend_args(n, t.color), *peer,
-            "--teamserver", f"127.0.0.1:{self._ts_port[t.color]}", "--refbox-host", self.refbox_host, "--layout", "sim",
-            "--public-recv", str(pub.recv), "--public-send", str(pub.send),
-            "--team-recv", str(chan.recv), "--team-send", str(chan.send), *start, "--hz", str(o.hz),
-            "--localisation", o.localisation, "-q", *self._net_args(n)]
-            + (["--first-start"] if first_start else []) + self._record_args(n))
+        self._spawn(self._agent_name(t.color, n), agent_command(
+            self.options, t, n, backend=self._agent_backend_args(n, t.color), teamserver_port=self._ts_port[t.color],
+            refbox_host=self.refbox_host, layout=self.layout, first_start=first_start, legacy=self.legacy,
+            pose=self.world.robot_pose(t.color, n) if known_pose else None,
+            extra=self._net_args(n) + self._record_args(n)))
 
     def _net_args(self, n: int) -> list[str]:
         """The --net-* faults of robot ``n``'s agent (its seed: the game's and the agent start's)."""
@@ -295,14 +285,37 @@ class ProcessGame:
         self._spawn_agent(number, first_start=False, known_pose=known_pose, team=t.color)
         self.recorders[t.color].note("agent started", robot=number)
 
-    def restart_teamserver(self, team: str | None = None) -> None:
+    def restart_teamserver(self, team: str | None = None, between: Callable[[], None] | None = None) -> None:
         """Kill the team server process (SIGKILL) and start a new one on the
-        same database and agent port; the agents reconnect to it."""
+        same database and agent port; the agents reconnect to it.  ``between()``
+        runs when the old process is gone and the new one not yet started."""
         t = self._team(team)
         self._kill(self._ts_name(t.color))
         self.restarts[t.color] += 1
+        if between is not None:
+            between()
         self._spawn_teamserver(t.color)
         self.recorders[t.color].note("team server restarted")
+
+    def restart_refbox(self) -> None:
+        """Kill the refbox process (SIGKILL) and start a new one on the same ports (a crash of its machine): it
+        keeps no state, so its game starts afresh, at once; the team servers and agents hear it again."""
+        self._kill("refbox")
+        self.refbox_restarts += 1
+        self.refbox_file.unlink(missing_ok=True)
+        if self._refbox_logs:          # a message log of its own, merged with the others at the end
+            self._refbox_logs.append(self.dir / f"refbox-messages-{len(self._refbox_logs) + 1}.jsonl")
+        self._spawn_refbox(self._refbox_logs[-1] if self._refbox_logs else None)
+        self._wait_for(lambda: self.refbox.ready() and self._start_game(), "the restarted refbox")
+        for rec in self.recorders.values():
+            rec.note("refbox restarted")
+
+    def _start_game(self) -> bool:
+        """The start command to the refbox process; False while its station link is not up."""
+        try:
+            return self.refbox.start() is None
+        except RuntimeError:
+            return False
 
     def station_down(self, machine: str, seconds: float) -> None:
         self.refbox.station_down(machine, seconds)
@@ -435,27 +448,12 @@ class ProcessGame:
             snaps[c] = dict(self.snapshot(c))
             snaps[c]["restarts"] = self.restarts[c]
         t0, end = self._t0, self.clock.now()
-        team = sorted((e for logs in self._team_logs.values() for path in logs
-                       for e in read_lines(path, self.time_map)), key=lambda e: e["t"])
-        for c in self.ours:
-            rec = self.recorders[c].rec
-            channel = "teamserver" if self.legacy else self._ts_name(c)
-            rec.tasks = task_runs(team, end=end, channel=channel, server=channel)
-            for wall, color, robot in self._kills:
-                t = round(self.time_map(wall), 4) if len(self.time_map) else self.clock.now()
-                for run in rec.tasks.get(robot, []) if color == c else ():
-                    if run["start"] <= t < run["end"]:
-                        run["end"], run["outcome"] = t, "agent killed"
-        for r in self.recorders.values():
-            shift_recording(r.rec, t0)
-        messages = 0
-        if self._refbox_log is not None:
-            names = {c.lower(): self._ts_name(c) if c in self.ours else f"external-{c.lower()}" for c in self.lineup}
-            refbox = [{**e, "from": udp_sender(e, None if self.legacy else names)}
-                      for e in read_lines(self._refbox_log, self.time_map)]
-            messages = merge_into(self.dir / "messages.jsonl", refbox, team, shift=t0)
-            for path in [self._refbox_log, *(p for logs in self._team_logs.values() for p in logs)]:
-                path.unlink(missing_ok=True)
+        kills = [(round(self.time_map(w), 4) if len(self.time_map) else end, c, n) for w, c, n in self._kills]
+        channels = {c: "teamserver" if self.legacy else self._ts_name(c) for c in self.ours}
+        names = {c.lower(): self._ts_name(c) if c in self.ours else f"external-{c.lower()}" for c in self.lineup}
+        messages = game_logs(self.dir, self._refbox_logs if self._refbox_log else [], self._team_logs, self.time_map,
+                             t0=t0, end=end, recordings={c: r.rec for c, r in self.recorders.items()},
+                             channels=channels, kills=kills, servers=None if self.legacy else names)
         collisions = self.world.collision_log()
         home = next(iter(self.ours))
         result = GameResult(finished=finished, status=self.refbox.status(), recording=self.recorder.rec,

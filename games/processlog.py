@@ -2,11 +2,18 @@
 
 - :func:`udp_sender`: who sent a message the refbox process logged;
 - :func:`shift_recording`: a recording made on the world's clock, moved to
-  the game's start (the world runs while the processes come up).
+  the game's start (the world runs while the processes come up);
+- :func:`game_logs`: each team's task runs read from its team server's
+  message logs (a run cut off where its agent was killed), and those logs
+  merged with the refbox processes' into the game's ``messages.jsonl``.
 """
 from __future__ import annotations
 
-__all__ = ["shift_recording", "udp_sender"]
+from pathlib import Path
+
+from .teamlog import merge_into, read_lines, task_runs
+
+__all__ = ["game_logs", "shift_recording", "udp_sender"]
 
 
 def shift_recording(rec, t0: float) -> None:
@@ -41,3 +48,37 @@ def udp_sender(entry: dict, servers: dict[str, str] | None = None) -> str:
     if servers:
         return servers.get(entry.get("channel", ""), "teamserver")
     return "teamserver"
+
+
+
+def game_logs(folder: Path, refbox_logs: list[Path], team_logs: dict[str, list[Path]], time_map, *, t0: float,
+              end: float, recordings: dict, channels: dict[str, str], kills: list[tuple[float, str, int]],
+              servers: dict[str, str] | None) -> int:
+    """Every team's task runs (``recordings[colour].tasks``) from its team server's
+    message logs (``team_logs``, one per process start, on the wall clock that
+    ``time_map`` maps onto the simulation's), a run under way when its agent was
+    killed (``kills``: (time, colour, robot)) ending then; every recording moved
+    to the game's start ``t0``.  Without refbox logs (a game neither saved nor
+    recorded) that is all.  Else the refbox processes' logs (one per process: a
+    restarted refbox writes a new one) and the team servers' are merged in time
+    order into ``folder/messages.jsonl`` and removed; returns the messages it holds."""
+    team = sorted((e for logs in team_logs.values() for path in logs for e in read_lines(path, time_map)),
+                  key=lambda e: e["t"])
+    for color, rec in recordings.items():
+        if color not in channels:
+            continue                   # an external team: no log of ours
+        rec.tasks = task_runs(team, end=end, channel=channels[color], server=channels[color])
+        for t, c, robot in kills:
+            for run in rec.tasks.get(robot, []) if c == color else ():
+                if run["start"] <= t < run["end"]:
+                    run["end"], run["outcome"] = t, "agent killed"
+    for rec in recordings.values():
+        shift_recording(rec, t0)
+    if not refbox_logs:
+        return 0
+    refbox = sorted(({**e, "from": udp_sender(e, servers)} for path in refbox_logs
+                     for e in read_lines(path, time_map)), key=lambda e: e["t"])
+    messages = merge_into(folder / "messages.jsonl", refbox, team, shift=t0)
+    for path in [*refbox_logs, *(p for logs in team_logs.values() for p in logs)]:
+        path.unlink(missing_ok=True)
+    return messages

@@ -90,7 +90,7 @@ class InProcessTeamServer(TeamServerHandle):
         delivered = sum(1 for p in kb.products.values() if p.state == "DELIVERED")
         stations = {name: st.state for name, st in kb.stations.items()}
         return {"robots": robots, "tasks": tasks, "known": known, "delivered": delivered,
-                "stations": stations,
+                "stations": stations, "phase": self.server.refbox.phase,
                 "color": color, "restarts": self.restarts}
 
     def close(self) -> None:
