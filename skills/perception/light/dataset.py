@@ -30,7 +30,7 @@ from .augment import photometric
 from .hog import crop_window, make_hog, random_negatives, window_features, window_for_tower
 from .mlp import DEFAULT_SIZE, NO_TOWER
 from .photos import backdrop
-from .synth import draw_tower, paste
+from .synth import Sprite, drawn_tower, paste
 
 #: a tower a detector must find: fully visible and at least this tall (pixels)
 MIN_REQUIRED_HEIGHT = 28
@@ -147,27 +147,38 @@ def _sky_swap(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator, phot
     return out
 
 
+#: frame sizes composed frames are drawn at (the detector searches any size)
+COMPOSED_SIZES = ((640, 480), (512, 384), (480, 360), (400, 300), (320, 240), (800, 600))
+#: tower heights pasted or drawn on composed frames, pixels (at most 0.85 of the frame)
+COMPOSED_HEIGHTS = (22.0, 260.0)
+
+
 def _compose(rng: np.random.Generator, size, sprites: list[tuple[np.ndarray, np.ndarray, int]],
-             n_towers: int, photos: str = "train") -> tuple[np.ndarray, list[Truth]]:
-    """A backdrop with ``n_towers`` towers pasted (rendered sprites or drawn
-    ones), some standing on a box."""
+             n_towers: int, photos: str = "train", procedural: float = 0.4) -> tuple[np.ndarray, list[Truth]]:
+    """A backdrop (``size``, or one of :data:`COMPOSED_SIZES` when None)
+    with ``n_towers`` towers: drawn ones (:func:`.synth.drawn_tower`, with
+    what they stand on) or, a quarter of them, rendered sprites."""
+    if size is None:
+        size = COMPOSED_SIZES[int(rng.integers(len(COMPOSED_SIZES)))]
     w, h = size
-    img = backdrop(rng, h, w, photos)
+    img = backdrop(rng, h, w, photos, procedural)
     truths: list[Truth] = []
+    hi = min(COMPOSED_HEIGHTS[1], 0.85 * h)
     for _ in range(n_towers):
         state = int(rng.integers(0, 8))
-        use_sprite = sprites and rng.random() < 0.4
-        if use_sprite:
+        height = float(np.exp(rng.uniform(math.log(COMPOSED_HEIGHTS[0]), math.log(hi))))
+        if sprites and rng.random() < 0.25:
             crop, mask, state = sprites[int(rng.integers(len(sprites)))]
-            k = math.exp(rng.uniform(-0.5, 0.4))
-            tw, th = max(3, int(crop.shape[1] * k)), max(8, int(crop.shape[0] * k))
-            timg = cv2.resize(crop, (tw, th), interpolation=cv2.INTER_AREA).astype(np.float32)
-            alpha = cv2.resize(mask.astype(np.float32), (tw, th), interpolation=cv2.INTER_AREA)
-            glow = None
+            k = height / crop.shape[0]
+            tw, th = max(3, int(round(crop.shape[1] * k))), max(8, int(round(height)))
+            sprite = Sprite(cv2.resize(crop, (tw, th), interpolation=cv2.INTER_AREA).astype(np.float32),
+                            cv2.resize(mask.astype(np.float32), (tw, th), interpolation=cv2.INTER_AREA),
+                            np.zeros((th, tw, 3), np.float32), (0, 0, tw, th))
         else:
-            tw = int(math.exp(rng.uniform(math.log(5), math.log(42))))
-            timg, alpha, glow = draw_tower(rng, tw, state)
-            th = timg.shape[0]
+            sprite = drawn_tower(rng, height, state)
+        tw, th = sprite.box[2], sprite.box[3]
+        if tw < 2 or th < 8:
+            continue
         for _ in range(20):
             x, y = int(rng.integers(-tw // 3, w - tw + tw // 3)), int(rng.integers(0, max(1, h - th)))
             box = (x, y, tw, th)
@@ -175,14 +186,8 @@ def _compose(rng: np.random.Generator, size, sprites: list[tuple[np.ndarray, np.
                 break
         else:
             continue
-        if rng.random() < 0.6:                          # mount: a box under the tower
-            mw = int(tw * rng.uniform(1.0, 4.0))
-            col = tuple(int(c) for c in rng.integers(0, 140, 3))
-            foot = y + th + int(mw * rng.uniform(0.5, 2))
-            cv2.rectangle(img, (x + tw // 2 - mw // 2, y + th), (x + tw // 2 + mw // 2, foot), col, -1)
-        pasted = paste(img, timg, alpha, x, y, glow)
-        clean = pasted == box
-        truths.append(Truth(pasted, state, clean))
+        pasted = paste(img, sprite, x, y)
+        truths.append(Truth(pasted, state, pasted == box))
     return img, truths
 
 
@@ -192,14 +197,15 @@ def _overlap(a, b) -> float:
     return ix * iy
 
 
-def free_frames(seed: int, count: int, size=(640, 480), photos: str = "train",
-                strength: tuple[float, float] = (0.3, 1.2)) -> list[PackedFrame]:
-    """``count`` tower-free frames composed on backdrops, augmented (no
-    rendering: cheap material for calibrating against false detections)."""
+def free_frames(seed: int, count: int, size=None, photos: str = "train",
+                strength: tuple[float, float] = (0.3, 1.2), procedural: float = 0.4) -> list[PackedFrame]:
+    """``count`` tower-free frames composed on backdrops (a ``procedural``
+    share of them procedural only), augmented (no rendering: cheap material
+    for mining and calibrating against false detections)."""
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(count):
-        img, _ = _compose(rng, size, [], 0, photos)
+        img, _ = _compose(rng, size, [], 0, photos, procedural)
         out.append(PackedFrame.pack(photometric(img, rng, float(rng.uniform(*strength))), [], "free-paste"))
     return out
 
@@ -241,7 +247,7 @@ def make_chunk(spec: ChunkSpec, open_world=None) -> ChunkResult:
         frames.append((img, truths, source, dist))
     for i in range(spec.pasted):
         n = int(rng.integers(0, 4)) if i % 4 else 0
-        img, truths = _compose(rng, spec.size, sprites, n, spec.photos)
+        img, truths = _compose(rng, None, sprites, n, spec.photos)
         frames.append((img, truths, "paste" if truths else "free-paste", None))
     for img, truths, source, dist in frames:
         img = photometric(img, rng, float(rng.uniform(*spec.strength)))

@@ -9,9 +9,14 @@ Input (:func:`crop_features`): the tower's crop cut at ``size`` (w, h;
 8 x 32 pixels, the tower's shape) in BGR, described by
 
 - ``pixels``: the crop reduced to 6 x 24, as floats in [0, 1] minus 0.5;
-- ``rich`` (the default): those pixels, plus each row's brightest value
-  per channel (a lit lens is bright across its middle wherever the box
-  sits), plus a HOG of the grey crop (4-pixel cells: the outline).
+- ``rich``: those pixels, plus each row's brightest value per channel (a
+  lit lens is bright across its middle wherever the box sits), plus a HOG
+  of the grey crop (4-pixel cells: the outline);
+- ``tower`` (the default): ``rich`` plus, per row, its brightness against
+  the crop's brightest (exposure cancels), its saturation, and its mean
+  hue as a direction weighted by saturation and brightness (a lit lens is
+  bright and saturated at its rim even where its core clips to white; a
+  milky unlit lens is bright but pale).
 """
 from __future__ import annotations
 
@@ -27,7 +32,7 @@ N_STATES = 8
 NO_TOWER = 8          # the label of "no tower" crops in the training material
 DEFAULT_SIZE = (8, 32)
 PIXELS = (6, 24)
-KINDS = ("pixels", "rich")
+KINDS = ("pixels", "rich", "tower")
 
 
 @lru_cache(maxsize=1)
@@ -35,7 +40,7 @@ def _crop_hog() -> cv2.HOGDescriptor:
     return cv2.HOGDescriptor((8, 32), (8, 8), (4, 4), (4, 4), 9)
 
 
-def crop_features(crop: np.ndarray, size: tuple[int, int] = DEFAULT_SIZE, kind: str = "rich") -> np.ndarray:
+def crop_features(crop: np.ndarray, size: tuple[int, int] = DEFAULT_SIZE, kind: str = "tower") -> np.ndarray:
     """A BGR crop to the network's input vector (see the module)."""
     if crop.shape[1] != size[0] or crop.shape[0] != size[1]:
         crop = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
@@ -43,13 +48,27 @@ def crop_features(crop: np.ndarray, size: tuple[int, int] = DEFAULT_SIZE, kind: 
     px = small.astype(np.float32).ravel() / 255.0 - 0.5
     if kind == "pixels":
         return px
-    if kind != "rich":
+    if kind not in KINDS:
         raise ValueError(f"unknown feature kind {kind!r} (known: {', '.join(KINDS)})")
     rows = crop.max(axis=1).astype(np.float32).ravel() / 255.0 - 0.5
     grey = cv2.cvtColor(crop, cv2.COLOR_BGR2GRAY)
     if grey.shape != (32, 8):
         grey = cv2.resize(grey, (8, 32), interpolation=cv2.INTER_AREA)
-    return np.concatenate([px, rows, _crop_hog().compute(grey).ravel()])
+    rich = [px, rows, _crop_hog().compute(grey).ravel()]
+    if kind == "tower":
+        rich.append(_row_colour(crop))
+    return np.concatenate(rich)
+
+
+def _row_colour(crop: np.ndarray) -> np.ndarray:
+    """Per row of a BGR crop: brightness over the crop's brightest, saturation,
+    and the hue direction (cos, sin) weighted by saturation and brightness."""
+    hsv = cv2.cvtColor(crop, cv2.COLOR_BGR2HSV_FULL).astype(np.float32)
+    h, s, v = hsv[:, :, 0] * (2 * np.pi / 256.0), hsv[:, :, 1] / 255.0, hsv[:, :, 2] / 255.0
+    top = max(float(np.percentile(v, 98)), 0.05)
+    w = s * v
+    return np.concatenate([np.minimum(v.mean(axis=1) / top, 1.5) - 0.5, s.mean(axis=1) - 0.5,
+                           (w * np.cos(h)).mean(axis=1), (w * np.sin(h)).mean(axis=1)]).astype(np.float32)
 
 
 def geometric_mean(p: np.ndarray, axis: int) -> np.ndarray:
@@ -68,11 +87,11 @@ class Mlp:
     w2: np.ndarray      # (n_hidden, 8)
     b2: np.ndarray
     size: tuple[int, int] = DEFAULT_SIZE
-    kind: str = "rich"  # the input features (:func:`crop_features`)
+    kind: str = "tower"  # the input features (:func:`crop_features`)
 
     @classmethod
     def create(cls, n_in: int, n_hidden: int, size=DEFAULT_SIZE, seed: int = 0,
-               n_out: int = N_STATES, kind: str = "rich") -> Mlp:
+               n_out: int = N_STATES, kind: str = "tower") -> Mlp:
         rng = np.random.default_rng(seed)
         return cls(rng.normal(0, 1 / np.sqrt(n_in), (n_in, n_hidden)), np.zeros(n_hidden),
                    rng.normal(0, 1 / np.sqrt(n_hidden), (n_hidden, n_out)), np.zeros(n_out),

@@ -30,14 +30,21 @@ from .backgrounds import procedural_background
 TRAIN = ("astronaut.png", "camera.png", "brick.png", "grass.png", "gravel.png", "text.png", "coins.png",
          "clock_motion.png", "hubble_deep_field.jpg", "ihc.png", "retina.jpg", "cell.png")
 HELDOUT = ("coffee.png", "rocket.jpg", "chelsea.png")
+#: photographs other packages ship, held out as well: (package, path in it); Grace Hopper's
+#: portrait in matplotlib's sample data is a US Navy photograph, in the public domain
+OTHER_HELDOUT = (("matplotlib", "mpl-data/sample_data/grace_hopper.jpg"),)
+
+
+def _package_dir(name: str) -> Path | None:
+    spec = importlib.util.find_spec(name)
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    return Path(list(spec.submodule_search_locations)[0])
 
 
 def _data_dir() -> Path | None:
-    spec = importlib.util.find_spec("skimage")
-    if spec is None or not spec.submodule_search_locations:
-        return None
-    d = Path(list(spec.submodule_search_locations)[0]) / "data"
-    return d if d.is_dir() else None
+    d = _package_dir("skimage")
+    return d / "data" if d is not None and (d / "data").is_dir() else None
 
 
 @lru_cache(maxsize=2)
@@ -46,11 +53,15 @@ def photos(split: str = "train") -> tuple[np.ndarray, ...]:
     if split not in ("train", "heldout"):
         raise ValueError(f"split must be 'train' or 'heldout', not {split!r}")
     d = _data_dir()
-    if d is None:
-        return ()
+    paths = [d / name for name in (TRAIN if split == "train" else HELDOUT)] if d is not None else []
+    if split == "heldout":
+        for package, rel in OTHER_HELDOUT:
+            p = _package_dir(package)
+            if p is not None:
+                paths.append(p / rel)
     out = []
-    for name in (TRAIN if split == "train" else HELDOUT):
-        img = cv2.imread(str(d / name), cv2.IMREAD_COLOR)
+    for path in paths:
+        img = cv2.imread(str(path), cv2.IMREAD_COLOR)
         if img is not None and min(img.shape[:2]) >= 64:
             out.append(img)
     return tuple(out)
@@ -83,13 +94,14 @@ def photo_backdrop(rng: np.random.Generator, h: int, w: int, split: str = "train
     return np.ascontiguousarray(crop)
 
 
-def backdrop(rng: np.random.Generator, h: int, w: int, split: str = "train") -> np.ndarray:
-    """Procedural (40 %), a photograph (35 %) or a collage of photograph
-    patches on a procedural background (25 %); procedural only without photographs."""
+def backdrop(rng: np.random.Generator, h: int, w: int, split: str = "train", procedural: float = 0.4) -> np.ndarray:
+    """Procedural (a ``procedural`` share, 40 % by default), a photograph
+    (35 %) or a collage of photograph patches on a procedural background
+    (25 %); procedural only without photographs."""
     r = rng.random()
-    if r < 0.4 or not available(split):
+    if r < procedural or not available(split):
         return procedural_background(rng, h, w)
-    if r < 0.75:
+    if r < procedural + (1 - procedural) * 0.35 / 0.6:
         return photo_backdrop(rng, h, w, split)
     img = procedural_background(rng, h, w, clutter=(0, 12))
     for _ in range(int(rng.integers(2, 6))):

@@ -143,7 +143,7 @@ class LightReader:
         in_region = region is not None and tower_height is not None
         thr = self.region_threshold if in_region else None
         boxes = self.detector.detect(image, region=region, tower_height=tower_height, threshold=thr)
-        boxes = boxes[: self.candidates]
+        boxes = boxes[: REGION_CANDIDATES if in_region else self.candidates]
         if not boxes:
             return []
         variants, p_no = self.check(image, [b.xywh for b in boxes], tower_height)
@@ -156,6 +156,8 @@ class LightReader:
 
 
 REFINE_HEIGHTS = (1.0, 0.82, 0.68)
+#: detector hits the networks look at inside a tag-given region (one tower is expected there)
+REGION_CANDIDATES = 12
 #: where a box of the expected height is put against a hit: its top, middle, bottom
 SNAP_ANCHORS = (0.0, 0.5, 1.0)
 

@@ -51,6 +51,7 @@ from .reader import (
     CLASSIFIER_FILE,
     DETECTOR_FILE,
     REFINE_HEIGHTS,
+    REGION_CANDIDATES,
     REPORT_FILE,
     LightReader,
     choose,
@@ -76,8 +77,8 @@ class TrainOptions:
     quick: bool = False
     workers: int = 2
     rounds: int = 2                # hard-negative rounds
-    hidden: int = 32               # the light network's hidden units
-    check_hidden: int = 32         # the tower check's
+    hidden: int = 48               # the light network's hidden units
+    check_hidden: int = 48         # the tower check's
     iterations: int = 300          # SCG iterations (each network)
     members: int = 3               # networks per ensemble (the check's and the light network's)
     heldout: int | None = None     # rendered held-out frames (default samples / 3)
@@ -99,7 +100,7 @@ def plan(opts: TrainOptions) -> tuple[list[ChunkSpec], list[ChunkSpec]]:
     for i in range(n_train):
         n = opts.samples // n_train + (1 if i < opts.samples % n_train else 0)
         free = max(1, n // 4)
-        train.append(ChunkSpec(PROFILES[i % 2], opts.seed * 7919 + i, n - free, free, int(n * 0.7)))
+        train.append(ChunkSpec(PROFILES[i % 2], opts.seed * 7919 + i, n - free, free, int(n * 3.0)))
     held = opts.heldout if opts.heldout is not None else max(10, opts.samples // 3)
     n_held = max(1, round(held / per))
     heldout = []
@@ -116,8 +117,8 @@ def _chunk_job(spec: ChunkSpec) -> ChunkResult:
 
 
 def _free_job(args) -> list[PackedFrame]:
-    seed, count = args
-    return free_frames(seed, count)
+    seed, count, procedural = args
+    return free_frames(seed, count, procedural=procedural)
 
 
 @dataclass
@@ -255,7 +256,7 @@ def calibrate_region(vector: np.ndarray, checker: Mlp | Ensemble, frames: list[P
             if not t.required or t.region is None:
                 continue
             img = f.image if img is None else img
-            kept = det.detect(img, region=t.region, tower_height=t.tower_height)[:40]
+            kept = det.detect(img, region=t.region, tower_height=t.tower_height)[:REGION_CANDIDATES]
             vs, p = reader.check(img, [k.xywh for k in kept], t.tower_height)
             reads.append((t, np.array([k.score for k in kept]), p, vs))
 
@@ -274,7 +275,7 @@ def calibrate_region(vector: np.ndarray, checker: Mlp | Ensemble, frames: list[P
     _, allowed = count(threshold, reject)
     best = (threshold, reject, *count(threshold, reject))
     for r in REJECT_LEVELS:
-        for t in np.round(np.linspace(low, threshold, 25), 4):
+        for t in np.round(np.linspace(max(low, threshold - 0.4), threshold, 25), 4):
             hits, false = count(float(t), r)
             if false <= allowed and hits > best[2]:
                 best = (float(t), r, hits, false)
@@ -336,7 +337,10 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         # and extra composed tower-free frames (false detections are what it must rule out)
         rest = [frames[i] for i in order[n_mine:]]
         calib = [f for f in rest if f.truths][:n_towers] + [f for f in rest if not f.truths]
-        for part in pool.map(_free_job, [(opts.seed * 7919 + 555_000 + k, n_free // opts.workers)
+        # calibration's composed tower-free frames are photographs and collages: procedural
+        # backdrops (drawn to look like towers at times) teach the models, the calibration
+        # sets the false-detection rate a camera's real scenes give
+        for part in pool.map(_free_job, [(opts.seed * 7919 + 555_000 + k, n_free // opts.workers, 0.0)
                                           for k in range(opts.workers)]):
             calib.extend(part)
         calib = calib or mine
@@ -366,7 +370,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         say(f"{sum(len(h.scores) for h in cal_hits)} hits on {len(calib)} calibration frames")
         # more clutter for the check: the detector's hits on further composed tower-free
         # frames (cheap: no rendering), apart from the calibration frames
-        extra = [f for part in pool.map(_free_job, [(opts.seed * 7919 + 777_000 + k, n_extra // opts.workers)
+        extra = [f for part in pool.map(_free_job, [(opts.seed * 7919 + 777_000 + k, n_extra // opts.workers, 0.4)
                                                      for k in range(opts.workers)]) for f in part]
         _, extra_hits = detect_all(extra)
         clutter = [c for h in extra_hits for k in np.flatnonzero(h.false) for c in h.crops[k]]

@@ -16,15 +16,16 @@ from skills.perception.light.hog import (
     window_features,
     window_for_tower,
 )
-from skills.perception.light.synth import draw_tower, paste
+from skills.perception.light.synth import drawn_tower, paste
 
 
 def scene(rng, width, state, at=None, h=240, w=320):
+    """A drawn tower about ``width`` pixels wide (four times as high) on a procedural background."""
     img = procedural_background(rng, h, w)
-    timg, alpha, glow = draw_tower(rng, width, state)
-    th = timg.shape[0]
-    x, y = at if at is not None else (int(rng.integers(5, w - width - 5)), int(rng.integers(5, h - th - 5)))
-    box = paste(img, timg, alpha, x, y, glow)
+    sprite = drawn_tower(rng, 4.0 * width, state)
+    tw, th = sprite.box[2], sprite.box[3]
+    x, y = at if at is not None else (int(rng.integers(5, w - tw - 5)), int(rng.integers(5, h - th - 5)))
+    box = paste(img, sprite, x, y)
     return img, box
 
 
@@ -33,7 +34,7 @@ def detector():
     rng = np.random.default_rng(0)
     hog = make_hog()
     pos = []
-    for _ in range(260):
+    for _ in range(700):
         img, box = scene(rng, int(rng.integers(9, 26)), int(rng.integers(0, 8)))
         pos.append(crop_window(img, window_for_tower(box)))
     bgs = [procedural_background(rng, 240, 320) for _ in range(40)]

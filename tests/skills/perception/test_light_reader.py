@@ -7,7 +7,7 @@ from skills.perception.light.backgrounds import procedural_background
 from skills.perception.light.hog import TOWER_H, TOWER_W, Box, iou
 from skills.perception.light.mlp import Ensemble, Mlp
 from skills.perception.light.reader import SNAP_ANCHORS, LightReader, snapped
-from skills.perception.light.synth import draw_tower, paste
+from skills.perception.light.synth import drawn_tower, paste
 
 
 class FixedDetector:
@@ -30,8 +30,7 @@ def shipped():
 def scene():
     rng = np.random.default_rng(11)
     img = procedural_background(rng, 240, 320)
-    timg, alpha, glow = draw_tower(rng, 16, 5)
-    box = paste(img, timg, alpha, 150, 60, glow)
+    box = paste(img, drawn_tower(rng, 66.0, 5), 150, 60)
     return img, box
 
 
