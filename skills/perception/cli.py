@@ -23,6 +23,8 @@ import os
 import sys
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
+#: ``train-light --source``: where training frames come from (:class:`.light.dataset.ChunkSpec`)
+SOURCES = {"world": "world", "raycast": "skills.perception.light.unseen.compose:raycast_frames"}
 
 
 def _int_at_least(lo: int):
@@ -68,6 +70,10 @@ def register(cli) -> None:
     t.add_argument("--members", type=_int_at_least(1), default=None, metavar="K",
                    help="networks per ensemble, for the tower check and the light network "
                         "(default 3; --quick: 2)")
+    t.add_argument("--source", choices=sorted(SOURCES), default="world",
+                   help="where the frames come from: world (default: the PyBullet world, drawn towers, "
+                        "photographs) or raycast (renderer B alone, an evaluation renderer: for the "
+                        "benchmark's reverse direction, never for models to ship)")
     t.add_argument("--workers", type=_int_at_least(1), default=min(2, os.cpu_count() or 1), metavar="W",
                    help="worker processes (default: 2 or the number of cores if fewer)")
     t.set_defaults(func=cmd_train_light)
@@ -118,7 +124,8 @@ def cmd_train_light(args) -> int:
     samples = args.samples if args.samples is not None else (60 if args.quick else 1000)
     members = args.members if args.members is not None else (2 if args.quick else 3)
     opts = TrainOptions(out=args.out, samples=samples, seed=args.seed, quick=args.quick, workers=args.workers,
-                        members=members, **({"iterations": 60, "rounds": 1} if args.quick else {}))
+                        members=members, source=SOURCES[args.source],
+                        **({"iterations": 60, "rounds": 1} if args.quick else {}))
     report = train_light(opts, progress=lambda s: print(s, file=sys.stderr, flush=True))
     h = report["heldout"]
     d = report["detector"]

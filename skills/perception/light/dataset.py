@@ -89,6 +89,11 @@ class ChunkSpec:
     keep: float = 1.0               # fraction of frames kept packed
     size: tuple[int, int] = (640, 480)
     photos: str = "train"           # which photographs back the frames ("train" or "heldout")
+    # where the frames come from: "world" (rendered from the simulated world, composed frames and
+    # photometric augmentation added), or "module:function" making finished frames,
+    # function(seed, towers, free, photos) -> [(BGR image, [Truth])] (another renderer, for the
+    # benchmark's cross-renderer tables; nothing is added to its frames)
+    source: str = "world"
 
 
 @dataclass
@@ -210,15 +215,20 @@ def free_frames(seed: int, count: int, size=None, photos: str = "train",
     return out
 
 
-def make_chunk(spec: ChunkSpec, open_world=None) -> ChunkResult:
-    """Render and cut one chunk (runs in a worker process); ``open_world``
-    is a world factory (default: :func:`.scenes.world_factory`)."""
-    import time
+def frame_source(name: str):
+    """The frame-making function ``module:function`` (see :class:`ChunkSpec`)."""
+    import importlib
+    module, _, func = name.partition(":")
+    try:
+        return getattr(importlib.import_module(module), func)
+    except (ImportError, AttributeError, ValueError) as exc:
+        raise ValueError(f"no frame source {name!r}: {exc}") from None
 
-    from .scenes import SceneRenderer, ViewRange, world_factory
-    t0 = time.perf_counter()
-    rng = np.random.default_rng(spec.seed)
-    world = (open_world or world_factory())(spec.profile, seed=spec.seed)
+
+def _world_frames(spec: ChunkSpec, rng: np.random.Generator, open_world) -> list:
+    """Frames rendered from a world of ``spec`` (some with another backdrop) and composed ones."""
+    from .scenes import SceneRenderer, ViewRange
+    world = open_world(spec.profile, seed=spec.seed)
     try:
         renderer = SceneRenderer(world, rng, ViewRange(size=spec.size))
         rendered = []
@@ -228,9 +238,6 @@ def make_chunk(spec: ChunkSpec, open_world=None) -> ChunkResult:
                 rendered.append(frame)
     finally:
         world.close()
-    res = ChunkResult()
-    hog = make_hog()
-    pos, neg_imgs, neg_avoid, crops, states = [], [], [], [], []
     sprites = []
     for f in rendered:
         for t in f.towers:
@@ -249,8 +256,28 @@ def make_chunk(spec: ChunkSpec, open_world=None) -> ChunkResult:
         n = int(rng.integers(0, 4)) if i % 4 else 0
         img, truths = _compose(rng, None, sprites, n, spec.photos)
         frames.append((img, truths, "paste" if truths else "free-paste", None))
+    return frames
+
+
+def make_chunk(spec: ChunkSpec, open_world=None) -> ChunkResult:
+    """Render and cut one chunk (runs in a worker process); ``open_world``
+    is a world factory (default: :func:`.scenes.world_factory`)."""
+    import time
+
+    from .scenes import world_factory
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(spec.seed)
+    res = ChunkResult()
+    hog = make_hog()
+    pos, neg_imgs, neg_avoid, crops, states = [], [], [], [], []
+    if spec.source == "world":
+        frames = _world_frames(spec, rng, open_world or world_factory())
+    else:
+        made = frame_source(spec.source)(spec.seed, spec.towers, spec.free, spec.photos)
+        frames = [(img, truths, spec.source.rsplit(":", 1)[-1], None) for img, truths in made]
     for img, truths, source, dist in frames:
-        img = photometric(img, rng, float(rng.uniform(*spec.strength)))
+        if spec.source == "world":
+            img = photometric(img, rng, float(rng.uniform(*spec.strength)))
         if spec.extract:
             for t in truths:
                 if t.clean and t.box[3] >= MIN_TRAIN_HEIGHT:

@@ -82,6 +82,7 @@ class TrainOptions:
     iterations: int = 300          # SCG iterations (each network)
     members: int = 3               # networks per ensemble (the check's and the light network's)
     heldout: int | None = None     # rendered held-out frames (default samples / 3)
+    source: str = "world"          # where frames come from (:class:`.dataset.ChunkSpec`)
 
     def __post_init__(self):
         if self.samples < 10:
@@ -100,7 +101,8 @@ def plan(opts: TrainOptions) -> tuple[list[ChunkSpec], list[ChunkSpec]]:
     for i in range(n_train):
         n = opts.samples // n_train + (1 if i < opts.samples % n_train else 0)
         free = max(1, n // 4)
-        train.append(ChunkSpec(PROFILES[i % 2], opts.seed * 7919 + i, n - free, free, int(n * 3.0)))
+        pasted = int(n * 3.0) if opts.source == "world" else 0
+        train.append(ChunkSpec(PROFILES[i % 2], opts.seed * 7919 + i, n - free, free, pasted, source=opts.source))
     held = opts.heldout if opts.heldout is not None else max(10, opts.samples // 3)
     n_held = max(1, round(held / per))
     heldout = []
@@ -108,7 +110,8 @@ def plan(opts: TrainOptions) -> tuple[list[ChunkSpec], list[ChunkSpec]]:
         n = held // n_held + (1 if i < held % n_held else 0)
         free = max(1, int(n * 0.3))
         heldout.append(ChunkSpec(PROFILES[(i + 1) % 2], HELDOUT_SEED + opts.seed * 7919 + i, n - free, free, 0,
-                                 strength=(0.3, 1.0), extract=False))
+                                 strength=(0.3, 1.0), extract=False, source=opts.source,
+                                 photos="train" if opts.source == "world" else "heldout"))
     return train, heldout
 
 

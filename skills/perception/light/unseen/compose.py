@@ -177,8 +177,8 @@ def _jpeg(img: np.ndarray, quality: int, subsample: bool = False) -> np.ndarray:
     return cv2.imdecode(buf, cv2.IMREAD_COLOR) if ok else img
 
 
-def frames(renderer: str, seed: int, towers: int, free: int, photos: str = "heldout") -> list[PackedFrame]:
-    """``towers`` frames with 1-3 towers and ``free`` tower-free ones, seeded."""
+def made(renderer: str, seed: int, towers: int, free: int, photos: str = "heldout") -> list:
+    """``towers`` frames with 1-3 towers and ``free`` tower-free ones, seeded: [(BGR image, [Truth])]."""
     rng = np.random.default_rng(seed)
     out = []
     for i in range(towers + free):
@@ -186,5 +186,17 @@ def frames(renderer: str, seed: int, towers: int, free: int, photos: str = "held
         img, truths = frame(rng, renderer, n, photos)
         if n and not truths:
             continue
-        out.append(PackedFrame.pack(img, truths, f"{renderer}" if truths else f"free-{renderer}"))
+        out.append((img, truths))
     return out
+
+
+def frames(renderer: str, seed: int, towers: int, free: int, photos: str = "heldout") -> list[PackedFrame]:
+    """:func:`made`, packed as the project's labelled frames."""
+    return [PackedFrame.pack(img, truths, renderer if truths else f"free-{renderer}")
+            for img, truths in made(renderer, seed, towers, free, photos)]
+
+
+def raycast_frames(seed: int, towers: int, free: int, photos: str = "train") -> list:
+    """Renderer B's frames as a training source (``ChunkSpec.source``): the
+    benchmark's reverse experiment, training on B and testing on the project's renderer."""
+    return made("raycast", seed, towers, free, photos)
