@@ -60,12 +60,52 @@ def crop_features(crop: np.ndarray, size: tuple[int, int] = DEFAULT_SIZE, kind: 
     return np.concatenate(rich)
 
 
+def batch_features(crops, kind: str = "tower") -> np.ndarray:
+    """:func:`crop_features` of many BGR crops of :data:`DEFAULT_SIZE` at once
+    (the per-pixel and per-row parts on all of them together: a reader's
+    tens of crops cost a third of the time)."""
+    w, h = DEFAULT_SIZE
+    n = len(crops)
+    stack = np.stack(crops)                                       # n x h x w x 3
+    tall = stack.reshape(n * h, w, 3)
+    px = np.stack([cv2.resize(c, PIXELS, interpolation=cv2.INTER_AREA) for c in crops])
+    px = px.reshape(n, -1).astype(np.float32) / 255.0 - 0.5
+    rows = stack.max(axis=2).reshape(n, -1).astype(np.float32) / 255.0 - 0.5
+    grey = cv2.cvtColor(tall, cv2.COLOR_BGR2GRAY).reshape(n, h, w)
+    hog = _crop_hog()
+    parts = [px, rows, np.stack([hog.compute(g).ravel() for g in grey])]
+    if kind == "tower":
+        hsv = cv2.cvtColor(tall, cv2.COLOR_BGR2HSV_FULL).astype(np.float32).reshape(n, h, w, 3)
+        hue, sat, val = hsv[..., 0] * (2 * np.pi / 256.0), hsv[..., 1] / 255.0, hsv[..., 2] / 255.0
+        flat = val.reshape(n, -1)
+        pos = (flat.shape[1] - 1) * 0.98
+        lo = int(pos)
+        hi = min(lo + 1, flat.shape[1] - 1)
+        part = np.partition(flat, (lo, hi), axis=1)
+        top = np.maximum(part[:, lo] + (part[:, hi] - part[:, lo]) * (pos - lo), 0.05)[:, None]
+        wgt = sat * val
+        parts.append(np.concatenate([np.minimum(val.mean(axis=2) / top, 1.5) - 0.5, sat.mean(axis=2) - 0.5,
+                                     (wgt * np.cos(hue)).mean(axis=2), (wgt * np.sin(hue)).mean(axis=2)],
+                                    axis=1).astype(np.float32))
+    return np.concatenate(parts, axis=1)
+
+
+def _percentile98(v: np.ndarray) -> float:
+    """``np.percentile(v, 98)`` (linear interpolation) by a partial sort: a tenth of its time."""
+    a = v.ravel()
+    pos = (a.size - 1) * 0.98
+    lo = int(pos)
+    hi = min(lo + 1, a.size - 1)
+    part = np.partition(a, (lo, hi))
+    return float(part[lo] + (part[hi] - part[lo]) * (pos - lo))
+
+
 def _row_colour(crop: np.ndarray) -> np.ndarray:
     """Per row of a BGR crop: brightness over the crop's brightest, saturation,
     and the hue direction (cos, sin) weighted by saturation and brightness."""
     hsv = cv2.cvtColor(crop, cv2.COLOR_BGR2HSV_FULL).astype(np.float32)
     h, s, v = hsv[:, :, 0] * (2 * np.pi / 256.0), hsv[:, :, 1] / 255.0, hsv[:, :, 2] / 255.0
-    top = max(float(np.percentile(v, 98)), 0.05)
+    top = max(_percentile98(v), 0.05)
     w = s * v
     return np.concatenate([np.minimum(v.mean(axis=1) / top, 1.5) - 0.5, s.mean(axis=1) - 0.5,
                            (w * np.cos(h)).mean(axis=1), (w * np.sin(h)).mean(axis=1)]).astype(np.float32)
@@ -101,6 +141,9 @@ class Mlp:
         """Input rows of BGR crops (any size; cut at ``size``)."""
         if len(crops) == 0:
             return np.zeros((0, self.w1.shape[0]), np.float32)
+        if self.kind in ("rich", "tower") and tuple(self.size) == DEFAULT_SIZE and all(
+                c.shape == (DEFAULT_SIZE[1], DEFAULT_SIZE[0], 3) for c in crops):
+            return batch_features(crops, self.kind)
         return np.stack([crop_features(c, self.size, self.kind) for c in crops])
 
 

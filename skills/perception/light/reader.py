@@ -15,6 +15,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from rll_bt.backend import LightDetection
 from rll_bt.errors import UserError
@@ -139,7 +140,15 @@ class LightReader:
              tower_height: float | None = None, camera: str = "front") -> list[LightDetection]:
         """Signal towers in a BGR image with their light states, best first.
         Hits the tower check calls "no tower" are dropped, and so are towers
-        read with less than ``min_confidence``."""
+        read with less than ``min_confidence``.
+
+        The networks' products are small: BLAS runs them on one thread (its
+        threads, waiting on each other on a loaded machine, made a read in a
+        tag-given region six times slower)."""
+        with _blas().limit(limits=1, user_api="blas"):
+            return self._read(image, region, tower_height, camera)
+
+    def _read(self, image, region, tower_height, camera) -> list[LightDetection]:
         in_region = region is not None and tower_height is not None
         thr = self.region_threshold if in_region else None
         boxes = self.detector.detect(image, region=region, tower_height=tower_height, threshold=thr)
@@ -153,6 +162,16 @@ class LightReader:
         return [LightDetection(box=tuple(int(round(c)) for c in v), state=int(p.argmax()), score=b.score,
                                probabilities=tuple(float(x) for x in p), camera=camera)
                 for (b, v), p in zip(chosen, probs) if p.max() >= self.min_confidence]
+
+
+_CONTROLLER: list[ThreadpoolController] = []
+
+
+def _blas() -> ThreadpoolController:
+    """The process's thread-pool controller (made once: it looks the libraries up)."""
+    if not _CONTROLLER:
+        _CONTROLLER.append(ThreadpoolController())
+    return _CONTROLLER[0]
 
 
 REFINE_HEIGHTS = (1.0, 0.82, 0.68)
