@@ -41,6 +41,8 @@ parallel on the two cores).
 from __future__ import annotations
 
 import argparse
+import pickle
+import subprocess
 import sys
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
@@ -187,6 +189,33 @@ def evaluate_sets(pool, workers: int, runs, sets, models: str, colour=None) -> d
     return results
 
 
+def render_sets(args):
+    """The colour model's tuning frames and the labelled test sets."""
+    print("rendering the colour model's tuning frames", file=sys.stderr)
+    tune = [f for f in render(160, 0, 0, args.workers, args.seed + 5000) if f.truths]
+    print("rendering test frames", file=sys.stderr)
+    frames = render(args.towers, args.free, args.pasted, args.workers, args.seed)
+    ours = [f for f in frames if not f.source.endswith("paste")]
+    composed = [f for f in frames if f.source.endswith("paste")]
+    free_n = int(args.unseen * args.unseen_free)
+    unseen = {r: render_unseen(r, args.unseen, free_n, args.workers) for r in UNSEEN_SEEDS}
+    return tune, [("ours", ours), ("ours composed", composed), ("B raycast", unseen["raycast"]),
+                  ("C sketch", unseen["sketch"])]
+
+
+def commit() -> str:
+    """The commit measured (``+`` when the work tree differs from it)."""
+    root = Path(__file__).resolve().parents[1]
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=root, capture_output=True,
+                              text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
+                               capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + ("+" if dirty else "")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--towers", type=int, default=600, help="rendered frames showing towers (ours)")
@@ -201,31 +230,47 @@ def main(argv=None) -> int:
                     help="models trained on renderer B (default: train them first, --reverse-samples frames)")
     ap.add_argument("--reverse-samples", type=int, default=1000)
     ap.add_argument("--no-reverse", action="store_true", help="skip the reverse direction")
+    ap.add_argument("--readers", default=",".join(ROW_NAMES),
+                    help="readers to evaluate, comma-separated (default: %(default)s)")
+    ap.add_argument("--no-forward", action="store_true",
+                    help="skip the models of --models (only the reverse direction)")
+    ap.add_argument("--frames", metavar="FILE", default=None,
+                    help="keep the rendered test frames in FILE (pickle) and use them again when it exists: "
+                         "both directions on the same frames in two runs")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seed", type=int, default=SEED)
     args = ap.parse_args(argv)
     model_dir = args.models or str(MODEL_DIR)
-    print("rendering the colour model's tuning frames", file=sys.stderr)
-    tune = [f for f in render(160, 0, 0, args.workers, args.seed + 5000) if f.truths]
-    colour = tune_colour(tune)
-    print("rendering test frames", file=sys.stderr)
-    frames = render(args.towers, args.free, args.pasted, args.workers, args.seed)
-    ours = [f for f in frames if not f.source.endswith("paste")]
-    composed = [f for f in frames if f.source.endswith("paste")]
-    free_n = int(args.unseen * args.unseen_free)
-    unseen = {r: render_unseen(r, args.unseen, free_n, args.workers) for r in UNSEEN_SEEDS}
-    sets = [("ours", ours), ("ours composed", composed), ("B raycast", unseen["raycast"]),
-            ("C sketch", unseen["sketch"])]
+    readers = [r.strip() for r in args.readers.split(",") if r.strip()]
+    unknown = [r for r in readers if r not in ROW_NAMES]
+    if unknown:
+        ap.error(f"unknown reader(s) {', '.join(unknown)} (known: {', '.join(ROW_NAMES)})")
+    cache = Path(args.frames) if args.frames else None
+    if cache is not None and cache.exists():
+        with cache.open("rb") as fh:
+            tune, sets = pickle.load(fh)
+        print(f"test frames from {cache}", file=sys.stderr)
+    else:
+        tune, sets = render_sets(args)
+        if cache is not None:
+            with cache.open("wb") as fh:
+                pickle.dump((tune, sets), fh)
     reverse = None if args.no_reverse else (args.reverse_models or train_reverse(args.reverse_samples, args.workers))
+    shipped = {}
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
-        shipped = evaluate_sets(pool, args.workers, ("hog-region", "hog-full", "colour-roi", "colour-full"),
-                                sets, model_dir, colour)
-        back = evaluate_sets(pool, args.workers, ("hog-region", "hog-full"), sets, reverse) if reverse else {}
+        if not args.no_forward:
+            colour = tune_colour(tune) if any(r.startswith("colour") for r in readers) else None
+            shipped = evaluate_sets(pool, args.workers, readers, sets, model_dir, colour)
+        back = evaluate_sets(pool, args.workers, [r for r in readers if r.startswith("hog")], sets,
+                             reverse) if reverse else {}
     print()
+    print(f"commit {commit()}; models {model_dir if not args.no_forward else '-'}; "
+          f"reverse models {reverse or '-'}")
     for label, subset in sets:
         print(f"{label}: {len(subset)} frames ({sum(1 for f in subset if f.tower_free)} tower-free)")
     print()
-    print(table("trained on the project's renderer (PyBullet scenes, drawn towers): the shipped models", shipped))
+    if shipped:
+        print(table("trained on the project's renderer (PyBullet scenes, drawn towers): the shipped models", shipped))
     if back:
         print()
         print(table("trained on renderer B alone (the reverse direction)", back))
