@@ -158,7 +158,7 @@ class TowerDetector:
 
     def __init__(self, detector: np.ndarray, threshold: float = 0.0, scale_step: float = 1.15,
                  stride: tuple[int, int] = (4, 4), nms_overlap: float = 0.3, min_support: int = 1,
-                 max_upscale: float = 1.1, max_tower_fraction: float = 0.9):
+                 max_upscale: float = 1.1, max_tower_fraction: float = 0.6):
         self.hog = make_hog()
         self.vector = np.asarray(detector, dtype=np.float32).ravel()
         if self.vector.size != self.hog.getDescriptorSize() + 1:

@@ -3,11 +3,10 @@ misplaced detector box right, and an unsure reading is not reported."""
 import numpy as np
 import pytest
 
-from skills.perception.light.backgrounds import procedural_background
 from skills.perception.light.hog import TOWER_H, TOWER_W, Box, iou
 from skills.perception.light.mlp import Ensemble, Mlp
 from skills.perception.light.reader import SNAP_ANCHORS, LightReader, snapped
-from skills.perception.light.synth import drawn_tower, paste
+from skills.perception.light.scenes import SceneRenderer, world_factory
 
 
 class FixedDetector:
@@ -28,10 +27,26 @@ def shipped():
 
 @pytest.fixture(scope="module")
 def scene():
-    rng = np.random.default_rng(11)
-    img = procedural_background(rng, 240, 320)
-    box = paste(img, drawn_tower(rng, 66.0, 5), 150, 60)
-    return img, box
+    """A frame of the project's renderer (what the shipped models are made for) showing a whole
+    tower at least 50 px high with a lit red and a lit green lens (state 5), and its box."""
+    world = world_factory()("rcll2016", seed=2)
+    try:
+        r = SceneRenderer(world, np.random.default_rng(11))
+        for name in world.machines:
+            world.set_lights(name, red="ON", yellow="OFF", green="ON")
+            world.station(name).show_lights(world.cid, world.time, world.blink_hz)
+        for _ in range(40):
+            r.randomise_look()
+            view = r.tower_view()
+            if view is None:
+                continue
+            f = r.render(*view, dict.fromkeys(world.machines, 5))
+            for t in f.towers:
+                if t.clean and t.box[3] >= 50:
+                    return f.image, t.box
+        raise AssertionError("no view of a whole tower 50 px high in 40 tries")
+    finally:
+        world.close()
 
 
 def test_snapped_boxes_have_the_expected_height_and_straddle_the_hit():
