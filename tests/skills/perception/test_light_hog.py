@@ -36,7 +36,8 @@ def detector():
     pos = []
     for _ in range(700):
         img, box = scene(rng, int(rng.integers(9, 26)), int(rng.integers(0, 8)))
-        pos.append(crop_window(img, window_for_tower(box)))
+        crop = crop_window(img, window_for_tower(box))
+        pos += [crop, crop[:, ::-1].copy()]          # mirrored too, as the recipe allows
     bgs = [procedural_background(rng, 240, 320) for _ in range(40)]
     pos_f = window_features(hog, pos)
     neg_f = window_features(hog, random_negatives(bgs, 1500, rng))
