@@ -101,6 +101,9 @@ def register(cli) -> None:
                    help="write this game's field, orders, ring setup and down periods to FILE (JSON) for --game")
     g.add_argument("--exploration", type=_seconds, metavar="S", help="exploration length (default: the rules')")
     g.add_argument("--production", type=_seconds, metavar="S", help="PRODUCTION length (default: the rules')")
+    g.add_argument("--overtime", type=_seconds, metavar="S",
+                   help="what a tie between two teams adds to PRODUCTION (default: the rules' 300 s; 0: a tie "
+                        "ends the game, for short test games)")
     g = gp.add_argument_group("running")
     g.add_argument("--gui", action="store_true",
                    help="open PyBullet's window (needs a display); the game then runs in real time")
@@ -215,7 +218,7 @@ def options_from(args):
                            perception=args.perception, strategy=args.strategy, until=args.until,
                            gui=args.gui, out=args.out, processes=args.processes or args.hardware == "emulated",
                            hardware=args.hardware, laser=args.laser, setup=args.setup,
-                           exploration=args.exploration, production=args.production, dt=args.dt,
+                           exploration=args.exploration, production=args.production, overtime=args.overtime, dt=args.dt,
                            hz=args.hz, laser_rate=args.laser_rate, localisation=args.localisation,
                            baseline=args.baseline, record=args.record, live=args.live,
                            record_camera=args.record_camera, view=args.view, speed=args.speed,

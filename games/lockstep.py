@@ -357,7 +357,7 @@ class LockstepGame:
         simulated seconds (default: the expected length plus overtime and a margin)."""
         self.start()
         if limit is None:
-            limit = self.options.expected_duration() + self.options.rules.phases.overtime + 60.0
+            limit = self.options.expected_duration() + self.options.overtime_length() + 60.0
         end = self.clock.now() + limit
         done = False
         while self.clock.now() < end:

@@ -55,6 +55,7 @@ class GameOptions:
     setup: float | None = 10.0
     exploration: float | None = None
     production: float | None = None
+    overtime: float | None = None        # added to PRODUCTION when two teams are tied (None: the rules')
     # speed knobs
     dt: float = 0.05
     hz: float = 10.0
@@ -207,7 +208,7 @@ class GameOptions:
 
     def phases(self) -> dict[str, float]:
         """The phase-length overrides for the simulator (game seconds)."""
-        return {k: float(v) for k in ("setup", "exploration", "production")
+        return {k: float(v) for k in ("setup", "exploration", "production", "overtime")
                 if (v := getattr(self, k)) is not None}
 
     def phase_lengths(self) -> dict[str, float]:
@@ -215,7 +216,7 @@ class GameOptions:
         p = self.rules.phases
         out = {"SETUP": p.setup, "EXPLORATION": p.exploration, "PRODUCTION": p.production}
         for k, v in self.phases().items():
-            if k == "exploration" and p.exploration_in_production > 0:
+            if k == "overtime" or (k == "exploration" and p.exploration_in_production > 0):
                 continue
             out[k.upper()] = v
         return out
@@ -236,6 +237,10 @@ class GameOptions:
     def game_over(self, status) -> bool:
         """Whether the game as asked for (``until``) is over at ``status``."""
         return status.phase == "POST_GAME" or (self.until == "exploration" and self.exploration_over(status))
+
+    def overtime_length(self) -> float:
+        """Game seconds a tie adds to PRODUCTION."""
+        return float(self.overtime if self.overtime is not None else self.rules.phases.overtime)
 
     def expected_duration(self) -> float:
         """Simulated seconds of the whole game (or until exploration ends), no overtime."""

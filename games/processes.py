@@ -420,7 +420,7 @@ class ProcessGame:
             return self.result(False)
         o = self.options
         if limit is None:
-            limit = o.expected_duration() + o.rules.phases.overtime + 60.0
+            limit = o.expected_duration() + o.overtime_length() + 60.0
         end = self.clock.now() + limit
         while self.clock.now() < end and not self.finished():
             dead = self._dead()

@@ -50,6 +50,8 @@ def register(cli) -> None:
     g.add_argument("--setup", type=_seconds, default=10.0, metavar="S", help="SETUP length (default 10)")
     g.add_argument("--exploration", type=_seconds, metavar="S", help="exploration length (default: the rules')")
     g.add_argument("--production", type=_seconds, metavar="S", help="PRODUCTION length (default: the rules')")
+    g.add_argument("--overtime", type=_seconds, metavar="S",
+                   help="what a tie adds to PRODUCTION (default: the rules' 300 s; 0: a tie ends the game)")
     g = p.add_argument_group("running")
     g.add_argument("--executor", default="local", choices=EXECUTORS,
                    help="local: a process pool here (default); dask: a Dask distributed cluster "
@@ -72,7 +74,7 @@ def run(args) -> int:
         raise UserError("--address names a Dask scheduler: give --executor dask", where="--address")
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     game = {"profile": args.profile, "robots": args.robots, "strategy": args.strategy, "setup": args.setup,
-            "exploration": args.exploration, "production": args.production}
+            "exploration": args.exploration, "production": args.production, "overtime": args.overtime}
     try:
         configs = normalise(args.configs)
         for m in round_robin(configs, seeds[:1], settings(**game)):       # a bad CONFIG before any game

@@ -25,6 +25,7 @@ def options_for(match):
     s = match.settings
     return GameOptions(seed=match.seed, cyan=match.cyan, magenta=match.magenta, profile=s["profile"],
                        setup=s["setup"], exploration=s["exploration"], production=s["production"],
+                       overtime=s.get("overtime"),
                        robots=s["robots"], strategy=s["strategy"])
 
 

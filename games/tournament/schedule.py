@@ -15,7 +15,7 @@ from ..teams import TeamSpec
 
 #: the game settings a tournament may set, with their defaults (None: the rules')
 SETTINGS = {"profile": "rcll2016", "setup": 10.0, "exploration": None, "production": None,
-            "robots": 3, "strategy": "algorithm1"}
+            "overtime": None, "robots": 3, "strategy": "algorithm1"}
 
 
 @dataclass(frozen=True)

@@ -30,13 +30,14 @@ def _senders_keep_to_their_team(log: list[dict]) -> None:
 def test_a_lockstep_head_to_head_game_both_teams_score_and_never_touch(tmp_path):
     out = tmp_path / "game"
     options = GameOptions(cyan="htn", magenta="baseline", seed=3, setup=1.0, exploration=40.0, production=60.0,
-                          strategy="oracle", out=out)
+                          overtime=0.0, strategy="oracle", out=out)
     with LockstepGame(options) as game:
         result = game.run()
         summary = finish(result, options)
         snaps = {c: side.teamserver.snapshot() for c, side in game.sides.items()}
     assert result.finished
     rep = json.loads((out / "report.json").read_text())
+    assert rep["sim_time"] < 1 + 40 + 60 + 5                 # overtime=0: a tie would not have added 300 s
     m = rep["match"]
     assert m["labels"] == {"CYAN": "htn", "MAGENTA": "baseline"}
     assert m["points"]["CYAN"] > 0 and m["points"]["MAGENTA"] > 0            # both teams scored
@@ -63,7 +64,8 @@ def test_a_lockstep_head_to_head_game_both_teams_score_and_never_touch(tmp_path)
 def test_a_head_to_head_game_in_processes(tmp_path):
     out = tmp_path / "game"
     rc = main(["sim", "--processes", "--cyan", "baseline", "--magenta", "htn", "--seed", "2", "--setup", "1",
-               "--exploration", "40", "--production", "10", "--strategy", "oracle", "--out", str(out), "-q"])
+               "--exploration", "40", "--production", "10", "--overtime", "0", "--strategy", "oracle",
+               "--out", str(out), "-q"])
     assert rc == 0, sorted(p.name for p in out.iterdir())
     rep = json.loads((out / "report.json").read_text())
     m = rep["match"]

@@ -23,8 +23,9 @@ pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
 
 CONFIGS = ["htn", "baseline"]
 #: short games of one robot a team: exploration and the first production seconds
-GAME = {"robots": 1, "setup": 1.0, "exploration": 15.0, "production": 15.0}
-ARGS = ["--robots", "1", "--setup", "1", "--exploration", "15", "--production", "15", "--seeds", "1", "-q"]
+GAME = {"robots": 1, "setup": 1.0, "exploration": 15.0, "production": 15.0, "overtime": 0.0}
+ARGS = ["--robots", "1", "--setup", "1", "--exploration", "15", "--production", "15", "--overtime", "0",
+        "--seeds", "1", "-q"]
 BIN = Path(sys.executable).parent
 
 
