@@ -10,7 +10,9 @@ retrieve another, and the product the cap is for keeps the station (its
 - an idle cap station gets a cap *ahead* (:meth:`Caps.prefill`) while
   robots have nothing else to do; it is *free* (owner :data:`FREE`), and the
   most urgent product whose cap is due there takes it instead of retrieving
-  one (:meth:`Caps.adopt_free_caps`).
+  one (:meth:`Caps.adopt_free_caps`); a cap ahead no robot has taken yet
+  gives way to a product whose cap became due there
+  (:meth:`Caps.yield_prefills`).
 
 :class:`CapBuffers` keeps who owns the cap each station holds, in the
 knowledge base (``cap_buffer``: CS -> product id or :data:`FREE`).
@@ -25,7 +27,7 @@ from ..planning.domain import CAPLESS, EXTRA, ProductionContext
 from ..planning.htn import Seq
 from ..planning.planner import ProductionPlanner
 from .locks import StationLocks
-from .products import CLEANUP_ORDER, Products
+from .products import ABANDONED, CLEANUP_ORDER, Products
 from .world import PlanningWorld
 
 log = logging.getLogger("teamserver.production")
@@ -83,6 +85,7 @@ class Caps:
         cancelled, a base from the BS takes the cap-less base's place on the slide.
         (A station holding a cap cannot retrieve another: without this the product
         would wait for ever.)"""
+        self.yield_prefills()
         out = []
         for cs, owner in sorted(self.buffers.owners.items()):
             if owner != FREE:
@@ -190,6 +193,35 @@ class Caps:
             made.append(product)
             log.info("%s retrieves a cap into %s ahead", product.id, cs)
         return made
+
+    def yield_prefills(self) -> list[M.Product]:
+        """A cap retrieval ahead that has not started (its RETRIEVE_CAP pending: no robot
+        took it yet, or it went back to the pool when its station went DOWN, keeping the
+        station's lock) gives way to a product whose cap is due at that station: it is
+        cancelled and its locks released.  Returns the retrievals given up."""
+        due = set()
+        for p in self.products.active():
+            if p.order_id == CLEANUP_ORDER:
+                continue
+            for cs in self.cs_caps:
+                chain = self.cap_chain(p, cs)
+                if chain is not None and self.cap_due(chain[0]):
+                    due.add(cs)
+        out = []
+        for p in self.products.active():
+            if p.order_id != CLEANUP_ORDER:
+                continue
+            retrieve = [t for t in self.kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP]
+            if len(retrieve) != 1 or retrieve[0].state != M.PENDING or retrieve[0].machine not in due:
+                continue
+            self.products.cancel_open(p)             # all pending: no robot to stop
+            p.state = ABANDONED
+            self.kb.save_product(p)
+            self.locks.release(p.id)
+            out.append(p)
+            log.info("%s gives up its cap ahead into %s: a product's cap is due there",
+                     p.id, retrieve[0].machine)
+        return out
 
     def choose_shelf_slot(self, task: M.Task) -> None:
         """Set the shelf slot an assigned RETRIEVE_CAP takes its cap carrier from: the

@@ -30,7 +30,10 @@ for it until it is fed, so the next robot's workpiece is processed with the
   (:meth:`~FeedMonitor.late`);
 - feeds a spare base to a station PREPARED with an instruction no task
   needs while a task needs another one (:meth:`~FeedMonitor.unstick`),
-  which brings it back to IDLE.
+  which brings it back to IDLE; not under rules that break a machine left
+  PREPARED (2025: after 20 s), where it is IDLE again after its BROKEN time
+  long before a spare base could come, which would then lie on the input of
+  an IDLE station for the next prepare to process.
 
 Times are seconds of the server's clock; the state lives in the knowledge
 base (``prepared``, ``feeds``, ``late_prepares``, ``flushing``).
@@ -197,7 +200,10 @@ class FeedMonitor:
     # -- stations waiting for nothing ----------------------------------------------------
     def unstick(self) -> list[M.Product]:
         """Feed a spare base to each station PREPARED with an instruction no open task
-        needs while one needs another instruction; returns the products made now."""
+        needs while one needs another instruction; returns the products made now.
+        Nothing under a stuck timeout (2025, see the module doc)."""
+        if self.kb.profile.stuck_timeout is not None:
+            return []
         flushing = dict(self.kb.get("flushing") or {})
         made = []
         wanted: dict[str, list[dict]] = {}

@@ -2,7 +2,9 @@
 workpieces a station never took, stations left PREPARED with a stale instruction,
 robots left holding what they cannot use yet, places the robots keep failing at."""
 from teamserver.knowledge import model as M
+from teamserver.server import ServerConfig
 from tests.support.teamserver import Lockstep, play, production_setup
+from tests.teamserver.production.test_ts_storage import send_orders, setup_2025
 
 
 def ds_gates(ls):
@@ -263,3 +265,33 @@ def test_a_cap_retrieved_ahead_that_the_station_never_took_blocks_nothing():
     assert cleanup not in ls.server.production.locks.owners.values()
     assert cs not in ls.server.production.buffers.owners          # no cap there to mount
     assert [g for _, g in ls.stations.deliveries] == [1]
+
+
+def test_2025_a_station_waiting_with_an_instruction_nothing_needs_is_fed_no_spare_base():
+    """2025 breaks a machine left PREPARED for 20 s: it is IDLE again (after its 30 s
+    BROKEN) long before a spare base from the BS could reach it, and that base would
+    then lie on the input of an IDLE station for the next prepare to process."""
+    ls = Lockstep("rcll2025", config=ServerConfig(prefill_caps=False))
+    setup_2025(ls)
+    send_orders(ls, [{"id": 1}, {"id": 2}])
+    srv = ls.server
+    kb, feeds = srv.kb, srv.dispatcher.feeds
+    for p in list(kb.products.values()):
+        srv.production.products.cancel_open(p)
+        p.state = "ABANDONED"
+        kb.save_product(p)
+    # the DS waits for a delivery of order 1 that is over; order 2's needs another id
+    old = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "order_id": 1},
+                 state=M.DONE, prepare={"machine": "C-DS", "ds": {"order_id": 1}})
+    kb.save_task(old)
+    feeds.sent(old)
+    ls.stations.states["C-DS"] = "PREPARED"
+    ls.stations._send()
+    ls.step()
+    want2 = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "order_id": 2},
+                   prepare={"machine": "C-DS", "ds": {"order_id": 2}}, carry=True, holder=1)
+    kb.save_task(want2)
+    assert feeds.instruction("C-DS") == {"machine": "C-DS", "ds": {"order_id": 1}}
+    assert not feeds.accepts(want2)
+    assert feeds.unstick() == []
+    assert not [p for p in kb.products.values() if p.state == "ACTIVE"]

@@ -232,3 +232,34 @@ def test_a_cap_waiting_ahead_is_not_given_to_a_product_far_from_its_cap():
             t.state = M.DONE
             kb.save_task(t)
     assert pm.caps.adopt_free_caps() == [p] and pm.buffers.owners["C-CS1"] == p.id
+
+
+def test_a_cap_ahead_no_robot_took_yet_gives_way_to_a_product_whose_cap_is_due():
+    """The retrieval ahead into C-CS1 went back to the pool with the station's lock (its
+    station went DOWN before the prepare, say).  A grey C0 comes, whose cap is due at
+    once: the retrieval ahead is given up and its lock released, so the C0 retrieves
+    its own cap instead of waiting for a robot to take the one ahead first."""
+    ls = Lockstep()
+    production_setup(ls, [{"id": 1}])                       # black caps (C-CS2) only
+    pm, kb = ls.server.production, ls.server.kb
+    [ahead] = [p for p in kb.products.values() if p.order_id == 0]
+    [early] = [t for t in kb.tasks_of(ahead.tasks) if t.kind == M.RETRIEVE_CAP]
+    assert early.machine == "C-CS1"
+    robot = kb.robots.get(early.robot) if early.robot is not None else None
+    if robot is not None:
+        robot.task_id = None
+        kb.save_robot(robot)
+    early.state, early.robot = M.PENDING, None
+    kb.save_task(early)
+    pm.locks.acquire(early)
+    assert pm.caps.yield_prefills() == []                  # nobody's cap is due at C-CS1
+    bc, cc = ls.refbox.ms.enum("BaseColor"), ls.refbox.ms.enum("CapColor")
+    ls.order_msgs.append(dict(ls.order_msgs[0], id=2, delivery_gate=2,
+                              base_color=bc.Value("BASE_BLACK"), cap_color=cc.Value("CAP_GREY")))
+    ls.refbox.orders(ls.order_msgs)
+    ls.step(n=3)
+    assert kb.products[ahead.id].state == "ABANDONED"
+    assert {t.state for t in kb.tasks_of(ahead.tasks)} == {M.CANCELLED}
+    [grey] = [p for p in kb.products.values() if p.order_id == 2]
+    [own] = [t for t in kb.tasks_of(grey.tasks) if t.kind == M.RETRIEVE_CAP]
+    assert own.machine == "C-CS1" and pm.locks.owners.get("C-CS1") in (None, grey.id)
