@@ -17,7 +17,9 @@ server (silent for its heartbeat timeout), tasks lost (a task the server
 sent that its robot never got, or a final result the robot made that the
 server never acknowledged, more than 30 s before the end) and tasks done
 twice (an assignment's AgentTask id started more than once: a task given
-to another robot, or again after a cancel, is a new assignment with a new id).
+to another robot, or again after a cancel, is a new assignment with a new id;
+or one planned task run by two robots at the same moment, as when a robot the
+server dropped as silent still runs the task the server gave another).
 
     .venv/bin/python benchmarks/network_faults.py [--seeds 10] [--jobs 2] [--json FILE]
                                                   [--profiles rcll2016,rcll2025] [--levels clean,0,10,20]
@@ -44,6 +46,7 @@ from games.batch import fmt, mean
 from games.options import GameOptions
 from rll_bt.comm.faults import NetFaults
 from rll_bt.comm.reliable import AT_TASK, agent_task_what
+from teamserver.links.agents import from_wire
 
 DELAY, JITTER = 2.0, 0.2
 LEVELS = {"clean": None, "0": 0.0, "10": 0.1, "20": 0.2}
@@ -65,6 +68,7 @@ class Ledger:
         self.got: set[tuple[int, int]] = set()            # (robot, task id) that reached the agent
         self.starts: Counter[int] = Counter()
         self.drops = 0
+        self.at_once: set[int] = set()                    # planned tasks two robots ran at once
         self._status: dict[int, str] = {}
         for agent in game.agents.values():
             self._watch(agent)
@@ -93,6 +97,12 @@ class Ledger:
         self.starts[int(run.task_id)] += 1
 
     def _round(self, game) -> None:
+        running: dict[int, int] = {}                      # planned task -> robots running it now
+        for a in game.agents.values():
+            if a.run is not None and not a.run.done:
+                tid = from_wire(a.run.task_id)[0]
+                running[tid] = running.get(tid, 0) + 1
+        self.at_once |= {tid for tid, n in running.items() if n > 1}
         for n, r in game.teamserver.server.kb.robots.items():
             if self._status.get(n) == "ACTIVE" and r.status == "LOST":
                 self.drops += 1
@@ -110,7 +120,9 @@ class Ledger:
                 "results_repeated": sum(a.server.delivery.reliable.counts["repeated"] for a in game.agents.values()),
                 "robots_dropped": self.drops, "lost": len(never_got) + len(unacked),
                 "lost_ids": sorted(never_got + unacked),
-                "done_twice": sum(1 for n in self.starts.values() if n > 1),
+                "done_twice": sum(1 for n in self.starts.values() if n > 1) + len(self.at_once),
+                "two_at_once": sorted(self.at_once),
+                "lease_expiries": sum(a.server.lease.expiries for a in game.agents.values()),
                 "link": {n: dict(getattr(a.link, "counts", {})) for n, a in game.agents.items()}}
 
 

@@ -374,7 +374,7 @@ class TeamServer:
             self.send_agent(None, self._phase_msg())
             for r in self.kb.active_robots():
                 if r.peer is not None and self.link.speaks_rllbt(r):
-                    self.send_agent(r, self.link.heartbeat_msg(r.number))
+                    self.send_agent(r, self.link.heartbeat_msg(r.number, self.config.dispatch.heartbeat_timeout))
         if now - self._last["map"] >= self.config.map_period:
             self._last["map"] = now
             mm = self.link.machine_map_msg(consistent_set(self.profile, self.kb.machines))

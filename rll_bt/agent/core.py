@@ -151,12 +151,12 @@ class RobotAgent:
         return self.gate.moving_allowed and not (cur is not None and cur.paused)
 
     def tick(self) -> Outcome | None:
-        """Tick the current task's tree once, if there is one and the robot
-        may move; returns the outcome when the task ended."""
-        run = self.run
-        if run is None or run.done or not self.moving_allowed():
+        """Tick the current task's tree once, if there is one and the robot may move
+        (its lease runs out also while it stands); returns the outcome when the task ended."""
+        run, now, lease = self.run, self.clock.now(), self.server.lease
+        if run is None or run.done or not (self.moving_allowed() or lease.expired(now)):
             return None
-        outcome = run.tick()
+        outcome = lease.tick(run, now, self.moving_allowed())     # past its lease it stops (.lease)
         if len(self.services) != self._n_services:     # a node made a service on first use
             self._services_changed()
         if outcome is not None:

@@ -156,6 +156,12 @@ class TaskRun:
         except Exception:
             log.exception("task %d: halting the tree raised", self.task_id)
 
+    def abandon(self, code: str, text: str) -> Outcome:
+        """Stop the task here (halted as by :meth:`halt`): it ends FAILED with ``code``."""
+        self.halt()
+        self.outcome = Outcome("FAILED", code, text)
+        return self.outcome
+
     def cancel(self, reason: str = "") -> Outcome:
         self.halt()
         self.outcome = Outcome("CANCELLED", "CANCELLED", reason or "cancelled by the team server")

@@ -30,6 +30,7 @@ from ..clock import Clock
 from ..comm import CONNECTED, DISCONNECTED
 from .config import AgentConfig
 from .delivery import ServerDelivery
+from .lease import TaskLease
 from .taskbook import Result
 
 log = logging.getLogger("rll_bt.agent")
@@ -65,6 +66,7 @@ class ServerLink:
         self.seq = 0
         self.server_speaks_rllbt = False      # a GamePhase / MachineMap / TaskDetail came
         self.color: str | None = None         # our colour, set by the agent once known
+        self.lease = TaskLease()              # how long the server leaves the robot its task unheard
 
     @property
     def extras(self) -> bool:
@@ -92,6 +94,7 @@ class ServerLink:
             self.silent = False
             if rec.msg.DESCRIPTOR.full_name.startswith("rllbt."):
                 self.server_speaks_rllbt = True
+                self.lease.heard(rec.msg)
             if self.delivery is not None and not self.delivery.incoming(rec.msg):
                 continue                        # an acknowledgement
             out.append(rec)

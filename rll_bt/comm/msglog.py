@@ -13,6 +13,19 @@ bus channel or stream address; ``msg`` the protobuf JSON mapping (original field
 name).  Frames of the team channels and the team-server link are decrypted
 with the team key; a frame that cannot be decoded is logged with ``type``
 null and the ``error`` cause.
+
+Size: a whole 2016 game writes about 8 MB (24 000 lines), nine tenths of it
+messages that repeat on a timer (:data:`PERIODIC`: beacons, heartbeats,
+robot statuses, the refbox's broadcasts).  A log holds everything until it
+reaches ``limit`` bytes (:data:`LOG_LIMIT`, 64 MB, well over a game's).
+From then on the periodic messages are left out and counted; every other
+message (the tasks, their results and acknowledgements, the robots'
+hellos and observations, the reports and machine instructions to the
+refbox) is still written, so the tasks the report reads from a log are all
+there, and past the limit the log grows only with the work done.  A line
+with ``type`` null and ``limit`` (``{"bytes", "left_out": {type: count}}``)
+says where the leaving out began and, when the log is closed, how much it
+left out.
 """
 from __future__ import annotations
 
@@ -66,15 +79,25 @@ class FrameDecoder:
         return (decoded.msg, None) if decoded is not None else (None, cause)
 
 
+#: bytes a log holds before it leaves out the periodic messages
+LOG_LIMIT = 64 << 20
+#: messages sent again and again on a timer, whatever happens: left out past the limit
+PERIODIC = frozenset({"BeaconSignal", "Heartbeat", "RobotStatus", "GamePhase", "GameState", "MachineInfo",
+                      "OrderInfo", "RingInfo", "RobotInfo", "ExplorationInfo", "MachineMap", "VersionInfo",
+                      "MachineReportInfo", "GameInfo"})
+
+
 class MessageLog(FrameDecoder):
     """Writes tapped frames, decoded, as JSON lines (see the module doc).
 
     ``key``: the team key; ``line_buffered``: every line reaches the file at
-    once (a process that may be killed).
+    once (a process that may be killed); ``limit``: bytes after which the
+    :data:`PERIODIC` messages (and undecoded frames) are left out (None: never).
     """
 
     def __init__(self, path: str | Path, clock, registries: dict[str, MessageRegistry],
-                 default: MessageRegistry, key: str | None = None, line_buffered: bool = False):
+                 default: MessageRegistry, key: str | None = None, line_buffered: bool = False,
+                 limit: int | None = LOG_LIMIT):
         super().__init__(registries, default, key)
         self.path = Path(path)
         self.clock = clock
@@ -83,6 +106,9 @@ class MessageLog(FrameDecoder):
         self.lines = 0
         self.undecoded = 0
         self.types: dict[str, int] = {}
+        self.limit = limit
+        self.bytes = 0
+        self.left_out: dict[str, int] = {}
 
     def tap(self, channel: str, source, frame: bytes) -> None:
         """A :meth:`rll_bt.comm.Bus.tap` callback."""
@@ -106,10 +132,29 @@ class MessageLog(FrameDecoder):
                      "msg": to_dict(msg)})
 
     def _write(self, entry: dict) -> None:
-        self._fh.write(json.dumps(entry, separators=(",", ":")) + "\n")
+        line = json.dumps(entry, separators=(",", ":")) + "\n"
+        if self.limit is not None and self.bytes + len(line) > self.limit and entry["type"] in PERIODIC | {None}:
+            kind = entry["type"] or "undecoded"
+            if not self.left_out:
+                self._mark()
+            self.left_out[kind] = self.left_out.get(kind, 0) + 1
+            return
+        self._fh.write(line)
+        self.bytes += len(line.encode("utf-8"))
+        self.lines += 1
+
+    def _mark(self) -> None:
+        """The line that says what the limit left out (so far)."""
+        line = json.dumps({"t": round(self.clock.now(), 4), "channel": "log", "from": "log", "type": None,
+                           "limit": {"bytes": self.limit, "left_out": dict(self.left_out)}},
+                          separators=(",", ":")) + "\n"
+        self._fh.write(line)
+        self.bytes += len(line)
         self.lines += 1
 
     def close(self) -> None:
         if self._fh is not None:
+            if self.left_out:
+                self._mark()
             self._fh.close()
             self._fh = None

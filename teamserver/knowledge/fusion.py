@@ -78,6 +78,12 @@ class DiscreteBelief:
     def empty(self) -> bool:
         return not self._votes
 
+    def rows(self) -> list[tuple[str, Hashable, float, float]]:
+        """(robot, value, confidence, time) of every vote, in order: added again
+        in this order (:meth:`add`, the refbox's with :meth:`add_fixed`) they
+        make the same belief (a robot's votes lie ``revisit_gap`` apart)."""
+        return [(r, v, c, t) for r, v, c, t in self._votes]
+
     def sources(self, min_confidence: float = 0.0) -> set[str]:
         """Robots (sources) with a vote of at least ``min_confidence``."""
         return {v[0] for v in self._votes if v[2] >= min_confidence}
@@ -124,16 +130,22 @@ class PoseBelief:
 
     def __init__(self) -> None:
         self._by_robot: dict[str, tuple[tuple[float, float, float], float]] = {}
+        self._times: dict[str, float] = {}
 
     def add(self, robot: str, value: Iterable[float], confidence: float, t: float = 0.0) -> None:
         x, y, ori = (float(v) for v in value)
         self._by_robot[robot] = ((x, y, ori), confidence)
+        self._times[robot] = t
 
     add_fixed = add
 
     @property
     def empty(self) -> bool:
         return not self._by_robot
+
+    def rows(self) -> list[tuple[str, tuple[float, float, float], float, float]]:
+        """(robot, pose, confidence, time) of each robot's latest pose: added again, the same belief."""
+        return [(r, v, c, self._times[r]) for r, (v, c) in self._by_robot.items()]
 
     def estimate(self) -> Estimate | None:
         if not self._by_robot:

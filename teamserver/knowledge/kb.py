@@ -3,7 +3,13 @@
 Holds machine observations (fused per property), robots, orders, station
 states, workpieces, tasks, products, visited zones and what was reported.
 Every mutating method persists at once; :meth:`KnowledgeBase.load` rebuilds
-the same state from the database after a restart.
+the same state from the database after a restart.  The observations are kept
+as they came until the store holds ``observation_limit`` of them; then they
+are folded into what the beliefs hold (each robot's vote per visit, its
+latest pose; :meth:`KnowledgeBase.fold_observations`): reloaded, the folded
+rows make exactly the same beliefs, so nothing a decision needs is lost.  The
+table holds at most the limit or twice the beliefs' votes, whichever is more
+(a robot votes again only after ``revisit_gap`` s of silence about a property).
 """
 from __future__ import annotations
 
@@ -17,6 +23,8 @@ from .fusion import DiscreteBelief, Estimate, PoseBelief
 from .store import Store
 
 REFBOX = "refbox"          # the "robot" name of ground truth released by the refbox
+#: observation rows the store holds before they are folded into the beliefs' votes
+OBSERVATION_LIMIT = 5000
 
 
 class MachineBelief:
@@ -47,11 +55,15 @@ class MachineBelief:
 class KnowledgeBase:
     """In-memory state plus its write-through :class:`Store`."""
 
-    def __init__(self, profile: Profile, store: Store | None = None):
+    def __init__(self, profile: Profile, store: Store | None = None, *, observation_limit: int = OBSERVATION_LIMIT):
         self.profile = profile
         self.store = store if store is not None else Store(":memory:")
         self.machines: dict[str, MachineBelief] = {}
-        self.observation_count = 0
+        self.observation_count = 0              # observations fused since the game began
+        self.observation_limit = observation_limit
+        self.observation_rows = 0               # rows the store holds
+        self.folds = 0                          # times they were folded (this process)
+        self._fold_at = observation_limit
         self.robots: dict[int, M.Robot] = {}
         self.orders: dict[int, M.Order] = {}
         self.stations: dict[str, M.Station] = {}
@@ -64,9 +76,9 @@ class KnowledgeBase:
 
     # -- restart ----------------------------------------------------------------
     @classmethod
-    def load(cls, profile: Profile, store: Store) -> KnowledgeBase:
+    def load(cls, profile: Profile, store: Store, *, observation_limit: int = OBSERVATION_LIMIT) -> KnowledgeBase:
         """The knowledge base as persisted in ``store`` (empty for a new database)."""
-        kb = cls(profile, store)
+        kb = cls(profile, store, observation_limit=observation_limit)
         saved = store.get_meta("profile")
         if saved is not None and saved != profile.name:
             from rll_bt.errors import UserError
@@ -76,6 +88,8 @@ class KnowledgeBase:
             store.set_meta("profile", profile.name)
         for machine, prop, value, conf, robot, t in store.observations():
             kb._fuse(M.Observation(machine, prop, value, conf, robot, t))
+        kb.observation_rows = kb.observation_count
+        kb.observation_count += int(store.get_meta("observations_folded", 0))
         for attr, kind, rec, keyf in cls._TABLES:
             table = getattr(kb, attr)
             for key, data in store.all(kind):
@@ -111,6 +125,19 @@ class KnowledgeBase:
         self._fuse(obs)
         self.store.add_observation(obs.machine, obs.prop, obs.value, obs.confidence,
                                    obs.robot, obs.time)
+        self.observation_rows += 1
+        if self.observation_rows > self._fold_at:
+            self.fold_observations()
+
+    def fold_observations(self) -> None:
+        """Replace the stored observations by the beliefs' votes (see the module doc)."""
+        rows = [(name, prop, list(v) if isinstance(v, tuple) else v, c, robot, t)
+                for name, mb in self.machines.items() for prop, belief in mb.props.items()
+                for robot, v, c, t in belief.rows()]
+        self.store.replace_observations(rows, {"observations_folded": self.observation_count - len(rows)})
+        self.observation_rows = len(rows)
+        self.folds += 1
+        self._fold_at = max(self.observation_limit, 2 * len(rows))
 
     def _fuse(self, obs: M.Observation) -> None:
         belief = self.machine(obs.machine).props[obs.prop]

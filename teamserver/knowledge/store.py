@@ -11,6 +11,15 @@ Every change is committed at once, so a killed server loses nothing it had
 acknowledged.  ``":memory:"`` keeps everything in RAM (tests, benchmarks).
 Other processes (``rll-bt teamserver status``) may read the file while the
 server writes: WAL lets readers and one writer work side by side.
+
+Bounds: ``records`` and ``meta`` hold one row per thing the team knows (a
+task, an order, a product...), rewritten in place, so they grow only with the
+work done.  ``observations`` grows with every message of the robots: the
+knowledge base folds it (:meth:`Store.replace_observations`, one transaction,
+so a kill in between leaves the old rows or the new ones) into what its
+beliefs hold once it passes a limit.  The write-ahead log is checkpointed by
+SQLite every 1000 pages and cut back to ``WAL_LIMIT`` bytes after each
+checkpoint (``journal_size_limit``).
 """
 from __future__ import annotations
 
@@ -23,6 +32,8 @@ from typing import Any
 from rll_bt.errors import UserError
 
 SCHEMA_VERSION = 1
+#: bytes the write-ahead log is cut back to after a checkpoint
+WAL_LIMIT = 4 << 20
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS observations (
@@ -54,6 +65,7 @@ class Store:
                 self.db = sqlite3.connect(self.path, isolation_level=None)
                 self.db.execute("PRAGMA journal_mode=WAL")
                 self.db.execute("PRAGMA synchronous=NORMAL")
+                self.db.execute(f"PRAGMA journal_size_limit={WAL_LIMIT}")
                 self.db.executescript(_SCHEMA)
                 if self.get_meta("schema") is None:
                     self.set_meta("schema", SCHEMA_VERSION)
@@ -81,6 +93,26 @@ class Store:
                 "SELECT machine, prop, value, confidence, robot, time FROM observations "
                 "ORDER BY seq"):
             yield m, p, json.loads(v), c, r, t
+
+    def count_observations(self) -> int:
+        return self.db.execute("SELECT COUNT(*) FROM observations").fetchone()[0]
+
+    def replace_observations(self, rows, meta: dict[str, Any] | None = None) -> None:
+        """All observations replaced by ``rows`` ((machine, prop, value, confidence,
+        robot, time), in this order) and ``meta`` set, in one transaction."""
+        db = self.db
+        db.execute("BEGIN IMMEDIATE")
+        try:
+            db.execute("DELETE FROM observations")
+            db.executemany("INSERT INTO observations (machine, prop, value, confidence, robot, time)"
+                           " VALUES (?, ?, ?, ?, ?, ?)",
+                           ((m, p, json.dumps(v), c, r, t) for m, p, v, c, r, t in rows))
+            for key, value in (meta or {}).items():
+                self.set_meta(key, value)
+        except BaseException:
+            db.execute("ROLLBACK")
+            raise
+        db.execute("COMMIT")
 
     # -- records -------------------------------------------------------------
     def put(self, kind: str, key: Any, data: Any) -> None:

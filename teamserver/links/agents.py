@@ -70,6 +70,7 @@ class AgentLink:
         self.league_peers: set = set()   # peers that spoke without it
         self._outcomes: dict[tuple[int, int], object] = {}   # (robot, task id) -> TaskOutcome
         self.hb_seq = 0
+        self.heard: dict[int, float] = {}   # robot -> latest stamp (its clock) of its RobotStatus heard
 
     def speaks_rllbt(self, robot: M.Robot | None) -> bool:
         """Whether rll-bt's additions may go to ``robot`` (None: to every robot)."""
@@ -105,6 +106,7 @@ class AgentLink:
         self.league_peers.discard(peer)
         r = self.robot(int(m.robot_id), peer)
         r.name = m.peer_name or r.name
+        self.heard.pop(r.number, None)     # a new connection, perhaps a new process with a new clock
         self.seen(r)
         if m.HasField("restarted") and m.restarted:
             r.holding = None            # a rebooted robot has lost what it knew
@@ -164,6 +166,8 @@ class AgentLink:
 
     def on_status(self, m, peer) -> tuple[M.Robot, bool]:
         r = self.robot(int(m.robot_id), peer)
+        if m.HasField("stamp"):
+            self.heard[r.number] = max(m.stamp, self.heard.get(r.number, -math.inf))
         back = self.seen(r)
         if m.HasField("pose"):
             r.pose = (m.pose.x, m.pose.y, m.pose.theta)
@@ -259,9 +263,14 @@ class AgentLink:
         """The AgentTask that stops the assignment ``wire`` on robot ``robot``."""
         return render_cancel(wire, robot, color)
 
-    def heartbeat_msg(self, number: int):
+    def heartbeat_msg(self, number: int, lease: float | None = None):
+        """A heartbeat to robot ``number``; with ``lease`` (the heartbeat timeout) its task
+        lease (:mod:`rll_bt.agent.lease`): the latest stamp of its statuses heard, and ``lease``."""
         self.hb_seq += 1
-        return self.ms.Heartbeat(robot_id=number, seq=self.hb_seq, stamp=self.clock.now())
+        hb = self.ms.Heartbeat(robot_id=number, seq=self.hb_seq, stamp=self.clock.now())
+        if lease is not None and number in self.heard:
+            hb.heard, hb.lease = self.heard[number], lease
+        return hb
 
     def game_phase_msg(self, phase: str, state: str, game_time: float, color: str | None,
                        exploring: bool):

@@ -15,6 +15,7 @@ from games.processes import ProcessGame
 from rll_bt import rules
 from teamserver.knowledge.kb import KnowledgeBase
 from teamserver.knowledge.store import Store
+from teamserver.links.agents import from_wire
 from tests.support.games import PRODUCTION_KINDS
 
 pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
@@ -195,7 +196,7 @@ def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
     assert [e["what"] for e in summary["events"]][:5] == ["agent killed", "agent started", "team server restarted",
                                                           "station down", "refbox restarted"]  # (+ the world's lag)
     runs = result.recording.tasks[victim]
-    assert any(r["id"] == tid and r["outcome"] == "agent killed" for r in runs)
+    assert any(from_wire(r["id"])[0] == tid and r["outcome"] == "agent killed" for r in runs)   # (wire ids)
     log = [json.loads(x) for x in (opts.out / "messages.jsonl").read_text().splitlines()]
     hellos = [x for x in log if x["type"] == "RobotHello" and x["from"] == f"R{victim}"]
     assert len(hellos) >= 2 and any(x["msg"]["restarted"] for x in hellos[1:])   # the new agent came back

@@ -132,13 +132,18 @@ class ScriptedServer:
         self.client = None
         self.pumps = 0
         self.heartbeat_every = 20       # pumps between the server's heartbeats
+        self.lease: float | None = None  # give the robot a task lease of so many s (rll_bt.agent.lease)
+        self.heard: float | None = None  # the latest stamp of the robot's statuses
         self._outcomes: dict[int, object] = {}
         self._results: list[Res] = []
 
     def pump(self) -> None:
         self.pumps += 1
         if self.client is not None and self.pumps % self.heartbeat_every == 0 and not self.league:
-            self.send(TM.Heartbeat(robot_id=0, seq=self.pumps))
+            hb = TM.Heartbeat(robot_id=0, seq=self.pumps)
+            if self.lease is not None and self.heard is not None:
+                hb.heard, hb.lease = self.heard, self.lease
+            self.send(hb)
         for ev in self.t.events():
             self.events.append(ev)
             if ev.kind == CONNECTED:
@@ -152,6 +157,8 @@ class ScriptedServer:
                 self.client = rx.source
                 self.send_phase()
                 self.send_map()
+            elif name == "RobotStatus" and rx.msg.HasField("stamp"):
+                self.heard = max(rx.msg.stamp, self.heard if self.heard is not None else rx.msg.stamp)
             elif name == "TaskOutcome":
                 self._outcomes[int(rx.msg.task_id)] = rx.msg
             elif name == "AgentTask" and (rx.msg.HasField("successful") or rx.msg.HasField("canceled")):

@@ -60,3 +60,68 @@ def test_the_agent_acknowledges_tasks_and_cancels():
     rig.run(1.0)
     acked = {(i.msg_type, i.id) for m in srv.of("LinkAck") for i in m.items}
     assert {(502, (9 << 3) | AT_TASK), (502, (9 << 3) | AT_CANCEL)} <= acked
+
+
+def test_a_robot_cut_off_longer_than_its_lease_stops_its_task_before_the_server_may_give_it_away():
+    """The server drops a robot it has not heard for its heartbeat timeout and gives the robot's
+    task to another: past that lease (its heartbeats say it) the robot stops the task, also when
+    it stands in a paused game, and reports it FAILED when back; a task that arrives before the
+    next heartbeat renews the lease waits for it."""
+    clock = SimClock()
+    bus = Bus(clock)
+    srv = ScriptedServer(bus.stream_server("ts", registry=TEAM_REG, key=KEY))
+    srv.lease = 3.0                     # the server drops a robot it has not heard for 3 s
+    cut = (3.0, 20.0)
+    link = FaultyTransport(bus.stream_client("ts", registry=TEAM_REG, key=KEY), LinkFaults(cuts=(cut,)),
+                           clock=clock, stream=True)
+    rig = Rig(link, srv, clock)
+    lease = rig.agent.server.lease
+    rig.until(lambda: rig.agent.gate.moving_allowed and lease.until is not None, what="a lease")
+    rig.run(2.3 - clock.now())
+    srv.task(4, "get_workpiece", machine="C-BS")
+    rig.until(lambda: srv.running(4) and rig.agent.run.ticks > 0, what="task 4 running")
+    srv.send_phase(state="PAUSED")          # the game is paused: the robot stands, on its task
+    rig.until(lambda: not rig.agent.gate.moving_allowed, what="the pause")
+    assert rig.agent.run is not None and not rig.agent.run.done and clock.now() < cut[0]
+    rig.run(cut[0] - clock.now())
+    heard = srv.heard                       # the last the server heard of the robot before the cut
+    rig.until(lambda: rig.agent.run is None, seconds=10.0, what="task 4 stopped while cut off")
+    stopped = clock.now()
+    # stopped before the server could have dropped the robot (heard + lease), not long before
+    assert cut[0] < stopped <= heard + srv.lease and stopped > heard + srv.lease - 1.5
+    assert rig.drives()[-1][1] == "stop" and lease.expiries == 1
+    [result] = rig.agent.server.delivery.unacknowledged
+    assert result.task_id == 4 and not result.successful
+    rig.run(cut[1] - clock.now() - 0.5)
+    assert rig.drives()[-1][1] == "stop" and not _final(srv, 4)          # still waiting, not moving
+
+    # back on the link: the result reaches the server; a task sent before the server's next
+    # heartbeat (which renews the lease) waits for it, then begins
+    rig.until(lambda: _final(srv, 4), seconds=3.0, what="the result after the cut")
+    res = _final(srv, 4)[0]
+    assert res.status == "FAILED" and res.code == "NOT_RUNNING" and "lease" in res.text
+    srv.heartbeat_every = 10 ** 6
+    srv.send_phase(state="RUNNING")
+    srv.task(5, "get_workpiece", machine="C-BS")
+    rig.until(lambda: rig.agent.run is not None, what="task 5 received")
+    n = len(rig.drives())
+    rig.run(2.0)
+    assert rig.agent.run is not None and rig.agent.run.ticks == 0 and len(rig.drives()) == n   # not begun
+    srv.send(TM.Heartbeat(robot_id=0, seq=1, heard=srv.heard, lease=srv.lease))
+    rig.until(lambda: rig.agent.run is None or rig.agent.run.ticks > 0, what="task 5 begun")
+    assert lease.expiries == 1
+
+
+def test_a_cut_shorter_than_the_lease_costs_nothing():
+    clock = SimClock()
+    bus = Bus(clock)
+    srv = ScriptedServer(bus.stream_server("ts", registry=TEAM_REG, key=KEY))
+    srv.lease = 10.0
+    link = FaultyTransport(bus.stream_client("ts", registry=TEAM_REG, key=KEY), LinkFaults(cuts=((3.0, 8.0),)),
+                           clock=clock, stream=True)
+    rig = Rig(link, srv, clock)
+    rig.until(lambda: rig.agent.gate.moving_allowed and rig.agent.server.lease.until is not None, what="a lease")
+    rig.run(2.5 - clock.now())
+    srv.task(4, "get_workpiece", machine="C-BS")
+    rig.until(lambda: _final(srv, 4), seconds=30.0, what="task 4 done")
+    assert _final(srv, 4)[0].status == "SUCCEEDED" and rig.agent.server.lease.expiries == 0
