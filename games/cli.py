@@ -18,9 +18,13 @@ the agents' backends and the refbox's stations (the station link) over TCP.  The
 league's, or ``rll-bt refbox sim``): the world serves it its stations and
 its clock, the team server and the agents play on its ports
 (:mod:`games.external`, ``docs/league.md``).
+``--external-team COLOR --teamserver HOST:PORT`` makes the world the
+league's simulator for another team's software: the robots of COLOR
+connect to that team server and take its AgentTasks (:mod:`games.league_sim`).
 
 Exit codes: 0 the game finished, 1 it did not, 2 bad arguments, 3 no display
-for ``--gui`` or the external refbox (or its broker) cannot be reached.
+for ``--gui``, the external refbox (or its broker) cannot be reached, or an
+external team's robots could not connect.
 ``rll-bt sim world`` (the world's own command) draws layouts.
 
 Registered through the ``rll_bt.commands`` entry point ``games``.  The
@@ -70,8 +74,8 @@ def register(cli) -> None:
     cli.group("sim")
     gp = cli.group_parser("sim")
     gp.description = __doc__.split("\n\n")[2].replace("\n", " ")
-    gp.epilog = ("exit codes: 0 game finished, 1 it did not, 2 bad arguments, 3 no display for --gui or the "
-                 "external refbox unreachable")
+    gp.epilog = ("exit codes: 0 game finished, 1 it did not, 2 bad arguments, 3 no display for --gui, the "
+                 "external refbox unreachable or an external team's robots could not connect, 130 interrupted")
     g = gp.add_argument_group("game")
     g.add_argument("--profile", default=rules.DEFAULT, choices=rules.PROFILES,
                    help="rules profile (default %(default)s)")
@@ -184,6 +188,8 @@ def register(cli) -> None:
     g.add_argument("--localisation", default="cheap", choices=published("localisation"), metavar="PRESET",
                    help="localiser preset of the agents (%(choices)s; default %(default)s; with --processes "
                         "passed to every rll-bt agent)")
+    from .external_cli import add_arguments
+    add_arguments(gp)
     gp.set_defaults(func=run)
 
     p = cli.command("replay", "print what a game recording holds and draw its report again")
@@ -235,6 +241,11 @@ def options_from(args):
 
 
 def run(args) -> int:
+    if args.external_team:
+        from .external_cli import run as run_external
+        return run_external(args)
+    if args.teamserver:
+        raise UserError("--teamserver names the team server of an --external-team", where="--teamserver")
     from rll_bt.backend import BackendUnavailable
     from rll_bt.clock import WallClock
 

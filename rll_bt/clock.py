@@ -57,6 +57,12 @@ class SimClock:
     def epoch(self) -> float:
         return self._epoch_offset + self._t
 
+    def sync_epoch(self, epoch: float) -> None:
+        """From now on :meth:`epoch` reads ``epoch`` at the current time (a
+        simulation that follows the wall clock stamps its messages with real
+        Unix time)."""
+        self._epoch_offset = float(epoch) - self._t
+
     def advance(self, seconds: float) -> float:
         if seconds < 0:
             raise ValueError(f"cannot advance a clock backwards ({seconds})")

@@ -169,6 +169,14 @@ class RefboxHere(_ViewOfWorld, InProcessRefbox):
     def attach_bus(self, bus) -> None:
         self.node = RefboxNode.on_bus(self.game, bus, keys=dict(self.teams.values()))
 
+    def attach_udp(self, *, host: str, layout, stream_port: int = -1) -> None:
+        """Put the refbox on UDP on this world's clock (``host``: where it sends,
+        e.g. the loopback broadcast; ``layout``: a :class:`rll_bt.comm.Layout`
+        or its name, the refbox's view; ``stream_port``: the plain TCP control
+        stream, -1 none): teams of other processes play in this world."""
+        self.node = RefboxNode.on_udp(self.game, host=host, layout=layout, keys=dict(self.teams.values()),
+                                      stream_port=stream_port)
+
     def start(self) -> None:
         self.game.start()
 
@@ -266,8 +274,8 @@ def load_stored(path: str | Path, profile: str):
 
 
 @offers(perception=PERCEPTION_MODES)
-def open_game(profile: str = "rcll2016", seed: int = 0, *, team_name: str, key: str, perception: str = "oracle",
-              gui: bool = False, phases: dict | None = None, world_step: float = 0.05,
+def open_game(profile: str = "rcll2016", seed: int = 0, *, team_name: str | None, key: str | None,
+              perception: str = "oracle", gui: bool = False, phases: dict | None = None, world_step: float = 0.05,
               robot_options: dict | None = None, refbox: str = "here", stored_game: str | Path | None = None,
               save_game: str | Path | None = None, external: dict | None = None,
               teams: dict | None = None) -> Simulation:

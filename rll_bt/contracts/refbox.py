@@ -154,6 +154,12 @@ class InProcessRefbox(SimulatedRefbox):
         """Put the refbox on an in-process :class:`rll_bt.comm.Bus`: channels
         "public", "cyan", "magenta" and the control stream at "refbox"."""
 
+    def attach_udp(self, *, host: str, layout, stream_port: int = -1) -> None:
+        """Put the refbox on UDP on the world's clock (sending to ``host`` on
+        ``layout``, the refbox's view): teams of other processes play in this
+        world (``rll-bt sim --external-team``).  Optional."""
+        raise NotImplementedError(f"{type(self).__name__} cannot talk UDP")
+
 
 class RefboxProcess(SimulatedRefbox):
     """A refbox that runs as a process of its own (``rll-bt sim --processes``),

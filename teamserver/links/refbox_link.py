@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from rll_bt import msgs
-from rll_bt.comm import MessageRegistry, UdpPeer, layout
+from rll_bt.comm import Layout, MessageRegistry, UdpPeer, layout
 from rll_bt.comm.transport import Received, Transport
 
 
@@ -51,11 +51,12 @@ class RefboxLink:
             self.team.close()
 
 
-def udp_refbox_link(profile: str, host: str = "127.0.0.1", port_layout: str = "sim",
+def udp_refbox_link(profile: str, host: str = "127.0.0.1", port_layout: str | Layout = "sim",
                     clock=None) -> RefboxLink:
-    """A RefboxLink over UDP; ``port_layout`` "sim" (split ports) or "competition"."""
+    """A RefboxLink over UDP; ``port_layout`` "sim" (split ports), "competition",
+    or a :class:`~rll_bt.comm.Layout` (the refbox's view)."""
     reg = MessageRegistry.from_message_set(msgs.message_set(profile))
-    lay = layout(port_layout)
+    lay = port_layout if isinstance(port_layout, Layout) else layout(port_layout)
     pub = lay.robot("public")
     public = UdpPeer(host, pub.send, pub.recv, registry=reg, channel="public", clock=clock)
 
