@@ -354,6 +354,8 @@ class TeamServer:
         for t in d.matcher.assign(gt):
             if t.kind == M.RETRIEVE_CAP:
                 pm.caps.choose_shelf_slot(t)
+        if pm.caps.prefill_caps and d.fleet.idle_for() >= self.config.dispatch.idle_prefill:
+            pm.caps.prefill(gt, self.profile.phases.production)     # work for a robot without
         d.preparer.prepare(self.refbox.running(), gt)
         d.parking.park()
 

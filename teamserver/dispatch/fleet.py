@@ -31,6 +31,15 @@ class Fleet:
         self.clock = clock
         self.locks = locks
         self.tasks = tasks
+        self._idle_since: dict[int, float] = {}
+
+    def idle_for(self) -> float:
+        """Seconds the robot idle longest (no work, empty gripper; parking is no work)
+        has been so; called once a tick, after the assignment round."""
+        now = self.clock.now()
+        idle = {r.number for r in self.available_robots() if not r.holding}
+        self._idle_since = {n: self._idle_since.get(n, now) for n in idle}
+        return max((now - t for t in self._idle_since.values()), default=0.0)
 
     def idle_robots(self) -> list[M.Robot]:
         """Robots without a task (a parking robot has one: see :meth:`available_robots`)."""

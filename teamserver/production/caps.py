@@ -8,11 +8,13 @@ retrieve another, and the product the cap is for keeps the station (its
   once every ring mount that does not wait for the cap-less base is under
   way;
 - an idle cap station gets a cap *ahead* (:meth:`Caps.prefill`) while
-  robots have nothing else to do; it is *free* (owner :data:`FREE`), and the
-  most urgent product whose cap is due there takes it instead of retrieving
-  one (:meth:`Caps.adopt_free_caps`); a cap ahead no robot has taken yet
-  gives way to a product whose cap became due there
-  (:meth:`Caps.yield_prefills`).
+  robots have nothing else to do (more idle robots than steps that could
+  start, or a robot left without work for a while: the dispatcher's
+  ``idle_prefill``), also one whose planned products' caps are not due yet;
+  it is *free* (owner :data:`FREE`), and the most urgent product whose cap
+  is due there takes it instead of retrieving one
+  (:meth:`Caps.adopt_free_caps`); a cap ahead no robot has taken yet gives
+  way to a product whose cap became due there (:meth:`Caps.yield_prefills`).
 
 :class:`CapBuffers` keeps who owns the cap each station holds, in the
 knowledge base (``cap_buffer``: CS -> product id or :data:`FREE`).
@@ -174,7 +176,8 @@ class Caps:
         if game_time > horizon - self.prefill_stop or not self.kb.orders:
             return []
         buf, made = self.buffers.owners, []
-        busy = {t.machine for t in self.kb.open_tasks() if t.machine}
+        later = self._not_due_yet()
+        busy = {t.machine for t in self.kb.open_tasks() if t.machine and t.id not in later}
         prefilling = {t.machine for p in self.products.active() if p.order_id == CLEANUP_ORDER
                       for t in self.kb.tasks_of(p.tasks) if t.kind == M.RETRIEVE_CAP}
         for cs, cap in sorted(self.cs_caps.items()):
@@ -221,6 +224,19 @@ class Caps:
             out.append(p)
             log.info("%s gives up its cap ahead into %s: a product's cap is due there",
                      p.id, retrieve[0].machine)
+        return out
+
+    def _not_due_yet(self) -> set[int]:
+        """Ids of the pending tasks at a cap station of products whose cap there is not
+        due yet (:meth:`cap_due`): they use the station only later, and a cap retrieved
+        ahead into it now is theirs to take once it is due (:meth:`adopt_free_caps`)."""
+        out: set[int] = set()
+        for p in self.products.active():
+            for cs in self.cs_caps:
+                chain = self.cap_chain(p, cs)
+                if chain is not None and not self.cap_due(chain[0]):
+                    out |= {t.id for t in self.kb.tasks_of(p.tasks)
+                            if t.machine == cs and t.state == M.PENDING}
         return out
 
     def choose_shelf_slot(self, task: M.Task) -> None:

@@ -84,9 +84,6 @@ def test_a_restarted_team_server_resumes_from_its_database_and_goes_on_playing()
         assert game.refbox.status().phase == "PRODUCTION"
 
 
-@pytest.mark.xfail(reason="open (issue 17): fails since the real refbox rules (222c840) and the "
-                   "real-rules team server (875669a); "
-                   "nothing else assigned while C-BS is down", strict=False)
 def test_a_station_going_down_gets_no_work_until_it_is_back(tmp_path):
     with short_game(seed=5) as game:
         prepares = _prepares(game, tmp_path)
@@ -115,9 +112,6 @@ def test_a_station_going_down_gets_no_work_until_it_is_back(tmp_path):
                               limit=150.0), "C-BS was not used again after its down period"
 
 
-@pytest.mark.xfail(reason="open (issue 17): fails since the real refbox rules (222c840) and the "
-                   "real-rules team server (875669a); "
-                   "C-CS1 gets no work after its down period", strict=False)
 def test_a_cap_station_going_down_holds_its_work_while_the_rest_goes_on_and_it_resumes(tmp_path):
     """No other station can stand in for a cap station: C-CS1 holds the grey caps,
     C-CS2 the black ones (one ring station per ring colour, too).  So the plan waits

@@ -254,3 +254,20 @@ def test_work_that_frees_a_stuck_robot_goes_first():
     # ... but the retrieval that frees robot 1 goes first
     assert kb.tasks[retrieve.id].state == M.ASSIGNED and kb.tasks[retrieve.id].robot == 2
     assert not any(t.machine == "C-CS1" and t.state == M.ASSIGNED for t in kb.tasks.values())
+
+
+def test_the_fleet_tells_how_long_a_robot_has_been_without_work():
+    ls = Lockstep()
+    production_setup(ls, [])                            # nothing to make: all three idle
+    fleet = ls.server.dispatcher.fleet
+    idle = fleet.idle_for()
+    ls.clock.advance(4.0)
+    assert fleet.idle_for() == pytest.approx(idle + 4.0)
+    r = ls.server.kb.robots[1]
+    r.holding = "P1/wp1"                                # holding a workpiece: not without work
+    ls.server.kb.save_robot(r)
+    for n in (2, 3):
+        r = ls.server.kb.robots[n]
+        r.task_id = 99
+        ls.server.kb.save_robot(r)
+    assert fleet.idle_for() == 0.0

@@ -263,3 +263,30 @@ def test_a_cap_ahead_no_robot_took_yet_gives_way_to_a_product_whose_cap_is_due()
     [grey] = [p for p in kb.products.values() if p.order_id == 2]
     [own] = [t for t in kb.tasks_of(grey.tasks) if t.kind == M.RETRIEVE_CAP]
     assert own.machine == "C-CS1" and pm.locks.owners.get("C-CS1") in (None, grey.id)
+
+
+def test_a_robot_without_work_retrieves_a_cap_ahead_for_a_product_whose_cap_is_not_due():
+    """The BS is DOWN: the C2's first ring waits for a base, its cap (grey, C-CS1) is
+    not due before its rings are under way, so the robots have nothing to do: a cap is
+    retrieved ahead into C-CS1, which the C2 mounts once its cap is due."""
+    ls = Lockstep()
+    production_setup(ls, [{"id": 6, "complexity": 2, "rings": ["RING_GREEN", "RING_YELLOW"],
+                               "cap_color": 2}], states={"C-BS": "DOWN"})
+    pm, kb = ls.server.production, ls.server.kb
+    [p] = [p for p in kb.products.values() if p.order_id == 6]
+    retrieve, _, _ = pm.caps.cap_chain(p, "C-CS1")
+    assert not pm.caps.cap_due(retrieve)
+
+    def ahead_into(cs):
+        return [q for q in kb.products.values() if q.order_id == 0 and any(
+            t.kind == M.RETRIEVE_CAP and t.machine == cs for t in kb.tasks_of(q.tasks))]
+    ls.step(dt=0.5, n=34)
+    assert ahead_into("C-CS1")
+    # the C2's own retrieval stays pending: the cap waiting ahead is its to take when due
+    assert kb.tasks[retrieve.id].state == M.PENDING
+    pm.buffers.take("C-CS1", FREE)
+    for t in kb.tasks_of(p.tasks):
+        if t.kind == M.MOUNT_RING:
+            t.state = M.DONE
+            kb.save_task(t)
+    assert pm.caps.adopt_free_caps() == [p] and pm.buffers.owners["C-CS1"] == p.id
