@@ -24,7 +24,14 @@ PyBullet scenes and drawn towers) and, for the reverse direction, models
 trained on renderer B alone (``--reverse-models DIR``; without it they are
 trained first: ``rll-bt vision train-light --source raycast``).
 
-Readers: the HOG + network chain on the whole frame, and inside the
+Readers: the physical reader inside the tag-given region, alone and
+finding the tower for the HOG chain's light network to read
+(``physical-hog-region``, the reverse direction with both trained on B)
+(:mod:`skills.perception.light.physical`: candidate boxes of the tag's
+tower height described by what a tower physically is, one small network;
+shipped model ``models/tower_physical.npz``, ``--physical``; the reverse
+direction's one trained on renderer B, ``--physical-reverse``); the HOG +
+network chain on the whole frame, and inside the
 tag-given region (for ``ours`` what
 :func:`skills.perception.light.region.tower_region` makes of the station's
 tag pose with tag-detection noise; for B and C the tower's box widened as
@@ -54,6 +61,8 @@ from rll_bt.clock import WallClock
 from skills.perception.light.colour_model import ColourModel
 from skills.perception.light.dataset import ChunkSpec, make_chunk
 from skills.perception.light.evaluation import LightScore, confusion_table
+from skills.perception.light.physical import MODEL_FILE as PHYSICAL_FILE
+from skills.perception.light.physical import PhysicalReader, samples, train, training_frames
 from skills.perception.light.reader import MODEL_DIR, LightReader
 
 SEED = 7_000_001
@@ -125,6 +134,15 @@ def _eval_job(args):
         return score_region(frames, lambda img, t: [(d.box, d.state) for d in
                                                     reader.read(img, region=t.region, tower_height=t.tower_height)[:1]],
                             clock)
+    if method in ("physical-region", "physical-hog-region"):
+        if method == "physical-region":
+            reader = PhysicalReader.load(model_dir)
+        else:
+            reader = PhysicalReader.load(model_dir[0])
+            reader.light = LightReader.load(model_dir[1])
+        return score_region(frames, lambda img, t: [(d.box, d.state) for d in
+                                                    reader.read(img, region=t.region, tower_height=t.tower_height)],
+                            clock)
     if method == "colour-roi":
         return score_region(frames, lambda img, t: [(t.box, model.read(img, t.roi))], clock)
     if method == "colour-full":
@@ -136,6 +154,8 @@ def tune_colour(frames) -> ColourModel:
     """The colour model's luma scale and lit fraction with the best ROI accuracy."""
     best = None
     base = ColourModel()
+    if not frames:
+        return base
     for luma in (0.5, 0.7, 0.85, 1.0, 1.2, 1.5):
         for fraction in (0.1, 0.2, 0.3, 0.5):
             m = base.scaled(luma, fraction)
@@ -158,41 +178,57 @@ def train_reverse(samples: int, workers: int) -> str:
     return out
 
 
-ROW_NAMES = {"hog-region": "HOG + network, tag region", "hog-full": "HOG + network, full frame",
+def train_physical_reverse(frames: int, workers: int) -> str:
+    """The physical reader trained on renderer B alone, in a temporary file."""
+    out = Path(tempfile.mkdtemp(prefix="physical-on-raycast-")) / "tower_physical.npz"
+    print(f"training the physical reader on renderer B ({frames} frames) into {out}", file=sys.stderr, flush=True)
+    made = training_frames(REVERSE_SOURCE, frames, 500_000, workers,
+                           progress=lambda s: print("  " + s, file=sys.stderr, flush=True))
+    train(*samples(made, __import__("numpy").random.default_rng(0)), trained_on="raycast").save(out)
+    return str(out)
+
+
+ROW_NAMES = {"physical-region": "physical reader, tag region", "physical-hog-region": "physical finds, HOG net reads",
+             "hog-region": "HOG + network, tag region", "hog-full": "HOG + network, full frame",
              "colour-roi": "colour model, geometric ROI", "colour-full": "colour model, full frame"}
 
 
 def table(title: str, results: dict) -> str:
-    lines = [title, f"{'reader':<28} {'test set':<13} {'towers':>6} {'acc all':>8} {'recall':>7} {'acc read':>8} "
+    lines = [title, f"{'reader':<30} {'test set':<13} {'towers':>6} {'acc all':>8} {'recall':>7} {'acc read':>8} "
                     f"{'false/1000':>10} {'ms med':>7} {'ms p95':>7}"]
     for (method, label), s in results.items():
         m = s.metrics()
         if not m["required_towers"] and not m["tower_free_frames"]:
             continue
         false = f"{m['false_per_1000']:.1f}" if m["tower_free_frames"] else "-"
-        lines.append(f"{ROW_NAMES[method]:<28} {label:<13} {m['required_towers']:>6} {m['end_to_end']:>8.4f} "
+        lines.append(f"{ROW_NAMES[method]:<30} {label:<13} {m['required_towers']:>6} {m['end_to_end']:>8.4f} "
                      f"{m['recall']:>7.4f} {m['state_accuracy']:>8.4f} {false:>10} {m['ms_median'] or 0:>7.1f} "
                      f"{m['ms_p95'] or 0:>7.1f}")
     return "\n".join(lines)
 
 
-def evaluate_sets(pool, workers: int, runs, sets, models: str, colour=None) -> dict:
+def evaluate_sets(pool, workers: int, runs, sets, models: str, colour=None, physical: str | None = None) -> dict:
     results = {}
     for method in runs:
+        if (method.startswith("physical") and physical is None) or (method == "physical-hog-region" and models is None):
+            continue
+        where = {"physical-region": physical, "physical-hog-region": (physical, models)}.get(method, models)
         for label, subset in sets:
             if not subset or (method.startswith("colour") and not label.startswith("ours")):
                 continue
             parts = [subset[i::workers] for i in range(workers)]
             results[(method, label)] = LightScore.combine(
-                pool.map(_eval_job, [(method, models, p, colour) for p in parts]))
+                pool.map(_eval_job, [(method, where, p, colour) for p in parts]))
             print(f"  evaluated {method} on {label}", file=sys.stderr, flush=True)
     return results
 
 
-def render_sets(args):
-    """The colour model's tuning frames and the labelled test sets."""
-    print("rendering the colour model's tuning frames", file=sys.stderr)
-    tune = [f for f in render(160, 0, 0, args.workers, args.seed + 5000) if f.truths]
+def render_sets(args, colour: bool = True):
+    """The colour model's tuning frames (none without ``colour``) and the labelled test sets."""
+    tune = []
+    if colour:
+        print("rendering the colour model's tuning frames", file=sys.stderr)
+        tune = [f for f in render(160, 0, 0, args.workers, args.seed + 5000) if f.truths]
     print("rendering test frames", file=sys.stderr)
     frames = render(args.towers, args.free, args.pasted, args.workers, args.seed)
     ours = [f for f in frames if not f.source.endswith("paste")]
@@ -230,6 +266,12 @@ def main(argv=None) -> int:
                     help="models trained on renderer B (default: train them first, --reverse-samples frames)")
     ap.add_argument("--reverse-samples", type=int, default=1000)
     ap.add_argument("--no-reverse", action="store_true", help="skip the reverse direction")
+    ap.add_argument("--physical", default=None, metavar="FILE",
+                    help="the physical reader's model (default: the shipped one)")
+    ap.add_argument("--physical-reverse", default=None, metavar="FILE",
+                    help="the physical reader trained on renderer B (default: train it first, "
+                         "--physical-reverse-frames frames)")
+    ap.add_argument("--physical-reverse-frames", type=int, default=400)
     ap.add_argument("--readers", default=",".join(ROW_NAMES),
                     help="readers to evaluate, comma-separated (default: %(default)s)")
     ap.add_argument("--no-forward", action="store_true",
@@ -251,29 +293,40 @@ def main(argv=None) -> int:
             tune, sets = pickle.load(fh)
         print(f"test frames from {cache}", file=sys.stderr)
     else:
-        tune, sets = render_sets(args)
+        tune, sets = render_sets(args, colour=any(r.startswith("colour") for r in readers))
         if cache is not None:
             with cache.open("wb") as fh:
                 pickle.dump((tune, sets), fh)
-    reverse = None if args.no_reverse else (args.reverse_models or train_reverse(args.reverse_samples, args.workers))
+    hog_readers = any(r.startswith("hog") for r in readers)
+    reverse = None if args.no_reverse or not hog_readers else (
+        args.reverse_models or train_reverse(args.reverse_samples, args.workers))
+    physical = args.physical or str(PHYSICAL_FILE)
+    physical_reverse = None
+    if any(r.startswith("physical") for r in readers) and not args.no_reverse:
+        physical_reverse = args.physical_reverse or train_physical_reverse(args.physical_reverse_frames,
+                                                                           args.workers)
     shipped = {}
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         if not args.no_forward:
             colour = tune_colour(tune) if any(r.startswith("colour") for r in readers) else None
-            shipped = evaluate_sets(pool, args.workers, readers, sets, model_dir, colour)
-        back = evaluate_sets(pool, args.workers, [r for r in readers if r.startswith("hog")], sets,
-                             reverse) if reverse else {}
+            shipped = evaluate_sets(pool, args.workers, readers, sets, model_dir, colour, physical)
+        back_readers = [r for r in readers if (r.startswith("hog") and reverse) or
+                        (r == "physical-region" and physical_reverse) or
+                        (r == "physical-hog-region" and reverse and physical_reverse)]
+        back = evaluate_sets(pool, args.workers, back_readers, sets, reverse, physical=physical_reverse)
     print()
     print(f"commit {commit()}; models {model_dir if not args.no_forward else '-'}; "
-          f"reverse models {reverse or '-'}")
+          f"reverse models {reverse or '-'}; physical reader {physical if not args.no_forward else '-'}, "
+          f"reverse {physical_reverse or '-'}")
     for label, subset in sets:
         print(f"{label}: {len(subset)} frames ({sum(1 for f in subset if f.tower_free)} tower-free)")
     print()
     if shipped:
-        print(table("trained on the project's renderer (PyBullet scenes, drawn towers): the shipped models", shipped))
+        print(table("trained on the project's renderer A (PyBullet scenes, drawn towers): the shipped models",
+                    shipped))
     if back:
         print()
-        print(table("trained on renderer B alone (the reverse direction)", back))
+        print(table("trained on renderer B alone (the reverse direction; test set ours = renderer A)", back))
     for key in (("hog-region", "B raycast"), ("hog-full", "B raycast"), ("hog-full", "C sketch")):
         if key in shipped:
             print(f"\nconfusion, shipped models, {ROW_NAMES[key[0]]} ({key[1]}); rows true state, "
@@ -281,7 +334,7 @@ def main(argv=None) -> int:
             print(confusion_table(shipped[key].confusion))
     print("\naims on the held-out renderer: acc all >= 0.995 (recall beside it), <= 1 false detection per 1000 "
           "tower-free frames, <= 15 ms per frame with the tag-given region")
-    print("(time per frame: 2 evaluations run in parallel on the 2 cores)")
+    print(f"(time per frame: {args.workers} evaluation(s) run in parallel on the machine's cores)")
     return 0
 
 

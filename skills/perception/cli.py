@@ -3,6 +3,9 @@
 - ``train-light --out DIR``: render a labelled data set from the PyBullet
   world, train the tower detector and the light network, report held-out
   accuracy and write the model files (see :mod:`.light.training`).
+- ``train-physical --out FILE``: train the physical tower reader (a
+  network over what a tower physically is, read in a tag-given region:
+  :mod:`.light.physical`) on frames of the PyBullet world or of renderer B.
 - ``light IMAGE...``: signal towers and their light states.  With
   ``--json`` one object per image and line: ``{"image": PATH, "ms": float,
   "detections": [{"box": [x, y, w, h], "score": float, "state": 0..7,
@@ -78,6 +81,26 @@ def register(cli) -> None:
                    help="worker processes (default: 2 or the number of cores if fewer)")
     t.set_defaults(func=cmd_train_light)
 
+    ph = sub.add_parser(
+        "train-physical", help="train the physical tower reader (tag-given regions)",
+        description="Render labelled frames (the PyBullet world with training photographs and drawn "
+                    "towers, or renderer B alone), describe every candidate box of each tower's "
+                    "tag-given region by what a signal tower physically is (per row band: brightness "
+                    "against the same box's brightest band, saturation, hue; contrast to the columns "
+                    "beside it), train the small network that reads them (8 states or no tower) and "
+                    "write it to one file.")
+    ph.add_argument("--out", required=True, metavar="FILE", help="model file to write (.npz)")
+    ph.add_argument("--frames", type=_int_at_least(10), default=400, metavar="N",
+                    help="labelled frames with towers to render (default 400)")
+    ph.add_argument("--source", choices=sorted(SOURCES), default="world",
+                    help="where the frames come from: world (default) or raycast (renderer B alone: "
+                         "the benchmark's reverse direction, never for a model to ship)")
+    ph.add_argument("--hidden", type=_int_at_least(2), default=24, metavar="K", help="hidden units (default 24)")
+    ph.add_argument("--seed", type=int, default=0, metavar="S", help="random seed (default 0)")
+    ph.add_argument("--workers", type=_int_at_least(1), default=min(2, os.cpu_count() or 1), metavar="W",
+                    help="worker processes rendering (default: 2 or the number of cores if fewer)")
+    ph.set_defaults(func=cmd_train_physical)
+
     li = sub.add_parser(
         "light", help="find signal towers in images and read their lights",
         description="Find signal towers with the HOG detector and read their light state with the "
@@ -142,6 +165,34 @@ def cmd_train_light(args) -> int:
     print(f"  detector threshold {d['threshold']:.3f}")
     print("confusion (rows: true state, columns: read state):")
     print(confusion_table(h["confusion"]))
+    return EXIT_OK
+
+
+# -- train-physical ----------------------------------------------------------
+def cmd_train_physical(args) -> int:
+    import time
+
+    import numpy as np
+
+    from .light.physical import samples, train, training_frames
+    t0 = time.perf_counter()
+    out = os.path.abspath(args.out)
+    if not os.path.isdir(os.path.dirname(out)):
+        print(f"error: no directory for {args.out}", file=sys.stderr)
+        return EXIT_USAGE
+    frames = training_frames(SOURCES[args.source], args.frames, args.seed * 1000 + 500_000, args.workers,
+                             progress=lambda s: print(s, file=sys.stderr, flush=True))
+    try:
+        x, y = samples(frames, np.random.default_rng(args.seed))
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_FAILURE
+    print(f"{len(x)} candidate boxes of {len(frames)} frames; training the network", file=sys.stderr, flush=True)
+    reader = train(x, y, hidden=args.hidden, seed=args.seed, trained_on=args.source, frames=len(frames))
+    reader.save(out)
+    acc = float((reader.probabilities(x).argmax(axis=1) == y).mean())
+    print(f"model written to {out} in {time.perf_counter() - t0:.0f} s; "
+          f"training accuracy {acc:.4f} on {len(x)} boxes ({int((y < 8).sum())} on towers)")
     return EXIT_OK
 
 

@@ -2,9 +2,10 @@
 
 :class:`CameraPerception` runs the detectors on ``backend.camera_image()``:
 ArUco tags (pose by solvePnP, upright disambiguation from the camera's
-extrinsics) and the signal towers, searched where each station tag in view
-says its tower must be (:func:`.light.region.tower_region`) and, if
-``full_frame_lights``, in the whole frame when no tag is in view.  Light
+extrinsics) and the signal towers (:func:`.light.physical.default_reader`),
+searched where each station tag in view says its tower must be
+(:func:`.light.region.tower_region`) and, if ``full_frame_lights``, in the
+whole frame when no tag is in view.  Light
 detections found through a tag carry that tag's id.
 
 :func:`make_tag_source` picks the source by a setting, not by code in the
@@ -49,8 +50,8 @@ class CameraPerception:
     @property
     def reader(self):
         if self._reader is None:
-            from .light.reader import LightReader
-            self._reader = LightReader.load()
+            from .light.physical import default_reader
+            self._reader = default_reader()
         return self._reader
 
     def detections(self) -> Detections | None:

@@ -6,7 +6,7 @@ import pytest
 from skills.perception.light.hog import TOWER_H, TOWER_W, Box, iou
 from skills.perception.light.mlp import Ensemble, Mlp
 from skills.perception.light.reader import SNAP_ANCHORS, LightReader, snapped
-from skills.perception.light.scenes import SceneRenderer, world_factory
+from tests.support.light_scene import rendered_tower
 
 
 class FixedDetector:
@@ -29,24 +29,7 @@ def shipped():
 def scene():
     """A frame of the project's renderer (what the shipped models are made for) showing a whole
     tower at least 50 px high with a lit red and a lit green lens (state 5), and its box."""
-    world = world_factory()("rcll2016", seed=2)
-    try:
-        r = SceneRenderer(world, np.random.default_rng(11))
-        for name in world.machines:
-            world.set_lights(name, red="ON", yellow="OFF", green="ON")
-            world.station(name).show_lights(world.cid, world.time, world.blink_hz)
-        for _ in range(40):
-            r.randomise_look()
-            view = r.tower_view()
-            if view is None:
-                continue
-            f = r.render(*view, dict.fromkeys(world.machines, 5))
-            for t in f.towers:
-                if t.clean and t.box[3] >= 50:
-                    return f.image, t.box
-        raise AssertionError("no view of a whole tower 50 px high in 40 tries")
-    finally:
-        world.close()
+    return rendered_tower(red=True, yellow=False, green=True)
 
 
 def test_snapped_boxes_have_the_expected_height_and_straddle_the_hit():

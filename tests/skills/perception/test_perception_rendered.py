@@ -1,6 +1,6 @@
 """Perception on images rendered by the PyBullet world, against the world's truth:
-station tags decode to their ids and give the station's pose; the shipped
-light models read the rendered tower's state through the tag-given region."""
+station tags decode to their ids and give the station's pose; the default
+light reader reads the rendered tower's state through the tag-given region."""
 import math
 
 import numpy as np
@@ -8,7 +8,7 @@ import pytest
 
 from backends.sim import World
 from rll_bt.backend import Pose2D, wrap_angle
-from skills.perception.light.reader import LightReader
+from skills.perception.light.physical import default_reader
 from skills.perception.source import CameraPerception
 from skills.perception.tags import MachineTracker, TagDetector
 
@@ -24,7 +24,8 @@ def world():
 
 @pytest.fixture(scope="module")
 def reader():
-    return LightReader.load()
+    """What games read lights with (the physical reader finds, the HOG chain's network reads)."""
+    return default_reader()
 
 
 def look_at_face(world, name, side, distance, off_deg):

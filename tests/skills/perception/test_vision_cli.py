@@ -126,3 +126,8 @@ def test_min_confidence_must_be_a_probability(rendered, capsys):
     assert "between 0 and 1" in capsys.readouterr().err
     assert main(["vision", "light", str(path), "--json", "--min-confidence", "1"]) == 0
     assert json.loads(capsys.readouterr().out)["detections"] == []     # no reading is that sure
+
+
+def test_train_physical_without_a_directory_for_its_file_is_bad_usage(tmp_path, capsys):
+    assert main(["vision", "train-physical", "--out", str(tmp_path / "no" / "such" / "model.npz")]) == 2
+    assert "no directory" in capsys.readouterr().err
