@@ -29,6 +29,7 @@ from rll_bt.rules import Profile, machine_team, machine_type
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
+from .docking import Docking
 
 log = logging.getLogger("teamserver.links.agents")
 
@@ -71,6 +72,7 @@ class AgentLink:
         self._outcomes: dict[tuple[int, int], object] = {}   # (robot, task id) -> TaskOutcome
         self.hb_seq = 0
         self.heard: dict[int, float] = {}   # robot -> latest stamp (its clock) of its RobotStatus heard
+        self.docking = Docking(kb, clock)   # where a robot of the league waits (it sends no RobotStatus)
 
     def speaks_rllbt(self, robot: M.Robot | None) -> bool:
         """Whether rll-bt's additions may go to ``robot`` (None: to every robot)."""
@@ -116,7 +118,8 @@ class AgentLink:
     def on_beacon(self, m, peer) -> tuple[M.Robot, bool]:
         """A robot's BeaconSignal: a sign of life (``back``: it was lost, or is
         new on this link).  A robot that never said hello is a league robot:
-        the beacon is all it says about itself (name, pose)."""
+        the beacon is all it says about itself (name, pose, the station it waits
+        at docked: :mod:`.docking`)."""
         league = peer not in self.rllbt_peers
         new = league and peer not in self.league_peers
         if league:
@@ -125,9 +128,12 @@ class AgentLink:
         back = self.seen(r) or new
         if league:
             r.name = m.peer_name or r.name
-            if m.HasField("pose"):
-                r.pose = (m.pose.x, m.pose.y, m.pose.ori)
+            pose = (m.pose.x, m.pose.y, m.pose.ori) if m.HasField("pose") else None
+            if pose is not None:
+                r.pose = pose
             r.state = "BUSY" if m.HasField("task") else "IDLE"
+            wire = int(m.task.task_id) if m.HasField("task") else None
+            r.waiting_at = self.docking.waiting_at(r.number, pose, wire, None if wire is None else self.task_of(wire))
             self.kb.save_robot(r)
         elif back:
             self.kb.save_robot(r)

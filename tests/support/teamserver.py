@@ -84,9 +84,11 @@ class TaskView:
 
 class FakeAgent:
     """A robot agent speaking rll-bt over the team-server link: the league's
-    AgentTask and BeaconSignal plus rll-bt's additions."""
+    AgentTask and BeaconSignal plus rll-bt's additions; with ``league`` a robot
+    of the league: no hello, no status, only beacons (pose, ``running`` task)."""
 
-    def __init__(self, transport, number: int, pose=(4.0, 0.5, 0.0), profile="rcll2016", ack: bool = True):
+    def __init__(self, transport, number: int, pose=(4.0, 0.5, 0.0), profile="rcll2016", ack: bool = True,
+                 league: bool = False):
         self.ms = msgs.message_set("team")
         self.lm = msgs.message_set("rcll2025")
         self.profile = rules.profile(profile)
@@ -95,13 +97,17 @@ class FakeAgent:
         self.pose = pose
         self.inbox: list = []
         self.seq = 0
-        self.ack = ack                       # acknowledge tasks and cancels, as an agent does
+        self.league = league
+        self.running = None                  # the AgentTask a league robot says it runs (beacon field 9)
+        self.ack = ack and not league        # acknowledge tasks and cancels, as an rll-bt agent does
         self.link = Reliable(SimClock())
         self.acks: list = []                 # LinkAcks the server sent
         self._views: list[TaskView] = []
         self._details: dict[int, object] = {}
 
     def hello(self, restarted=False):
+        if self.league:
+            return self.beat()
         self.t.send(self.ms.RobotHello(robot_id=self.number, team_name=TEAM,
                                        peer_name=f"robot{self.number}", restarted=restarted))
 
@@ -109,9 +115,15 @@ class FakeAgent:
         self.seq += 1
         b = self.lm.BeaconSignal(seq=self.seq, number=self.number, team_name=TEAM, peer_name=f"robot{self.number}")
         b.time.sec, b.time.nsec = 0, 0
+        b.pose.x, b.pose.y, b.pose.ori = self.pose
+        b.pose.timestamp.sec, b.pose.timestamp.nsec = 0, 0
+        if self.running is not None:
+            b.task.CopyFrom(self.running)
         self.t.send(b)
 
     def status(self, state=1, holding=False, waiting_at=None):
+        if self.league:
+            return self.beat()
         st = self.ms.RobotStatus(robot_id=self.number, state=state)
         st.pose.x, st.pose.y, st.pose.theta = self.pose
         if holding:
@@ -186,7 +198,7 @@ class Lockstep:
     """A team server, a fake refbox and fake agents on one bus and one clock."""
 
     def __init__(self, profile="rcll2016", robots=3, state=":memory:", config=None,
-                 tcp=False, **kw):
+                 tcp=False, league=False, **kw):
         self.tcp = tcp
         self.clock = SimClock()
         self.bus = Bus(self.clock)
@@ -198,7 +210,8 @@ class Lockstep:
         self.kw = kw
         self.team_reg = agent_link.registry()
         self.server = self._server()
-        self.agents = [FakeAgent(self._client(f"robot{i}"), i, profile=profile) for i in range(1, robots + 1)]
+        self.agents = [FakeAgent(self._client(f"robot{i}"), i, profile=profile, league=league)
+                       for i in range(1, robots + 1)]
         if tcp:
             for a in self.agents:
                 assert a.t.wait_connected(5.0), "loopback TCP connect failed"

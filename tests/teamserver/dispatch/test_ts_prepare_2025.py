@@ -46,3 +46,31 @@ def test_a_feed_is_prepared_only_once_its_robot_waits_docked_at_the_station():
     ls.step(n=4)
     assert len(prepares(ls, t.machine)) == 1
 
+
+
+def test_a_league_robot_that_stands_docked_at_its_feed_station_gets_it_prepared():
+    """rll-bt teamserver --robots agenttask under 2025: a robot of the league sends no
+    RobotStatus, so no ``waiting_at``; its beacons say the same (it runs the feed, stands
+    at the station and has not moved for 2 s)."""
+    ls = Lockstep("rcll2025", config=ServerConfig(prefill_caps=False, robots="agenttask"), league=True)
+    t, robot = _retrieve_cap(ls)
+    robot.running = next(v.agent_task for v in robot.tasks() if v.task_id == t.id)
+    x, y = _station(ls, t.machine)
+
+    def beacons(seconds, move=0.0):
+        for _ in range(int(seconds)):
+            robot.pose = (robot.pose[0] + move, robot.pose[1], robot.pose[2])
+            robot.beat()
+            ls.step(n=10)
+    robot.pose = (x + 3.0, y, 0.0)
+    beacons(4)                                        # standing, but far from the station
+    assert not prepares(ls, t.machine)
+    robot.pose = (x + 0.8, y, 0.0)
+    beacons(4, move=-0.05)                            # at the station, still docking
+    assert not prepares(ls, t.machine) and ls.server.kb.robots[robot.number].waiting_at is None
+    beacons(4)                                        # standing still, docked
+    assert ls.server.kb.robots[robot.number].waiting_at == t.machine
+    assert len(prepares(ls, t.machine)) == 1
+    robot.running = None
+    beacons(2)
+    assert ls.server.kb.robots[robot.number].waiting_at is None
