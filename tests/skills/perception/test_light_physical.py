@@ -82,6 +82,7 @@ def trained():
     return train(x, y, hidden=16, iterations=200)
 
 
+@pytest.mark.slow
 def test_a_reader_trained_on_drawn_towers_finds_drawn_towers_it_never_saw(trained):
     rng = np.random.default_rng(4)
     found = 0
@@ -109,6 +110,7 @@ def test_the_shipped_reader_finds_a_rendered_tower_for_the_light_network_to_read
     assert reader.read(img) == reader.light.read(img)   # no region: the chain's full-frame read
 
 
+@pytest.mark.slow
 def test_it_reads_only_in_a_tag_given_region_and_round_trips(trained, tmp_path):
     img = procedural_background(np.random.default_rng(5), 240, 320)
     with pytest.raises(ValueError, match="region"):
