@@ -4,8 +4,7 @@ not plan (lining up on a tag, sliding along a face, backing off).
 :class:`MotionGuard` answers how fast the robot may move in a direction of
 its own frame: the latest scan's points (moved to now by odometry) ahead
 within the robot's width plus ``lateral`` must stay ``margin`` metres
-away (points the map does not explain, other robots, ``OTHER_MARGIN`` and
-``OTHER_LATERAL`` more), braking at the base's deceleration; toward where the laser is blind
+away, braking at the base's deceleration; toward where the laser is blind
 (behind) the unexplained points remembered by navigation
 (``ctx.laser_memory``: other robots seen on the way in) count instead.  A
 pressed bumper stops every motion.  Units: metres, seconds, the robot
@@ -19,13 +18,8 @@ import numpy as np
 
 from rll_bt.backend import CapabilityError
 
-from .laserview import laser_view, points_now
-from .others import unexplained
-from .safety import scan_points, speed_limit, to_field
-
-#: more room (m) kept from what the map does not explain (other robots): ahead and beside
-OTHER_MARGIN = 0.07
-OTHER_LATERAL = 0.04
+from .laserview import points_now
+from .safety import scan_points, speed_limit
 
 
 class MotionGuard:
@@ -38,35 +32,23 @@ class MotionGuard:
         self._no_laser = False
         self._no_bumper = False
 
-    def _points(self) -> tuple[np.ndarray, np.ndarray]:
-        """Laser points in the robot frame of now: (walls and stations of the
-        map, the rest: other robots, mostly), both empty without a laser.
-        The rest goes into ``ctx.laser_memory`` (what stood beside the robot
-        while it lined up is still known when it backs off, blind)."""
-        none = np.zeros((0, 2))
+    def _points(self) -> np.ndarray:
+        """Laser points in the robot frame of now (empty without a laser)."""
         if self._no_laser:
-            return none, none
+            return np.zeros((0, 2))
         ctx = self.ctx
         try:
             scan = ctx.backend.laser_scan()
         except CapabilityError:
             self._no_laser = True
-            return none, none
+            return np.zeros((0, 2))
         if scan is None:
-            return none, none
+            return np.zeros((0, 2))
         pts = scan_points(scan, max_range=self.max_range)
         then = ctx.odometry_history.at(scan.stamp)
         if then is not None:
             pts = points_now(pts, then, ctx.backend.odometry().pose)
-        try:
-            pose = ctx.pose()
-        except RuntimeError:
-            return pts, none
-        field = to_field(pts, pose)
-        other = unexplained(ctx, field)
-        now = ctx.clock.now()
-        ctx.laser_memory.add(field[other], now, (pose.x, pose.y), laser_view(ctx, pose, self.max_range))
-        return pts[~other], pts[other]
+        return pts
 
     def _remembered(self) -> np.ndarray:
         """Remembered unexplained points in the robot frame."""
@@ -102,11 +84,8 @@ class MotionGuard:
         decel = self.ctx.settings.max_decel * 0.8
         period = self.ctx.settings.control_period
         blind = abs(math.atan2(uy, ux)) > r.laser_fov / 2.0 - 0.4
-        fixed, other = (np.zeros((0, 2)), self._remembered()) if blind else self._points()
-        # stations and walls at a few centimetres; other robots with the navigation's wider berth
-        cap = min(speed_limit(fixed, ux, uy, r.radius, self.margin, self.lateral, decel, period),
-                  speed_limit(other, ux, uy, r.radius, self.margin + OTHER_MARGIN, self.lateral + OTHER_LATERAL,
-                              decel, period))
+        pts = self._remembered() if blind else self._points()
+        cap = speed_limit(pts, ux, uy, r.radius, self.margin, self.lateral, decel, period)
         if cap <= 0.0:
             self.reason = "something is in the way" + (" (seen earlier, behind the robot)" if blind else "")
         return cap
