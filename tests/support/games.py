@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from games import GameOptions, LockstepGame
 from teamserver.dispatch import DispatchConfig
+from teamserver.links.agents import from_wire
 
 PRODUCTION_KINDS = ("get_workpiece", "put_workpiece", "retrieve_cap", "mount_ring", "mount_cap",
                     "deliver", "discard")
@@ -27,10 +28,11 @@ def tasks(game) -> dict[int, dict]:
 
 
 def running(game, kinds=PRODUCTION_KINDS) -> dict[int, tuple[str, int]]:
-    """Robot number -> (kind, task id) of the production trees running now."""
+    """Robot number -> (kind, task id) of the production trees running now (the team
+    server's task id: an agent runs an assignment's wire id, :func:`from_wire`)."""
     out = {}
     for n, agent in game.agents.items():
         run = agent.run
         if run is not None and not run.done and run.kind in kinds:
-            out[n] = (run.kind, run.task_id)
+            out[n] = (run.kind, from_wire(run.task_id)[0])
     return out
