@@ -4,8 +4,12 @@ messages they sent and the ones they received; read back, each message
 one end sent is the message the other end received."""
 from __future__ import annotations
 
+import signal
 import socket
-import threading
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
@@ -30,20 +34,38 @@ def read(path):
     return meta, msgs
 
 
+def wait_listening(port: int, proc, timeout: float = 120.0) -> None:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        assert proc.poll() is None, f"the team server exited ({proc.returncode})"
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1.0).close()
+            return
+        except OSError:
+            time.sleep(0.1)
+    raise AssertionError(f"the team server did not listen on {port} within {timeout} s")
+
+
 def test_team_server_and_agent_record_both_ends_of_their_link(tmp_path):
+    # the team server outlives the agent whatever the machine's load: it is up before the agent
+    # starts and stopped (SIGTERM, which closes its recording like the end of --duration) after
     port = free_port()
-    rc = {}
-    ts = threading.Thread(target=lambda: rc.setdefault("ts", main([
-        "teamserver", "--team", TEAM, "--key", KEY, "--listen", f"127.0.0.1:{port}",
-        "--state", str(tmp_path / "ts.sqlite"), "--duration", "6", "--record", str(tmp_path / "ts.mcap")])))
-    agent = threading.Thread(target=lambda: rc.setdefault("agent", main([
-        "agent", "--robot", "2", "--team", TEAM, "--key", KEY, "--backend", "scripted", "--no-refbox",
-        "--teamserver", f"127.0.0.1:{port}", "--seconds", "4", "-q", "--record", str(tmp_path / "agent.mcap")])))
-    ts.start()
-    agent.start()
-    agent.join(30)
-    ts.join(30)
-    assert rc == {"ts": 0, "agent": 0}
+    ts = subprocess.Popen([str(Path(sys.executable).parent / "rll-bt"),
+                           "teamserver", "--team", TEAM, "--key", KEY, "--listen", f"127.0.0.1:{port}",
+                           "--state", str(tmp_path / "ts.sqlite"), "--record", str(tmp_path / "ts.mcap")],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        wait_listening(port, ts)
+        rc = main(["agent", "--robot", "2", "--team", TEAM, "--key", KEY, "--backend", "scripted",
+                   "--no-refbox", "--teamserver", f"127.0.0.1:{port}", "--seconds", "4", "-q",
+                   "--record", str(tmp_path / "agent.mcap")])
+        time.sleep(0.5)                        # the agent's last frames reach the server
+        ts.send_signal(signal.SIGTERM)
+        out, _ = ts.communicate(timeout=60)
+    finally:
+        if ts.poll() is None:
+            ts.kill()
+    assert rc == 0 and ts.returncode == 0, out
     ts_meta, ts_msgs = read(tmp_path / "ts.mcap")
     ag_meta, ag_msgs = read(tmp_path / "agent.mcap")
     assert ts_meta["kind"] == "teamserver" and ag_meta["kind"] == "agent"
