@@ -39,6 +39,7 @@ gripper, at a cap station's output or on the storage shelf).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from ..knowledge import model as M
@@ -135,13 +136,14 @@ class ProductionContext:
 def storage_pays(ctx: ProductionContext) -> bool:
     """Store the finished product in the storage station: there is one, it is usable,
     and the product is expected ready ``min_wait`` s or more before its window opens,
-    and more than ``retrieve_lead`` s (a product would be retrieved again at once: one
-    just retrieved for its window would go round the station again and again)."""
+    and more than ``retrieve_lead`` s (it would be retrieved again at once); with
+    ``min_wait`` -inf every product (a product goes through the station once:
+    :meth:`~teamserver.production.handover.Handover.redecide`)."""
     st = ctx.storage
     if st is None or st.ready_at is None or st.machine in ctx.unusable or ctx.order is None:
         return False
     wait = ctx.order.begin - st.ready_at
-    return wait >= st.min_wait and wait > st.retrieve_lead
+    return wait >= st.min_wait and (wait > st.retrieve_lead or st.min_wait == -math.inf)
 
 
 def _ss_place(place) -> dict:

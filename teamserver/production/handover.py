@@ -41,6 +41,8 @@ class Handover:
         wp = self.kb.workpieces.get(product.workpiece or "")
         if wp is None or wp.cap is None or wp.location == "gone" or self.shelf.is_stored(product):
             return False
+        if any(t.machine == self.ss and t.state == M.DONE for t in self.kb.tasks_of(product.tasks)):
+            return False                # it went through the storage station once already
         open_tasks = [t for t in self.kb.tasks_of(product.tasks) if t.state in M.OPEN_STATES]
         if not open_tasks or any(t.state == M.ASSIGNED for t in open_tasks):
             return False

@@ -17,9 +17,6 @@ from teamserver.planning.planner import StoragePolicy
 pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
 
 
-@pytest.mark.xfail(reason="open (issue 17): fails since the real refbox rules (222c840) and the "
-                   "real-rules team server (875669a); "
-                   "nothing stored: the storage policy and the real machine times", strict=False)
 def test_a_product_goes_through_the_storage_station_and_is_delivered(tmp_path):
     opts = GameOptions(profile="rcll2025", seed=3, setup=1.0, exploration=40.0, production=420.0,
                        strategy="oracle", out=tmp_path,
