@@ -21,7 +21,7 @@ sim: $(STAMP)
 
 # the whole suite, after the linter (what CI runs); the live-view test drives Debian's chromium
 test: lint browser
-	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup --durations=30
 
 # the inner loop: the linter and every test not marked slow (whole games, training)
 test-fast: lint

@@ -20,6 +20,7 @@ from rll_bt.backend import Backend, BackendError, Pose2D
 from rll_bt.clock import Clock
 from rll_bt.rules import Profile
 
+from .errors import NotLocalised
 from .localisation import AmclConfig, Localiser, PoseEstimate
 from .machines import MachineMap, TagSource
 from .maps import FieldMap
@@ -127,7 +128,7 @@ class SkillContext:
     def pose(self) -> Pose2D:
         pose = self.pose_source.pose()
         if pose is None:
-            raise RuntimeError("the pose source has no pose yet")
+            raise NotLocalised()
         return pose
 
     def estimate(self) -> PoseEstimate | None:

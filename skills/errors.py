@@ -33,3 +33,12 @@ class SkillFailure(Exception):
         super().__init__(f"{code.value}: {message}")
         self.code = code
         self.message = message
+
+
+class NotLocalised(SkillFailure, RuntimeError):
+    """The pose source has no pose (a global search that has not converged,
+    e.g. while the laser is away): an activity starting or stepping now ends
+    with LOCALISATION_LOST instead of crashing its tree."""
+
+    def __init__(self, message: str = "no pose yet (the localiser is still searching)"):
+        super().__init__(SkillError.LOCALISATION_LOST, message)

@@ -384,11 +384,10 @@ class RobotinoEmulator:
             ep.send(self.gripper.receive(data, now), now)
 
     def _track_connection(self, ep: _Endpoint, now: float) -> None:
-        if not ep.pty.is_open:
-            return
-        was = ep.pty.connected
+        if not ep.pty.is_open or ep.pty.connected:
+            return          # a connected host's close shows as POLLHUP in the step's poll
         ep.pty.connected = ep.pty.poll_connected()
-        if ep.pty.connected and not was:
+        if ep.pty.connected:
             ep.connects += 1
             log.info("%s: host opened %s", ep.name, ep.pty.link)
             if ep is self._grip and self.gripper is not None:

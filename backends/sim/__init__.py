@@ -32,7 +32,9 @@ World (:class:`backends.sim.world.World`)
       contact point; ``SimRobot.collisions`` counts events (a motion blocked
       by a wall, station or robot the robot was not already touching: more
       pushes against the same thing before the robot has left it by
-      ``CONTACT_GAP`` are the same contact), ``SimRobot.blocked_steps``
+      ``CONTACT_GAP`` are the same contact; two robots touching are one
+      contact, counted for the one that ran into the other first),
+      ``SimRobot.blocked_steps``
       counts blocked steps, ``world.collision_count`` sums the events,
       ``world.collision_log`` is a list of ``Collision(time, robot,
       obstacle, pose, speed)`` (the robot's true pose at the contact and its

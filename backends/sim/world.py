@@ -265,11 +265,22 @@ class World(StationAPI, GripperHandling, CameraViews):
         else:
             r.commit(stop, (0.0, 0.0, 0.0), h)
         if hit not in r.touching:       # a new contact, not more pushing against the same thing
-            r.collisions += 1
-            self.collision_log.append(Collision(now, r.key, hit, stop, speed))
             r.touching.add(hit)
+            if not self._same_contact(r, hit):
+                r.collisions += 1
+                self.collision_log.append(Collision(now, r.key, hit, stop, speed))
         r.blocked = True
         r.blocked_steps += 1
+
+    def _same_contact(self, r: SimRobot, hit: str) -> bool:
+        """Two robots touching are one collision, whichever pushes first or
+        both: ``r`` blocked by robot ``hit`` that already touches it (it ran
+        into ``r``, or they have stood pressed together since) adds none."""
+        if not hit.startswith("robot "):
+            return False
+        team, number = hit[len("robot "):].split("/")
+        other = self.robots.get((team, int(number)))
+        return other is not None and f"robot {r.name}" in other.touching
 
     def _separate(self, r: SimRobot) -> None:
         """Forget the contacts the robot has left (gap above ``CONTACT_GAP``)."""

@@ -102,6 +102,7 @@ class ExploreZone(Activity):
         self.collector = collector or getattr(ctx, "sightings", None) or SightingCollector(ctx)
         self.found: list[str] = []
         self.visited = 0
+        self.child: Activity | None = None      # (set before _on_start: a start that fails still stops)
         self.name = f"explore {prof.zone_name(zone)}" if zone in prof.zones.all_zones else "explore"
 
     def _on_start(self) -> None:

@@ -164,4 +164,8 @@ class Relocalise(Activity):
         loc = self.ctx.pose_source
         if hasattr(loc, "unboost"):
             loc.unboost()
+        if status is not Status.SUCCESS and self.last is not None and loc.pose() is None:
+            # stopped before the search had a first estimate (cancelled, or no scan came): track
+            # from where the robot was believed to be, as before, rather than leave it with no pose
+            loc.initialise(self.last, self.spread)
         self.ctx.stop_base()

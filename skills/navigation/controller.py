@@ -8,7 +8,14 @@ direction of travel while far from the goal (so the laser, which sees
 for the last ``align_distance`` metres - except while the direction of
 travel lies more than ``blind_angle`` off the heading (where the laser is
 blind) and more than ``blind_creep`` metres remain: then it turns to the
-direction of travel first.
+direction of travel first.  With ``look_angle`` set, a follower that has
+not looked yet (a navigation's start: the robot stood still, maybe docked
+at a station, while another robot came up in its blind sector) turns on the
+spot until the direction of travel lies within ``look_angle`` of its
+heading before it translates at all (turning a round robot touches
+nothing), unless no more than ``align_distance`` is left (a short move to
+a goal heading: the blind rule above holds); ``looked`` carries over to a
+replanned follower.
 
 Limits: translation speed ``max_speed`` (the rules' 0.7 m/s), the speed
 from which the robot can still stop at the goal with ``max_decel``, the
@@ -104,7 +111,7 @@ class PathFollower:
                  position_tolerance: float = 0.05, heading_tolerance: float = 0.05,
                  lookahead: float = 0.5, align_distance: float = 0.8, gain: float = 2.5,
                  blind_angle: float | None = None, blind_creep: float = 0.15,
-                 corner_overshoot: float = 0.04):
+                 corner_overshoot: float = 0.04, look_angle: float | None = None):
         self.path = np.asarray(path, dtype=float)
         if len(self.path) == 1:
             self.path = np.vstack([self.path, self.path])
@@ -121,6 +128,8 @@ class PathFollower:
         self.gain = gain
         self.blind_angle = blind_angle
         self.blind_creep = blind_creep
+        self.look_angle = look_angle
+        self.looked = look_angle is None    # faced the direction of travel since the start
         self.limiter = VelocityLimiter(limits)
         self.progress = 0.0           # arc length of the closest path point
         self.done = False
@@ -250,6 +259,12 @@ class PathFollower:
         travel = math.atan2(direction[1], direction[0]) if n > 1e-9 else pose.theta
         blind = (self.blind_angle is not None and wanted > 0.05 and d_goal > self.blind_creep
                  and abs(wrap_angle(travel - pose.theta)) > self.blind_angle)
+        if not self.looked and n > 1e-9:
+            if wanted > 0.05 and remaining > self.align_distance \
+                    and abs(wrap_angle(travel - pose.theta)) > self.look_angle:
+                blind, v_des = True, np.zeros(2)       # look first, on the spot
+            else:
+                self.looked = True
         if blind:
             want = travel            # never drive far where the laser cannot see: turn first
         elif self.goal_theta is not None and remaining <= self.align_distance:

@@ -4,7 +4,8 @@ not plan (lining up on a tag, sliding along a face, backing off).
 :class:`MotionGuard` answers how fast the robot may move in a direction of
 its own frame: the latest scan's points (moved to now by odometry) ahead
 within the robot's width plus ``lateral`` must stay ``margin`` metres
-away, braking at the base's deceleration; toward where the laser is blind
+away (points the map does not explain, other robots, ``OTHER_MARGIN`` and
+``OTHER_LATERAL`` more), braking at the base's deceleration; toward where the laser is blind
 (behind) the unexplained points remembered by navigation
 (``ctx.laser_memory``: other robots seen on the way in) count instead.  A
 pressed bumper stops every motion.  Units: metres, seconds, the robot
@@ -18,8 +19,14 @@ import numpy as np
 
 from rll_bt.backend import CapabilityError
 
-from .laserview import points_now
-from .safety import scan_points, speed_limit
+from ..errors import NotLocalised
+from .laserview import laser_view, points_now
+from .others import unexplained
+from .safety import scan_points, speed_limit, to_field
+
+#: more room (m) kept from what the map does not explain (other robots): ahead and beside
+OTHER_MARGIN = 0.07
+OTHER_LATERAL = 0.04
 
 
 class MotionGuard:
@@ -32,30 +39,42 @@ class MotionGuard:
         self._no_laser = False
         self._no_bumper = False
 
-    def _points(self) -> np.ndarray:
-        """Laser points in the robot frame of now (empty without a laser)."""
+    def _points(self) -> tuple[np.ndarray, np.ndarray]:
+        """Laser points in the robot frame of now: (walls and stations of the
+        map, the rest: other robots, mostly), both empty without a laser.
+        The rest goes into ``ctx.laser_memory`` (what stood beside the robot
+        while it lined up is still known when it backs off, blind)."""
+        none = np.zeros((0, 2))
         if self._no_laser:
-            return np.zeros((0, 2))
+            return none, none
         ctx = self.ctx
         try:
             scan = ctx.backend.laser_scan()
         except CapabilityError:
             self._no_laser = True
-            return np.zeros((0, 2))
+            return none, none
         if scan is None:
-            return np.zeros((0, 2))
+            return none, none
         pts = scan_points(scan, max_range=self.max_range)
         then = ctx.odometry_history.at(scan.stamp)
         if then is not None:
             pts = points_now(pts, then, ctx.backend.odometry().pose)
-        return pts
+        try:
+            pose = ctx.pose()
+        except NotLocalised:
+            return pts, none
+        field = to_field(pts, pose)
+        other = unexplained(ctx, field)
+        now = ctx.clock.now()
+        ctx.laser_memory.add(field[other], now, (pose.x, pose.y), laser_view(ctx, pose, self.max_range))
+        return pts[~other], pts[other]
 
     def _remembered(self) -> np.ndarray:
         """Remembered unexplained points in the robot frame."""
         ctx = self.ctx
         try:
             pose = ctx.pose()
-        except RuntimeError:
+        except NotLocalised:
             return np.zeros((0, 2))
         rel = ctx.laser_memory.relative(pose, ctx.clock.now())
         c, s = math.cos(-pose.theta), math.sin(-pose.theta)
@@ -84,8 +103,11 @@ class MotionGuard:
         decel = self.ctx.settings.max_decel * 0.8
         period = self.ctx.settings.control_period
         blind = abs(math.atan2(uy, ux)) > r.laser_fov / 2.0 - 0.4
-        pts = self._remembered() if blind else self._points()
-        cap = speed_limit(pts, ux, uy, r.radius, self.margin, self.lateral, decel, period)
+        fixed, other = (np.zeros((0, 2)), self._remembered()) if blind else self._points()
+        # stations and walls at a few centimetres; other robots with the navigation's wider berth
+        cap = min(speed_limit(fixed, ux, uy, r.radius, self.margin, self.lateral, decel, period),
+                  speed_limit(other, ux, uy, r.radius, self.margin + OTHER_MARGIN, self.lateral + OTHER_LATERAL,
+                              decel, period))
         if cap <= 0.0:
             self.reason = "something is in the way" + (" (seen earlier, behind the robot)" if blind else "")
         return cap

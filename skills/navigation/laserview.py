@@ -48,15 +48,28 @@ def points_now(points_then: np.ndarray, odom_then: Pose2D, odom_now: Pose2D) -> 
 
 class LaserMemory:
     """Field-frame points, each forgotten after ``ttl`` seconds, thinned to
-    one per ``cell`` metres."""
+    one per ``cell`` metres.  A scan that covers a remembered point (``view``
+    of :meth:`add`) replaces it: the scan's own points are what is there now,
+    so the memory keeps, for longer, only what lies where the laser cannot
+    see at the moment (behind the robot)."""
 
-    def __init__(self, ttl: float = 10.0, cell: float = 0.05, radius: float = 2.5):
+    def __init__(self, ttl: float = 30.0, cell: float = 0.05, radius: float = 2.5):
         self.ttl, self.cell, self.radius = ttl, cell, radius
         self.points = np.zeros((0, 2))
         self.expiry = np.zeros(0)
 
-    def add(self, points: np.ndarray, now: float, centre: tuple[float, float]) -> None:
+    def add(self, points: np.ndarray, now: float, centre: tuple[float, float],
+            view: tuple[float, float, float, float, float] | None = None) -> None:
+        """Remember ``points`` (field frame) seen at ``now`` by a robot at
+        ``centre``; ``view`` = (x, y, heading, half angle, range) of the laser
+        that saw them, in the field frame: older points inside it are dropped."""
         keep = self.expiry > now
+        if view is not None and keep.any():
+            x, y, heading, half, reach = view
+            dx, dy = self.points[:, 0] - x, self.points[:, 1] - y
+            bearing = np.arctan2(dy, dx) - heading
+            inside = (np.abs((bearing + np.pi) % (2.0 * np.pi) - np.pi) < half) & (np.hypot(dx, dy) < reach)
+            keep &= ~inside
         pts = np.concatenate([self.points[keep], points])
         exp = np.concatenate([self.expiry[keep], np.full(len(points), now + self.ttl)])
         near = np.hypot(pts[:, 0] - centre[0], pts[:, 1] - centre[1]) <= self.radius
@@ -73,3 +86,13 @@ class LaserMemory:
         """Remembered points relative to ``pose`` (field-frame axes)."""
         live = self.expiry > now
         return self.points[live] - np.array([pose.x, pose.y])
+
+
+def laser_view(ctx, pose: Pose2D, reach: float, inset: float = 0.1) -> tuple[float, float, float, float, float]:
+    """The laser's view for :meth:`LaserMemory.add`: (x, y, heading, half
+    angle, range) in the field frame for a robot at ``pose``, the angle
+    ``inset`` radians inside the edge of the field of view."""
+    mx, my, _ = ctx.robot.laser_mount
+    c, s = np.cos(pose.theta), np.sin(pose.theta)
+    return (pose.x + c * mx - s * my, pose.y + s * mx + c * my, pose.theta,
+            ctx.robot.laser_fov / 2.0 - inset, reach)

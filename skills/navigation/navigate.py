@@ -8,7 +8,11 @@ unexplained laser points near the robot (not walls or known stations:
 other robots, unknown stations) go into the costmap for
 ``obstacle_ttl`` seconds and the path is replanned; while no path exists
 the robot waits, and after ``max_blocked`` seconds it fails with
-``NAVIGATION_FAILED``.  A navigation that finds no path at its start
+``NAVIGATION_FAILED``.  Other robots (:mod:`.others`): a robot at a station
+keeps the strip behind it that it backs off into, and the robot waits
+``GOAL_WAIT`` metres before a goal another robot stands on until it is free.  A navigation
+looks before it leaves: it turns toward its way out before it drives
+(:class:`~.controller.PathFollower`'s ``look_angle``).  A navigation that finds no path at its start
 clears those remembered obstacles (they were seen on an earlier way) and
 plans again before it gives up.  A robot that does not move (by odometry) although
 commanded counts as blocked too (something the laser does not see).  Losing localisation fails with
@@ -26,9 +30,15 @@ from ..activity import Activity, Status
 from ..errors import SkillError, SkillFailure
 from .controller import Limits, PathFollower
 from .goals import standing_clearance
-from .laserview import points_now
+from .laserview import laser_view, points_now
+from .others import occupied, station_zones, unexplained
 from .planner import GridPlanner, NoPath
 from .safety import clear_distance, scan_points, speed_limit, to_field
+
+#: metres from a goal another robot takes up (or backs off over) where the robot waits for it
+GOAL_WAIT = 1.0
+#: room (m) beyond the robot's radius a goal needs free of other robots
+GOAL_ROOM = 0.1
 
 
 def tight_speed(gap, settings) -> np.ndarray:
@@ -61,6 +71,8 @@ class Navigate(Activity):
         self.adjusted = 0.0              # metres the goal was moved to where the robot fits
         self.cleared = 0                 # earlier laser obstacles cleared at the start (no path with them)
         self.blocked_time = 0.0
+        self.lag = ctx.settings.control_period
+        self.waiting = False             # another robot stands on the goal (or backs off over it)
         self._blocked_since: float | None = None
         self._last_poll: float | None = None
         self._user_timeout = timeout
@@ -89,6 +101,8 @@ class Navigate(Activity):
         self._stall_ref = None
         self._blocked_since = None
         self._last_poll = None
+        self.lag = self.ctx.settings.control_period      # s between polls, the worst lately
+        self.follower = None             # a new start looks before it leaves
         try:
             self._plan(start)
         except NoPath as exc:
@@ -110,12 +124,17 @@ class Navigate(Activity):
         self.ctx.costmap.expire(self.ctx.clock.now())
         self.path = self.planner.plan((start.x, start.y), (self.target.x, self.target.y))
         old = self.follower
-        blind = self.ctx.robot.laser_fov / 2.0 - 0.4 if self.use_laser else None
+        fov = self.ctx.robot.laser_fov / 2.0
+        blind = fov - 0.4 if self.use_laser else None
+        # the side of the way out the laser sees whole: within 90 degrees of a direction
+        look = max(fov - math.pi / 2.0, 0.2) if self.use_laser else None
         self.follower = PathFollower(self.path, self._goal_heading, self.limits,
-                                     self.position_tolerance, self.heading_tolerance, blind_angle=blind)
+                                     self.position_tolerance, self.heading_tolerance, blind_angle=blind,
+                                     look_angle=look)
         if old is not None:      # keep the current velocity: no jump in the command
             self.follower.limiter.v = old.limiter.v.copy()
             self.follower.limiter.omega = old.limiter.omega
+            self.follower.looked = old.looked
 
     def _step(self, now: float) -> Status:
         ctx = self.ctx
@@ -126,40 +145,53 @@ class Navigate(Activity):
         pose = ctx.pose()
         dt = ctx.settings.control_period if self._last_poll is None else max(now - self._last_poll, 1e-3)
         self._last_poll = now
+        # the command holds until the next poll: late polls (a loaded machine,
+        # a slow link) are a longer reaction time; the worst of the last few
+        # seconds counts, up to the base's deadman time
+        self.lag = max(min(dt, 0.5), self.lag * 0.97, ctx.settings.control_period)
         points = self._points(pose) if self.use_laser else None
         cap = None
         if points is not None:
             s = ctx.settings
             half_fov = ctx.robot.laser_fov / 2.0
             d_goal = math.hypot(self.target.x - pose.x, self.target.y - pose.y)
-            static = ctx.map.distance(ctx.costmap.resolution).lookup(points[:, 0] + pose.x,
-                                                                     points[:, 1] + pose.y) <= 0.1
+            here = np.array([pose.x, pose.y])
+            static = ~unexplained(ctx, points + here)
             fixed, moving = points[static], points[~static]
             now_t = ctx.clock.now()
-            ctx.laser_memory.add(moving + np.array([pose.x, pose.y]), now_t, (pose.x, pose.y))
+            ctx.laser_memory.add(moving + here, now_t, (pose.x, pose.y), laser_view(ctx, pose, 3.0))
             remembered = ctx.laser_memory.relative(pose, now_t)
             # what was seen where the laser is blind now (another robot beside
             # and behind, when the direction of travel still lies in view)
             bearing = np.arctan2(remembered[:, 1], remembered[:, 0]) - pose.theta
             unseen = np.abs((bearing + np.pi) % (2.0 * np.pi) - np.pi) > half_fov
             moving = np.vstack([moving, remembered[unseen]])
+            # a robot at a station keeps the strip it backs off into; a goal
+            # another robot stands on (or backs off over) is not driven to
+            moving = np.vstack([moving, station_zones(ctx, moving + here) - here])
+            goal_taken = d_goal < GOAL_WAIT and occupied(moving, self.target.x - pose.x, self.target.y - pose.y,
+                                                         ctx.robot.radius + GOAL_ROOM)
+            self.waiting = goal_taken
             decel = self.limits.max_decel * 0.8
 
             def cap(ux: float, uy: float) -> float:
+                if goal_taken:
+                    return 0.0
                 if d_goal < 0.5 and clear_distance(points, ux, uy, ctx.robot.radius, 0.02) >= d_goal + 0.02:
                     limit = math.inf      # the goal comes before the obstacle: no need to stop short
                 else:
                     # mapped walls and stations; unmapped points may be robots coming closer
                     limit = min(speed_limit(fixed, ux, uy, ctx.robot.radius, s.safety_margin, 0.02, decel,
-                                            s.control_period),
+                                            self.lag),
                                 speed_limit(moving, ux, uy, ctx.robot.radius, s.safety_margin + 0.07, 0.08,
-                                            decel, s.control_period + 0.1, s.closing_speed))
+                                            decel, self.lag + 0.1, s.closing_speed))
                 # the laser does not see behind: creep where it is blind, and
                 # stop for what it saw there a moment ago
                 if abs(wrap_angle(math.atan2(uy, ux) - pose.theta)) > half_fov - 0.4:
                     limit = min(limit, s.blind_speed,
                                 speed_limit(remembered, ux, uy, ctx.robot.radius, s.safety_margin + 0.07,
-                                            0.08, decel, s.control_period))
+                                            0.08, decel, self.lag),
+                                self._map_limit(pose, ux, uy, decel))
                 return limit
         self.follower.lookahead = self._lookahead(pose)
         self.follower.speed_limit = self._tight_speed(pose)
@@ -168,7 +200,7 @@ class Navigate(Activity):
             self.message = f"reached {self.goal.describe()}" if hasattr(self.goal, "describe") else "reached"
             return Status.SUCCESS
         blocked = self.follower.capped and self.follower.last_speed_wanted < 0.02
-        stalled = self._stalled(now, vx, vy)
+        stalled = self._stalled(now, vx, vy, w)
         if stalled:
             self.stalled_time += dt
             if self.stalled_time > self.max_blocked:
@@ -182,9 +214,10 @@ class Navigate(Activity):
             if now - self._blocked_since >= ctx.settings.block_replan_after:
                 self._replan_around(pose, points, now)
             if self.blocked_time > self.max_blocked:
+                why = " (another robot stands on the goal)" if self.waiting else ""
                 raise SkillFailure(SkillError.NAVIGATION_FAILED,
                                    f"blocked for {self.blocked_time:.0f} s on the way to "
-                                   f"({self.target.x:.2f}, {self.target.y:.2f})")
+                                   f"({self.target.x:.2f}, {self.target.y:.2f}){why}")
         else:
             self._blocked_since = None
             if self._off_path(pose) > 0.6:
@@ -249,12 +282,28 @@ class Navigate(Activity):
         v = tight_speed(gaps, s)
         return float(np.sqrt(v * v + 2.0 * self.limits.max_decel * 0.8 * dist).min())
 
-    def _stalled(self, now: float, vx: float, vy: float) -> bool:
-        """Commanded to drive for ``stall_time`` seconds without the odometry
-        moving 2 cm: something the laser does not see holds the robot."""
+    def _map_limit(self, pose: Pose2D, ux: float, uy: float, decel: float, reach: float = 0.4) -> float:
+        """Speed (m/s) toward where the laser is blind that stops before the
+        robot comes closer to a mapped wall or station than ``safety_margin``
+        (or than it already is): the map sees there for it."""
+        cm, step = self.ctx.costmap, 0.02
+        d = np.arange(0.0, reach + step, step)
+        gap = cm.clearance_at(pose.x + ux * d, pose.y + uy * d) - self.ctx.robot.radius
+        bad = gap < min(float(gap[0]), self.ctx.settings.safety_margin) - 1e-3
+        if not bad.any():
+            return math.inf
+        free = max(float(d[int(np.argmax(bad))]) - step, 0.0)
+        return math.sqrt(2.0 * decel * free)
+
+    def _stalled(self, now: float, vx: float, vy: float, w: float = 0.0) -> bool:
+        """Commanded to drive (or to turn, looking before it leaves) for
+        ``stall_time`` seconds without the odometry moving 2 cm (turning
+        0.05 rad): something the laser does not see holds the robot."""
         odom = self.ctx.backend.odometry().pose
-        if math.hypot(vx, vy) < 0.05 or self._stall_ref is None or \
-                odom.distance_to(self._stall_ref[1]) > 0.02:
+        driving, turning = math.hypot(vx, vy) >= 0.05, abs(w) >= 0.2
+        if not (driving or turning) or self._stall_ref is None or \
+                odom.distance_to(self._stall_ref[1]) > 0.02 or \
+                abs(wrap_angle(odom.theta - self._stall_ref[1].theta)) > 0.05:
             self._stall_ref = (now, odom)
             return False
         return now - self._stall_ref[0] > self.stall_time
@@ -282,9 +331,9 @@ class Navigate(Activity):
         if points is not None and len(points):
             field_pts = points + np.array([pose.x, pose.y])
             near = np.hypot(points[:, 0], points[:, 1]) < 2.0
-            static = ctx.map.distance(ctx.costmap.resolution).lookup(field_pts[:, 0], field_pts[:, 1])
-            unexplained = near & (static > 0.1)
-            ctx.costmap.add_obstacles(field_pts[unexplained], now, ctx.settings.obstacle_ttl)
+            others = field_pts[near & unexplained(ctx, field_pts)]
+            ctx.costmap.add_obstacles(np.vstack([others, station_zones(ctx, others)]), now,
+                                      ctx.settings.obstacle_ttl)
         self._blocked_since = now       # next attempt after another block period
         self._try_plan(pose)
 

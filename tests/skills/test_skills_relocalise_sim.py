@@ -136,3 +136,30 @@ def test_tags_of_stations_mapped_at_their_zone_centres_do_not_pull_the_pose_away
     act = relocalise(world, ctx)
     assert act.status is Status.SUCCESS, act.message
     assert error(world, ctx, 2)[0] < 0.1
+
+
+def test_a_global_search_stopped_before_its_first_estimate_leaves_the_last_pose():
+    """The laser is away (no scan comes), a global relocalisation starts and
+    the task is cancelled: the robot keeps the pose it had, so the next task
+    does not start without one."""
+    truth = Pose2D(1.33, 4.16, 1.77)
+    world, ctx = kidnapped(5, truth, truth)
+    ctx.backend.laser_scan = lambda: None                     # the cable is pulled
+    act = Relocalise(ctx, global_search=True).start()
+    assert ctx.pose_source.pose() is None                    # searching, no estimate yet
+    world.step(0.1)
+    act.poll()
+    act.cancel()
+    p = ctx.pose()
+    assert math.hypot(p.x - truth.x, p.y - truth.y) < 0.05
+
+
+def test_an_activity_started_without_a_pose_fails_as_lost_instead_of_raising():
+    from skills.errors import SkillError
+    from skills.exploration.explore import ExploreZone
+    world, ctx = kidnapped(5, Pose2D(1.33, 4.16, 1.77), Pose2D(1.33, 4.16, 1.77))
+    ctx.backend.laser_scan = lambda: None                     # no scan yet
+    ctx.pose_source.initialise_global()                      # a restarted robot, nothing seen yet
+    act = ExploreZone(ctx, world.profile.zones.all_zones[0]).start()
+    assert act.status is Status.FAILURE
+    assert act.error is SkillError.LOCALISATION_LOST

@@ -307,12 +307,12 @@ class UrgDevice:
         vals = np.where(good, np.round(vals), NO_ECHO)
         mm[inside] = vals
         c = max(cluster, 1)
-        out = []
-        for i in range(0, len(mm), c):
-            group = mm[i:i + c]
-            ok = group[group >= m.dmin]
-            out.append(int(ok.min()) if len(ok) else int(group[0]))
-        return out
+        groups = np.full(-(-len(mm) // c) * c, np.inf)         # padded to whole clusters
+        groups[:len(mm)] = mm
+        groups = groups.reshape(-1, c)
+        # a cluster sends its nearest echo; with none, its first step's error code
+        echoes = np.where(groups >= m.dmin, groups, np.inf).min(axis=1)
+        return np.where(np.isfinite(echoes), echoes, groups[:, 0]).astype(int).tolist()
 
     def _scan_payload(self, s: dict, t: float) -> bytes:
         values = self.measure(t, s["start"], s["end"], s["cluster"], s["size"])

@@ -1,6 +1,7 @@
 """SCIP 2.0 codec and the URG device model: the bytes the vendor's
 specification shows, and decoders that never crash on garbage."""
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -106,6 +107,24 @@ def test_values_survive_a_data_block(values, size):
     body = scip.sum_line(scip.encode(123456, 4)) + scip.data_block(scip.encode_values(values, size)) + b"\n"
     (block,) = scip.BlockReader().feed(b"MD0000000001000\n99b\n" + body)
     assert block.scan(size) == (123456, values)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.integers(-5, (1 << 24) + 5), max_size=80), st.sampled_from([2, 3, 4]))
+def test_a_whole_scan_encodes_and_decodes_as_its_values_one_by_one(values, size):
+    fits = all(0 <= v < 1 << (6 * size) for v in values)
+    if not fits:
+        with pytest.raises(ValueError):
+            scip.encode_values(values, size)
+        return
+    data = scip.encode_values(values, size)
+    assert data == b"".join(scip.encode(v, size) for v in values)
+    assert scip.decode_values(data, size) == [scip.decode(data[i:i + size]) for i in range(0, len(data), size)]
+
+
+def test_a_character_outside_the_scip_digits_is_named():
+    with pytest.raises(scip.ScipError, match="'~' is not a SCIP digit"):
+        scip.decode_values(b"0~", 2)
 
 
 @settings(max_examples=200, deadline=None)

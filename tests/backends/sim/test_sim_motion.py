@@ -151,6 +151,31 @@ def test_robots_and_stations_block_robots(world):
     assert b.bumper() and c.bumper()
 
 
+def test_two_robots_driving_into_each_other_are_one_collision(world):
+    """Whichever of two robots pushes first, or both, while they touch: one
+    contact is one collision (of the first to run into the other); apart
+    again and back, a second."""
+    a = SimBackend(world, ("CYAN", 1), pose=Pose2D(-5.5, -0.5, 0.0))
+    b = SimBackend(world, ("MAGENTA", 1), pose=Pose2D(-4.5, -0.5, math.pi))
+    for _ in range(30):
+        a.drive(0.4, 0.0, 0.0)
+        b.drive(0.4, 0.0, 0.0)
+        world.step(0.1)
+    assert world.collision_count == 1 and len(world.collision_log) == 1
+    for _ in range(10):                       # one stands, the other pushes on
+        a.drive(0.2, 0.0, 0.0)
+        world.step(0.1)
+    assert world.collision_count == 1
+    for _ in range(10):                       # apart ...
+        a.drive(-0.3, 0.0, 0.0)
+        b.drive(-0.3, 0.0, 0.0)
+        world.step(0.1)
+    for _ in range(30):                       # ... and together again
+        a.drive(0.3, 0.0, 0.0)
+        world.step(0.1)
+    assert world.collision_count == 2
+
+
 def test_open_backend_entry_point_and_options(world):
     bot = open_backend("sim", world=world, robot=("MAGENTA", 2), laser_beams=90)
     assert isinstance(bot, SimBackend)

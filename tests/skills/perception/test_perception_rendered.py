@@ -24,7 +24,7 @@ def world():
 
 @pytest.fixture(scope="module")
 def reader():
-    """What games read lights with (the physical reader finds, the HOG chain's network reads)."""
+    """What games read lights with (:func:`default_reader`)."""
     return default_reader()
 
 
