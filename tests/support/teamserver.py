@@ -457,3 +457,12 @@ def play(ls, until, *, t0=0.0, dt=0.5, steps=800, fail=None, drop=None, drive=3)
         if until(gt):
             return True
     return False
+
+
+def abandon_all_products(server) -> None:
+    """Every product the server planned given up (its open tasks cancelled), as after its orders ended."""
+    kb = server.kb
+    for p in list(kb.products.values()):
+        server.production.products.cancel_open(p)
+        p.state = "ABANDONED"
+        kb.save_product(p)

@@ -3,7 +3,7 @@ workpieces a station never took, stations left PREPARED with a stale instruction
 robots left holding what they cannot use yet, places the robots keep failing at."""
 from teamserver.knowledge import model as M
 from teamserver.server import ServerConfig
-from tests.support.teamserver import Lockstep, play, production_setup
+from tests.support.teamserver import Lockstep, abandon_all_products, play, production_setup
 from tests.teamserver.production.test_ts_storage import send_orders, setup_2025
 
 
@@ -84,10 +84,7 @@ def test_a_station_waiting_with_another_gate_is_fed_a_spare_base_first():
     kb, feeds = srv.kb, srv.dispatcher.feeds
     ls.step(n=3)
     # the DS waits with gate 1 of a delivery that is over; order 2 needs gate 2
-    for p in list(kb.products.values()):
-        srv.production.products.cancel_open(p)
-        p.state = "ABANDONED"
-        kb.save_product(p)
+    abandon_all_products(srv)
     old = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
                  state=M.DONE, prepare={"machine": "C-DS", "ds": {"gate": 1}})
     kb.save_task(old)
@@ -277,10 +274,7 @@ def test_2025_a_station_waiting_with_an_instruction_nothing_needs_is_fed_no_spar
     send_orders(ls, [{"id": 1}, {"id": 2}])
     srv = ls.server
     kb, feeds = srv.kb, srv.dispatcher.feeds
-    for p in list(kb.products.values()):
-        srv.production.products.cancel_open(p)
-        p.state = "ABANDONED"
-        kb.save_product(p)
+    abandon_all_products(srv)
     # the DS waits for a delivery of order 1 that is over; order 2's needs another id
     old = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "order_id": 1},
                  state=M.DONE, prepare={"machine": "C-DS", "ds": {"order_id": 1}})

@@ -16,17 +16,14 @@ from teamserver.planning.planner import PLANNERS, GreedyPlanner, ProductionPlann
 from teamserver.production.caps import FREE
 from teamserver.production.health import StationHealth
 from teamserver.server import ServerConfig
-from tests.support.teamserver import Lockstep, play, production_setup
+from tests.support.teamserver import Lockstep, abandon_all_products, play, production_setup
 
 
 def test_a_delivery_the_refbox_never_counted_opens_its_order_again():
     ls = Lockstep()
     production_setup(ls, [{"id": 1}, {"id": 3, "quantity_requested": 2}])
     pm, kb = ls.server.production, ls.server.kb
-    for p in list(kb.products.values()):
-        pm.products.cancel_open(p)
-        p.state = "ABANDONED"
-        kb.save_product(p)
+    abandon_all_products(ls.server)
     kb.save_product(M.Product("D1", 1, state="DELIVERED", delivered_at=100.0))
     kb.save_product(M.Product("D2", 3, state="DELIVERED", delivered_at=100.0))
     kb.save_product(M.Product("A1", 3))
