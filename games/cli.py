@@ -163,7 +163,8 @@ def register(cli) -> None:
                         f"(default port {DEFAULT_VIEW_PORT}; 0: any free port)")
     g.add_argument("--speed", type=_seconds, metavar="X",
                    help="game seconds per wall second (1: real time, the default with --gui, --live or --view; "
-                        "0: as fast as the machine goes, the default otherwise)")
+                        "0: as fast as the machine goes, the default otherwise; with --external-team: > 0, "
+                        "default 1)")
     g.add_argument("--record-camera", type=_seconds, default=0.0, metavar="HZ",
                    help="also take camera frames for the recording, per robot and second (default 0: only the "
                         "frames the robots' perception reads; a frame costs about 0.2 s of CPU)")

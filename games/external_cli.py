@@ -76,11 +76,15 @@ def run(args) -> int:
         except ValueError as exc:
             raise UserError(str(exc), where=f"--key-{color.lower()}") from None
         teams.append(ExternalTeam(color, server, name, key, robots=args.robots))
+    speed = 1.0 if args.speed is None else float(args.speed)
+    if not speed > 0:
+        raise UserError("the league's simulator runs on the wall clock: give --speed X > 0 (game seconds per wall "
+                        "second; default 1)", where="--speed")
     phases = {k: float(v) for k in ("setup", "exploration", "production") if (v := getattr(args, k)) is not None}
     try:
         game = ExternalGame(teams, profile=args.profile, seed=args.seed, host=args.refbox_broadcast,
                             layout=args.refbox_ports, phases=phases, perception=args.perception, hz=args.hz,
-                            localisation=args.localisation, world_step=0.05)
+                            localisation=args.localisation, world_step=0.05, speed=speed)
     except OSError as exc:
         raise Unavailable(f"cannot open the refbox's UDP ports: {exc}", where=f"--refbox-ports {args.refbox_ports}",
                           hint="is another refbox running on this machine?") from None

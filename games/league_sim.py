@@ -19,7 +19,7 @@ robots they find the stations themselves: from the refbox's MachineInfo
 exploration time is over) and from what they see.
 
 The refbox is on UDP on this process's clock (which follows the wall
-clock): it sends to ``host`` (default the loopback broadcast address, so
+clock, or runs ``speed`` times faster than it): it sends to ``host`` (default the loopback broadcast address, so
 that every process on the machine hears it) with the refbox's default port
 layout ``sim`` (public: refbox sends 4444, listens 4445; cyan 4441/4446;
 magenta 4442/4447; a team server listens where the refbox sends and sends
@@ -69,12 +69,20 @@ class ExternalGame:
     """See the module doc.  ``layout``: the refbox's port layout (a
     :class:`~rll_bt.comm.Layout` or "sim"/"competition"); ``phases``: phase
     lengths in game seconds ({"setup": 10, ...}); ``hz`` the robots' tree
-    tick rate; ``localisation`` their localiser preset."""
+    tick rate; ``localisation`` their localiser preset; ``speed`` game seconds per
+    wall second (default 1, real time; above 1 the game clock and every time
+    stamp the robots and the refbox send run that much faster than Unix time,
+    from the moment the game was made, as the league simulator's simulated
+    time does; the other team's software must then keep its time from those
+    stamps or the refbox's game time, not from its own wall clock)."""
 
     def __init__(self, teams: list[ExternalTeam], *, profile: str = "rcll2025", seed: int = 1,
                  host: str = BROADCAST, layout: Layout | str = "sim", phases: dict | None = None,
                  perception: str = "oracle", hz: float = 10.0, localisation: str = "cheap",
-                 world_step: float = 0.05, simulator: str = "pybullet", wall=None):
+                 world_step: float = 0.05, simulator: str = "pybullet", wall=None, speed: float = 1.0):
+        if not speed > 0:
+            raise ValueError(f"speed must be > 0 game seconds per wall second, not {speed}")
+        self.speed = float(speed)
         colors = [t.color for t in teams]
         if not teams or len(set(colors)) != len(colors):
             raise ValueError("give one or two external teams of different colours")
@@ -124,16 +132,18 @@ class ExternalGame:
     # -- running -------------------------------------------------------------------------
     def round(self) -> None:
         """Step the robots, then the world by the wall time that passed (at most
-        0.1 s), then the refbox; waits a moment when less than half a world step passed."""
+        0.1 s) times ``speed``, then the refbox; waits a moment when less than
+        half a world step would pass."""
         now = self.wall.now()
-        dt = min(now - self._last, 0.1)
-        if dt < self.world_step * 0.5:
-            self.wall.sleep(self.world_step * 0.5 - dt)
+        dt = min(now - self._last, 0.1) * self.speed
+        if dt < self.world_step * 0.5 - 1e-9:
+            self.wall.sleep((self.world_step * 0.5 - dt) / self.speed)
             return
         self._last = now
-        epoch = self.wall_epoch()
-        if abs(self.clock.epoch() - epoch) > 0.5:     # the world fell behind: stamps stay real time
-            self.clock.sync_epoch(epoch)
+        if self.speed == 1.0:
+            epoch = self.wall_epoch()
+            if abs(self.clock.epoch() - epoch) > 0.5:     # the world fell behind: stamps stay real time
+                self.clock.sync_epoch(epoch)
         for key in sorted(self.agents):
             self.agents[key].step()
         self.world.step(dt)

@@ -21,6 +21,7 @@ TEAM, KEY = "Leaguers", "league-key"
 PRODUCTION = 30          # GameState.phase
 CS_OP = {"RETRIEVE_CAP": 1, "MOUNT_CAP": 2}
 CS_OF_CAP = {"CAP_GREY": "C-CS1", "CAP_BLACK": "C-CS2"}     # the refbox's default shelves
+SPEED = 3.0     # game seconds per wall second: the games run faster than real time, as the league's simulator can
 
 
 def make_game(robots: int, exploration: float, seed: int = 1):
@@ -31,7 +32,7 @@ def make_game(robots: int, exploration: float, seed: int = 1):
     server = LeagueServer(0, (BROADCAST, pub.send, pub.recv, cyan.send, cyan.recv), TEAM, KEY)
     game = ExternalGame([ExternalTeam("CYAN", ("127.0.0.1", server.port), TEAM, KEY, robots=robots)],
                         profile="rcll2025", seed=seed, layout=layout,
-                        phases={"setup": 3.0, "exploration": exploration, "production": 1200.0})
+                        phases={"setup": 3.0, "exploration": exploration, "production": 1200.0}, speed=SPEED)
     game.hooks.append(lambda g: server.poll())
     assert game.connect(timeout=30.0), "the robots did not connect to the team server"
     return game, server
@@ -196,7 +197,7 @@ def test_rll_bts_team_server_drives_any_agenttask_robot():
     listen = agent_link.tcp_server(0, host="127.0.0.1", key=None)
     game = ExternalGame([ExternalTeam("CYAN", ("127.0.0.1", listen.port), TEAM, KEY, robots=3)],
                         profile="rcll2025", seed=8, layout=layout,
-                        phases={"setup": 3.0, "exploration": 20.0, "production": 1200.0})
+                        phases={"setup": 3.0, "exploration": 20.0, "production": 1200.0}, speed=SPEED)
     server = TeamServer("rcll2025", TEAM, clock=game.clock, key=KEY, agents=listen,
                         refbox=udp_refbox_link("rcll2025", BROADCAST, layout, clock=game.clock),
                         config=ServerConfig(robots="agenttask"))

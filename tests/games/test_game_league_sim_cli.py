@@ -12,6 +12,7 @@ from rll_bt.cli import main
     (["--external-team", "cyan", "--external-team", "cyan"], "--external-team"),         # a colour twice
     (["--external-team", "cyan", "--teamserver", "127.0.0.1:1", "--teamserver", "127.0.0.1:2"], "--teamserver"),
     (["--external-team", "cyan", "--key-cyan", ""], "--key-cyan"),                       # no key
+    (["--external-team", "cyan", "--speed", "0"], "--speed"),                            # not on the wall clock
 ])
 def test_bad_usage_is_exit_2_naming_the_option(argv, where, capsys):
     assert main(["sim", *argv]) == 2
@@ -31,3 +32,37 @@ def test_help_names_the_external_team_options(capsys):
     assert exc.value.code == 0
     for opt in ("--external-team", "--teamserver", "--team-cyan", "--key-magenta", "--connect-timeout"):
         assert opt in out
+
+
+class _Wall:
+    """A wall clock that moves only when slept on."""
+
+    def __init__(self):
+        self.t = 0.0
+
+    def now(self) -> float:
+        return self.t
+
+    def epoch(self) -> float:
+        return 1.7e9 + self.t
+
+    def sleep(self, seconds: float) -> None:
+        self.t += max(0.0, seconds)
+
+
+def test_the_league_simulator_runs_speed_times_faster_than_the_wall_clock():
+    from games.league_sim import ExternalGame, ExternalTeam
+    from rll_bt.comm import Layout, PeerPorts, free_ports
+    p = free_ports(7)
+    layout = Layout("test", public=PeerPorts(send=p[0], recv=p[1]), cyan=PeerPorts(send=p[2], recv=p[3]),
+                    magenta=PeerPorts(send=p[4], recv=p[5]), stream=-1)
+    wall = _Wall()
+    # nobody listens at p[6]: the robot keeps trying to connect while the world runs
+    with ExternalGame([ExternalTeam("CYAN", ("127.0.0.1", p[6]), "Leaguers", "league-key", robots=1)],
+                      seed=1, layout=layout, wall=wall, speed=3.0) as game:
+        t0 = game.clock.now()
+        game.run_until(lambda g: False, 3.0)
+        assert game.clock.now() - t0 >= 3.0
+        assert (game.clock.now() - t0) / wall.t == pytest.approx(3.0, rel=0.02)
+    with pytest.raises(ValueError, match="speed"):
+        ExternalGame([ExternalTeam("CYAN", ("127.0.0.1", p[6]), "Leaguers", "league-key")], speed=0.0)
