@@ -40,7 +40,8 @@ def tower_region(det: TagDetection, side: str, mps: MpsGeometry, intrinsics: Cam
                  margin_x: float = 1.5, margin_y: float = 0.5, min_size: int = 24
                  ) -> tuple[tuple[int, int, int, int], float] | None:
     """((x, y, w, h) image region to search, expected tower height in pixels),
-    or None when the tower would be behind the camera or outside the image.
+    or None when the tower would be behind the camera or outside the image,
+    or the tag's pose or the projection is not finite.
 
     The projected tower box is widened by ``margin_x`` tower widths on each
     side and ``margin_y`` tower heights above and below: room for the tag
@@ -49,11 +50,15 @@ def tower_region(det: TagDetection, side: str, mps: MpsGeometry, intrinsics: Cam
     pts = tower_points_in_tag_frame(side, mps)
     rvec = np.asarray(det.rvec, np.float64).reshape(3, 1)
     tvec = np.asarray(det.tvec, np.float64).reshape(3, 1)
+    if not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):
+        return None
     r, _ = cv2.Rodrigues(rvec)
     if np.any((r @ pts.T + tvec)[2] <= 0.05):
         return None
     uv, _ = cv2.projectPoints(pts, rvec, tvec, intrinsics.matrix, np.asarray(intrinsics.distortion, np.float64))
     uv = uv.reshape(-1, 2)
+    if not np.all(np.isfinite(uv)):     # the lens model diverges far outside the image
+        return None
     x0, y0 = uv.min(axis=0)
     x1, y1 = uv.max(axis=0)
     w, h = x1 - x0, y1 - y0

@@ -85,8 +85,10 @@ class TagDetector:
     def _solve(self, pts, k, dist, up):
         n, rvecs, tvecs, errs = cv2.solvePnPGeneric(self._obj, pts, k, dist,
                                                     flags=cv2.SOLVEPNP_IPPE_SQUARE)
+        if not n or errs is None:          # degenerate corners (all on a line or one point): no pose
+            return None
         cands = [(float(np.ravel(e)[0]), r, t) for r, t, e in zip(rvecs, tvecs, errs)
-                 if t[2, 0] > 0]
+                 if np.all(np.isfinite(r)) and np.all(np.isfinite(t)) and np.all(np.isfinite(e)) and t[2, 0] > 0]
         if not cands:
             return None
         cands.sort(key=lambda c: c[0])
