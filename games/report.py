@@ -76,6 +76,16 @@ def _other_team_collisions(log) -> int:
                if what.startswith("robot ") and what[len("robot "):].split("/")[0] != robot.split("/")[0])
 
 
+def _own_team_collisions(log) -> dict[str, int]:
+    """Collisions of a robot with a robot of its own team, per team (teams without any left out)."""
+    out: dict[str, int] = {}
+    for _t, robot, what in log:
+        team = robot.split("/")[0]
+        if what.startswith("robot ") and what[len("robot "):].split("/")[0] == team:
+            out[team] = out.get(team, 0) + 1
+    return out
+
+
 def summarise(result, options: GameOptions, team: str | None = None, wall_time: float | None = None) -> dict:
     """The report of ``team`` (default: the first team of the game); a game of
     two teams adds ``teams`` (each colour's report, without the game-wide
@@ -100,7 +110,8 @@ def _team_part(summary: dict) -> dict:
 
 def match(result) -> dict:
     """Both teams' scores, the winner ("CYAN", "MAGENTA" or None for a draw),
-    collisions between the teams and the laser sightings of the other team."""
+    collisions between the teams and within each team, and the laser
+    sightings of the other team."""
     points = {c: int(result.status.points.get(c, 0)) for c in result.recordings}
     cyan, magenta = points.get("CYAN", 0), points.get("MAGENTA", 0)
     winner = None if cyan == magenta else ("CYAN" if cyan > magenta else "MAGENTA")
@@ -108,6 +119,8 @@ def match(result) -> dict:
             for robot, saw in (result.sightings or {}).items()}
     return {"points": points, "labels": dict(result.labels), "winner": winner,
             "collisions_between_teams": _other_team_collisions(result.collision_log),
+            "collisions_within_teams": {c: _own_team_collisions(result.collision_log).get(c, 0)
+                                        for c in result.recordings},
             "other_team_in_laser_scans": {r: n for r, n in sorted(seen.items()) if n}}
 
 

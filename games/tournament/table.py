@@ -63,17 +63,24 @@ def render(configs: list[str], rows, *, planned: int | None = None) -> str:
 
 
 ROW_FIELDS = ("seed", "cyan", "magenta", "cyan_points", "magenta_points", "winner", "cyan_delivered",
-              "magenta_delivered", "collisions_between_teams", "sim_time", "wall_time", "host", "error")
+              "magenta_delivered", "collisions_between_teams", "cyan_collisions_within",
+              "magenta_collisions_within", "collisions_with_stations", "collisions_with_walls",
+              "sim_time", "wall_time", "host", "error")
 
 
 def flat(r: dict) -> dict:
     pts = r.get("points") or {}
     dl = r.get("deliveries") or {}
+    own = r.get("collisions_within_teams") or {}     # rows stored before these fields: left empty
+    hit = r.get("collisions_with") or {}
     return {"seed": r["seed"], "cyan": r["cyan"], "magenta": r["magenta"],
             "cyan_points": pts.get("cyan"), "magenta_points": pts.get("magenta"),
             "winner": r.get("winner") or ("" if r.get("error") else "draw"),
             "cyan_delivered": dl.get("cyan"), "magenta_delivered": dl.get("magenta"),
-            "collisions_between_teams": r.get("collisions_between_teams"), "sim_time": r.get("sim_time"),
+            "collisions_between_teams": r.get("collisions_between_teams"),
+            "cyan_collisions_within": own.get("cyan"), "magenta_collisions_within": own.get("magenta"),
+            "collisions_with_stations": hit.get("station"), "collisions_with_walls": hit.get("wall"),
+            "sim_time": r.get("sim_time"),
             "wall_time": r.get("wall_time"), "host": r.get("host"), "error": r.get("error") or ""}
 
 

@@ -51,6 +51,7 @@ def test_a_lockstep_head_to_head_game_both_teams_score_and_never_touch(tmp_path)
         assert {str(n) for n, r in robots.items() if r["status"] == "ACTIVE"} == {"1", "2", "3"} \
             and len(robots) == 3 and snaps[color]["color"] == color
     assert m["collisions_between_teams"] == 0
+    assert m["collisions_within_teams"] == {"CYAN": 0, "MAGENTA": 0}
     # they met: the lasers of both teams saw robots of the other team
     seen = m["other_team_in_laser_scans"]
     assert any(r.startswith("CYAN/") for r in seen) and any(r.startswith("MAGENTA/") for r in seen)

@@ -2,8 +2,11 @@
 the table, the executors on a stand-in game, and the command's usage errors."""
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import pytest
 
+from games import report
 from games.tournament import run_tournament
 from games.tournament.executors import LocalExecutor, open_executor
 from games.tournament.schedule import Match, round_robin, settings
@@ -49,6 +52,23 @@ def test_the_table_counts_wins_losses_draws_points_and_the_best_game():
     text = render(["a", "b"], rows, planned=6)
     assert text.splitlines()[2].startswith("a ") and "4 games of 6, 1 failed" in text
     assert "RuntimeError: boom" in games_csv(rows)
+
+
+def test_collisions_are_counted_between_the_teams_within_each_team_and_with_the_field():
+    log = [(1.0, "CYAN/1", "robot MAGENTA/2"), (2.0, "MAGENTA/3", "robot MAGENTA/1"),
+           (3.0, "MAGENTA/1", "robot MAGENTA/3"), (4.0, "CYAN/2", "C-CS1"), (5.0, "CYAN/3", "wall")]
+    result = SimpleNamespace(status=SimpleNamespace(points={"CYAN": 10, "MAGENTA": 10}), sightings={},
+                             recordings={"CYAN": None, "MAGENTA": None}, labels={}, collision_log=log)
+    m = report.match(result)
+    assert m["collisions_between_teams"] == 1
+    assert m["collisions_within_teams"] == {"CYAN": 0, "MAGENTA": 2}
+    assert report._collision_kinds(log) == {"robot": 3, "station": 1, "wall": 1}
+    row = {**_row("a", "b", 1, 10, 10), "collisions_between_teams": 1,
+           "collisions_within_teams": {"cyan": 0, "magenta": 2}, "collisions_with": {"station": 1, "wall": 1}}
+    head, line = games_csv([row]).splitlines()
+    got = dict(zip(head.split(","), line.split(",")))
+    assert (got["collisions_between_teams"], got["cyan_collisions_within"], got["magenta_collisions_within"],
+            got["collisions_with_stations"], got["collisions_with_walls"]) == ("1", "0", "2", "1", "1")
 
 
 def test_the_store_keeps_rows_and_refuses_other_settings(tmp_path):
