@@ -74,6 +74,13 @@ def render(args, seeds, two, one, wall2, wall1, same) -> str:
         lines.append(f"HTN's margin per game: mean {sum(margin) / len(margin):.0f}, min {min(margin)}, "
                      f"max {max(margin)} points")
     lines.append(f"inter-team collisions: {sum(r['collisions_between_teams'] for r in rows)} in {len(rows)} games")
+    known = [r for r in rows if r.get("collisions_within_teams") is not None]
+    if known:
+        own = {cfg: sum(r["collisions_within_teams"][c] for r in known for c in ("cyan", "magenta") if r[c] == cfg)
+               for cfg in CONFIGS}
+        hit = {k: sum(r["collisions_with"][k] for r in known) for k in ("station", "wall")}
+        lines.append(f"collisions within a team: {', '.join(f'{k} {v}' for k, v in own.items())}; "
+                     f"with stations {hit['station']}, walls {hit['wall']} (in {len(known)} games)")
     lines.append("")
     for workers, out, wall in ((2, two, wall2), (1, one, wall1)):
         rate = _rate(out, wall)
