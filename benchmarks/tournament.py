@@ -71,7 +71,7 @@ def render(args, seeds, two, one, wall2, wall1, same) -> str:
     margin = [r["points"]["cyan" if r["cyan"] == "htn" else "magenta"]
               - r["points"]["magenta" if r["cyan"] == "htn" else "cyan"] for r in rows]
     if margin:
-        lines.append(f"HTN's margin per game: mean {sum(margin) / len(margin):.0f}, min {min(margin)}, "
+        lines.append(f"HTN's margin per game: mean {sum(margin) / len(margin):.1f}, min {min(margin)}, "
                      f"max {max(margin)} points")
     lines.append(f"inter-team collisions: {sum(r['collisions_between_teams'] for r in rows)} in {len(rows)} games")
     known = [r for r in rows if r.get("collisions_within_teams") is not None]
