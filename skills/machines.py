@@ -15,7 +15,7 @@ skills and perception.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol, runtime_checkable
 
 from rll_bt.backend import Backend, BackendError, CapabilityError, Detections, Pose2D
@@ -27,7 +27,11 @@ from .maps import FieldMap
 class MachineObservation:
     """A station as seen.  ``pose`` is the machine centre in the field frame
     (machine x axis from output to input, see ``rll_bt.rules.geometry``);
-    ``light_state`` 0..7 (green 1, yellow 2, red 4) when the light was read."""
+    ``light_state`` 0..7 (green 1, yellow 2, red 4) when the light was read;
+    ``light_confidence`` how sure that reading is (None: as sure as the
+    sighting, ``confidence``) and ``light_view`` which of the robot's views
+    of the tower it comes from (None: a reading handed over as exact, e.g.
+    by the simulator's oracle; see :mod:`skills.exploration.light_views`)."""
     machine: str
     pose: Pose2D | None
     stamp: float
@@ -36,6 +40,8 @@ class MachineObservation:
     zone: int | None = None
     light_state: int | None = None
     confidence: float = 1.0
+    light_confidence: float | None = None
+    light_view: int | None = None
 
 
 ObservationSink = Callable[[MachineObservation], None]
@@ -102,8 +108,8 @@ class MachineMap:
         (the agent streams them to the team server)."""
         prev = self._observations.get(obs.machine)
         if prev is not None and obs.light_state is None and prev.light_state is not None:
-            obs = MachineObservation(obs.machine, obs.pose, obs.stamp, obs.side, obs.tag_id, obs.zone,
-                                     prev.light_state, obs.confidence)
+            obs = replace(obs, light_state=prev.light_state, light_confidence=prev.light_confidence,
+                          light_view=prev.light_view)
         self._observations[obs.machine] = obs
         for listener in list(self._listeners):
             listener(obs)

@@ -39,6 +39,7 @@ from rll_bt.rules import CYAN, MAGENTA, PREFIX, Profile
 from .dispatch.config import DispatchConfig
 from .dispatch.dispatcher import Dispatcher
 from .exploration.explorer import Explorer
+from .exploration.lights import LightGate
 from .exploration.lookout import Lookout
 from .exploration.report import Reporter
 from .exploration.strategies import DEFAULT_THRESH, make_strategy
@@ -163,7 +164,8 @@ class TeamServer:
                                      cfg.dispatch)
         self.explorer = Explorer(
             self.kb, self.clock, self.strategy,
-            Reporter(self.profile, prefix, thresh=cfg.explore_thresh, margin=cfg.report_margin),
+            Reporter(self.profile, prefix, thresh=cfg.explore_thresh, margin=cfg.report_margin,
+                     light_ok=LightGate(self.kb).passes),
             Lookout(self.profile, prefix, thresh=cfg.explore_thresh), self.refbox,
             self.dispatcher.fleet, self.tasks, self.send_refbox,
             report_period=cfg.report_period, on_end=self._map_now)

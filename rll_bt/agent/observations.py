@@ -5,14 +5,16 @@ Skills and tree nodes report sightings with :meth:`ObservationFeed.report`
 (any object shaped like ``skills.machines.MachineObservation``: ``machine``,
 ``pose`` (field frame, machine x from output to input), ``stamp``,
 ``tag_id``, ``zone``, ``light_state`` 0..7 (green 1, yellow 2, red 4),
-``confidence`` 0..1; or a mapping with those keys; or a team-protocol
+``confidence`` 0..1, and for a light read by a detector ``light_confidence``
+and ``light_view``, the robot's view of the tower it was read from; or a
+mapping with those keys; or a team-protocol
 ``MachineObservation``), or with :meth:`ObservationFeed.machine`.  A finished
 zone search is :meth:`ObservationFeed.zone_searched`.  An object with
 ``subscribe(callback)`` (the skills' machine map) can be attached so its
 observations flow in by themselves.
 
 Only changes go out: a station's first sighting, a new zone, light
-pattern or type, a pose that moved more than ``pose_tolerance`` metres or
+pattern, light view or type, a pose that moved more than ``pose_tolerance`` metres or
 turned more than ``angle_tolerance`` radians (the orientation likewise), or
 a confidence that rose by ``confidence_step``.  Sightings with confidence 0
 say nothing and are dropped.  The agent drains the queue into the team-server
@@ -42,6 +44,8 @@ class _Sent:
     pattern: int | None
     type: str | None
     confidence: float
+    light_view: int | None = None
+    light_confidence: float | None = None
 
 
 def _get(obj: Any, name: str, default: Any = None) -> Any:
@@ -101,13 +105,17 @@ class ObservationFeed:
         return self.machine(name, pose=_pose(_get(obs, "pose")), zone=_get(obs, "zone"),
                             orientation=_get(obs, "orientation"), lights=lights, type=_get(obs, "type"),
                             tag_id=_get(obs, "tag_id"), confidence=float(_get(obs, "confidence", 1.0) or 0.0),
-                            stamp=_get(obs, "stamp"), covariance=_get(obs, "covariance"))
+                            stamp=_get(obs, "stamp"), covariance=_get(obs, "covariance"),
+                            light_confidence=_get(obs, "light_confidence"), light_view=_get(obs, "light_view"))
 
     def machine(self, name: str | None, *, pose: Pose2D | None = None, zone: int | None = None,
                 orientation: int | None = None, lights: int | None = None, type: str | None = None,
                 tag_id: int | None = None, confidence: float = 1.0, stamp: float | None = None,
-                covariance: Iterable[float] | None = None) -> bool:
-        """Report station ``name`` (or, without a name, the station of ``tag_id``)."""
+                covariance: Iterable[float] | None = None, light_confidence: float | None = None,
+                light_view: int | None = None) -> bool:
+        """Report station ``name`` (or, without a name, the station of ``tag_id``).
+        ``lights`` goes out with ``light_confidence`` (default ``confidence``)
+        and ``light_view`` (the robot's view of the tower it was read from)."""
         self.reported += 1
         if not name and tag_id is not None:
             hit = self.profile.machine_for_tag(int(tag_id))
@@ -121,10 +129,12 @@ class ObservationFeed:
         if orientation is None and pose is not None:
             orientation = int(round(math.degrees(pose.theta))) % 360
         conf = max(0.0, min(1.0, float(confidence)))
-        if conf <= 0.0:                  # says nothing
+        if conf <= 0.0 and (lights is None or not light_confidence):      # says nothing
             return False
         new = _Sent(pose, None if zone is None else int(zone), None if orientation is None else int(orientation),
-                    None if lights is None else int(lights), type, conf)
+                    None if lights is None else int(lights), type, conf,
+                    None if lights is None or light_view is None else int(light_view),
+                    None if lights is None or light_confidence is None else float(light_confidence))
         if not self._changed(self._sent.get(name), new):
             return False
         self._sent[name] = self._merge(self._sent.get(name), new)
@@ -144,7 +154,10 @@ class ObservationFeed:
         if new.orientation is not None:
             m.orientation.value, m.orientation.confidence = new.orientation, conf
         if new.pattern is not None:
-            m.lights.pattern, m.lights.confidence = new.pattern & 7, conf
+            m.lights.pattern = new.pattern & 7
+            m.lights.confidence = conf if light_confidence is None else max(0.0, min(1.0, float(light_confidence)))
+            if new.light_view is not None:
+                m.lights.view = new.light_view
         if type:
             m.type.value, m.type.confidence = str(type), conf
         self._push(m)
@@ -195,7 +208,7 @@ class ObservationFeed:
     def _changed(self, old: _Sent | None, new: _Sent) -> bool:
         if old is None:
             return True
-        for attr in ("zone", "pattern", "type"):
+        for attr in ("zone", "pattern", "type", "light_view"):
             v = getattr(new, attr)
             if v is not None and v != getattr(old, attr):
                 return True
@@ -211,6 +224,9 @@ class ObservationFeed:
             if new.pose.distance_to(old.pose) > self.pose_tolerance or \
                     abs(wrap_angle(new.pose.theta - old.pose.theta)) > self.angle_tolerance:
                 return True
+        if new.light_confidence is not None and (old.light_confidence is None or abs(
+                new.light_confidence - old.light_confidence) >= self.confidence_step / 2):
+            return True                  # a view's reading became surer (or less sure)
         return new.confidence >= old.confidence + self.confidence_step
 
     @staticmethod
@@ -219,7 +235,8 @@ class ObservationFeed:
             return new
         return _Sent(*(getattr(new, a) if getattr(new, a) is not None else getattr(old, a)
                        for a in ("pose", "zone", "orientation", "pattern", "type")),
-                     new.confidence)
+                     new.confidence, *((new.light_view, new.light_confidence) if new.pattern is not None
+                                       else (old.light_view, old.light_confidence)))
 
 
 def _flat(values: Iterable) -> list[float]:

@@ -14,7 +14,13 @@ in the zone must also be known with ``sure_confidence``: a station believed
 in the zone (seen in this search, or placed there by the robot's machine
 map, i.e. the team server's) is looked at from in front of its tag faces
 (the nearer one first) before any ring viewpoint, since a far or oblique
-view of a tag leaves its pose, and with it the rotation, weak.  The zone is explored when the activity succeeds:
+view of a tag leaves its pose, and with it the rotation, weak.  A light read
+but not settled (:meth:`~.sightings.SightingCollector.light_unsure`: its
+views do not agree yet, :mod:`.light_views`) is read again before the robot
+goes on: after a moment (``reread_wait`` seconds facing the station, when
+the view is not even confident), then from a second view ``side_offset``
+metres sideways of where the robot stands, facing the station (at most
+``max_sideways`` of them per station).  The zone is explored when the activity succeeds:
 ``found`` lists the stations seen in it (possibly none).  It fails with
 NAVIGATION_FAILED only when no viewpoint could be reached.
 """
@@ -87,7 +93,8 @@ class ExploreZone(Activity):
                  want_light: bool | None = None, max_viewpoints: int = 3, sweep: float = math.radians(100),
                  min_confidence: float = 0.5, collector: SightingCollector | None = None,
                  timeout: float | None = 240.0, want_sure: bool | None = None,
-                 sure_confidence: float = 0.97, face_distance: float = 1.0):
+                 sure_confidence: float = 0.97, face_distance: float = 1.0, reread_wait: float = 1.5,
+                 side_offset: float = 0.45, max_sideways: int = 2):
         super().__init__(ctx, timeout)
         self.zone = zone
         self.given = list(viewpoints) if viewpoints else None
@@ -96,6 +103,7 @@ class ExploreZone(Activity):
         self.want_sure = (prof.exploration_reports != "type+zone") if want_sure is None else want_sure
         self.sure_confidence = sure_confidence
         self.face_distance = face_distance
+        self.reread_wait, self.side_offset, self.max_sideways = reread_wait, side_offset, max_sideways
         self.max_viewpoints = max_viewpoints
         self.sweep = sweep
         self.min_confidence = min_confidence
@@ -121,6 +129,10 @@ class ExploreZone(Activity):
         self.phase = "next"
         self.visited = 0
         self.failures = 0
+        self.lingered: set[tuple[str, int | None]] = set()   # (station, view) read again after a moment
+        self.sideways: dict[str, int] = {}                    # station -> second views taken
+        self.face_after_go: Pose2D | None = None              # look at this station after the drive
+        self.rereads = 0
 
     # -- phases -----------------------------------------------------------
     def _done_enough(self) -> bool:
@@ -171,7 +183,57 @@ class ExploreZone(Activity):
                                 position_tolerance=0.1, heading_tolerance=0.1, timeout=60.0, max_blocked=8.0)
         return None
 
+    def _reread(self) -> Activity | None:
+        """Read an unsure light again: after a moment, then from a second view
+        sideways (see the module doc); None when there is nothing to read again."""
+        if not self.want_light:
+            return None
+        views = self.collector.views
+        for m in self._seen_in_zone():          # a tower glimpsed in a sweep: faced and read now
+            if not self.collector.light_unsure(m):
+                continue
+            est = self.collector.tracker.estimate(m)
+            view, verdict = views.current_view(m), views.verdict(m)
+            if (m, view) not in self.lingered and (verdict is None or verdict.confidence < views.view_confidence):
+                self.lingered.add((m, view))
+                self.rereads += 1
+                self.phase = "look"
+                return _Linger(self.ctx, est.pose, self.reread_wait)
+            if self.sideways.get(m, 0) < self.max_sideways:
+                self.sideways[m] = self.sideways.get(m, 0) + 1
+                goal = self._sideways_pose(est.pose)
+                if goal is None:
+                    continue
+                self.rereads += 1
+                self.phase = "go"
+                self.face_after_go = est.pose
+                return Navigate(self.ctx, PoseGoal(goal), position_tolerance=0.1, heading_tolerance=0.1,
+                                timeout=30.0, max_blocked=5.0)
+        return None
+
+    def _sideways_pose(self, station: Pose2D) -> Pose2D | None:
+        """A free pose ``side_offset`` m sideways of the robot (across its line of
+        sight to ``station``), facing the station; the first side that is free."""
+        here = self.ctx.pose()
+        dx, dy = here.x - station.x, here.y - station.y
+        r = math.hypot(dx, dy)
+        if r < 1e-6:
+            return None
+        nx, ny = -dy / r, dx / r
+        seen = self.ctx.laser_memory.points[self.ctx.laser_memory.expiry > self.ctx.clock.now()]
+        for off in (self.side_offset, -self.side_offset, 0.8 * self.side_offset, -0.8 * self.side_offset):
+            x, y = here.x + off * nx, here.y + off * ny
+            if not bool(self.ctx.costmap.is_free(x, y)):
+                continue
+            if len(seen) and np.hypot(seen[:, 0] - x, seen[:, 1] - y).min() < 0.5:
+                continue
+            return Pose2D(x, y, math.atan2(station.y - y, station.x - x))
+        return None
+
     def _next_child(self) -> Activity | None:
+        again = self._reread()
+        if again is not None:
+            return again
         if self.want_sure:
             face = self._face_goal()
             if face is not None:
@@ -213,11 +275,14 @@ class ExploreZone(Activity):
             if status is Status.SUCCESS:
                 self.visited += 1
                 self.phase = "look"
-                self.child = _Sweep(self.ctx, self.sweep).start()
+                face, self.face_after_go = self.face_after_go, None
+                self.child = (_Sweep(self.ctx, self.sweep) if face is None
+                              else _Linger(self.ctx, face, self.reread_wait)).start()
                 return Status.RUNNING
             if status is Status.FAILURE and self.child.error is SkillError.LOCALISATION_LOST:
                 raise SkillFailure(self.child.error, self.child.message)
             self.failures += 1
+            self.face_after_go = None
         self.child = None
         return Status.RUNNING
 
@@ -237,6 +302,37 @@ class ExploreZone(Activity):
         if self.child is not None and self.child.status is Status.RUNNING:
             self.child.cancel()
         self.ctx.stop_base()
+
+
+class _Linger(Activity):
+    """Turn to face ``target`` (a station's pose), then stand still ``wait``
+    seconds: the camera reads its tower again, after a moment."""
+    name = "read again"
+
+    def __init__(self, ctx, target: Pose2D, wait: float):
+        super().__init__(ctx, None)
+        self.target = target
+        self.wait = wait
+
+    def _on_start(self) -> None:
+        here = self.ctx.pose()
+        self.turn = Turn(self.ctx, heading=math.atan2(self.target.y - here.y, self.target.x - here.x),
+                         omega=0.6).start()
+        self.still_since: float | None = None
+
+    def _step(self, now: float) -> Status:
+        if self.turn is not None:
+            st = self.turn.poll()
+            if st is Status.RUNNING:
+                return Status.RUNNING
+            self.turn = None              # turned (or could not): read from where it faces
+            self.ctx.stop_base()
+            self.still_since = now
+        return Status.SUCCESS if now - self.still_since >= self.wait else Status.RUNNING
+
+    def _on_stop(self, status: Status) -> None:
+        if self.turn is not None and self.turn.status is Status.RUNNING:
+            self.turn.cancel()
 
 
 class _Sweep(Activity):

@@ -9,41 +9,38 @@ station through ``ctx.machines.observe`` (the agent forwards those to the
 team server).  With ``confirm_confidence`` set, a station whose estimate
 becomes that confident is also put into the robot's map.
 
-A station's light state is told only when its readings agree: of the
-readings of the last :data:`LIGHT_WINDOW` seconds, at least
-``min_light_votes`` and a :data:`LIGHT_SHARE` of them name it, over at
-least :data:`LIGHT_SPAN` seconds (read again after a moment, not one
-frame counted thrice).  Readings that disagree tell nothing; the
-exploration then reads the light from another side
-(:class:`~.explore.ExploreZone`), and the old readings leave the window.
-(The reader itself reports no reading below its confidence:
-``skills.perception.light.reader``.)  A reading handed over as exact (no
-class probabilities: oracle perception, which reads the refbox's state)
-cannot disagree with itself: those count as before, the most frequent
-state once it has ``min_light_votes``.
+A station's light is read view by view (:mod:`.light_views`): every
+reading of a detector carries its confidence, and each view's verdict goes
+to the team server with it and the view's number (``light_confidence``,
+``light_view``), where the light code is reported only when views agree
+(``teamserver.exploration.lights``).  :meth:`SightingCollector.light_state`
+is the state once the views settle it by that same rule; a light read but
+not settled (:meth:`SightingCollector.light_unsure`) is read again by the
+exploration (:class:`~.explore.ExploreZone`).  (The reader itself reports
+no reading below its own confidence: ``skills.perception.light.reader``.)
+A reading handed over as exact (no class probabilities: oracle perception,
+which reads the refbox's state) cannot disagree with itself: those count
+as before, the most frequent state once it has ``min_light_votes``.
 """
 from __future__ import annotations
 
-from collections import Counter, deque
+from collections import Counter
 
 from rll_bt.backend import Pose2D
 
 from ..machines import MachineObservation
 from ..perception.tags import MachineTracker
+from .light_views import LIGHT_WINDOW, LightViews
 
-#: seconds a light reading votes for
-LIGHT_WINDOW = 8.0
-#: share of the readings in the window a light state needs
-LIGHT_SHARE = 0.8
-#: seconds between the first and the last reading of that state in the window
-LIGHT_SPAN = 0.35
+__all__ = ["LIGHT_WINDOW", "SightingCollector"]
 
 
 class SightingCollector:
-    def __init__(self, ctx, confirm_confidence: float | None = None, min_light_votes: int = 3):
+    def __init__(self, ctx, confirm_confidence: float | None = None, min_light_votes: int = 3,
+                 views: LightViews | None = None):
         self.ctx = ctx
         self.tracker = MachineTracker(ctx.profile)
-        self.lights: dict[str, deque] = {}           # station -> (stamp, state) readings of a reader
+        self.views = views or LightViews(min_votes=min_light_votes)   # readings of a reader, view by view
         self.exact: dict[str, Counter] = {}          # station -> votes of exact readings (oracle)
         self.confirm_confidence = confirm_confidence
         self.min_light_votes = min_light_votes
@@ -68,7 +65,8 @@ class SightingCollector:
             if owner is None:
                 continue
             if light.probabilities:
-                self.lights.setdefault(owner[0], deque(maxlen=200)).append((dets.stamp, int(light.state)))
+                self.views.add(owner[0], dets.stamp, int(light.state), light.probabilities,
+                               None if pose is None else (pose.x, pose.y))
             else:
                 self.exact.setdefault(owner[0], Counter())[int(light.state)] += 1
             updated.add(owner[0])
@@ -83,29 +81,25 @@ class SightingCollector:
         return updated
 
     def light_state(self, machine: str) -> int | None:
-        """The light state (0..7) the recent readings agree on (see the module), or None."""
+        """The light state (0..7) the readings settle on (see the module), or None."""
         exact = self.exact.get(machine)
         if exact:
             state, n = exact.most_common(1)[0]
             return state if n >= self.min_light_votes else None
-        readings = self.lights.get(machine)
-        if not readings:
-            return None
-        latest = readings[-1][0] if self._last_stamp is None else max(readings[-1][0], self._last_stamp)
-        while readings and readings[0][0] < latest - LIGHT_WINDOW:
-            readings.popleft()
-        votes = Counter(state for _, state in readings)
-        if not votes:
-            return None
-        state, n = votes.most_common(1)[0]
-        stamps = [t for t, s in readings if s == state]
-        if n < self.min_light_votes or n < LIGHT_SHARE * len(readings) or stamps[-1] - stamps[0] < LIGHT_SPAN:
-            return None
-        return state
+        return self.views.settled(machine)
+
+    def light_unsure(self, machine: str) -> bool:
+        """Read by a detector but not settled: worth reading again."""
+        return not self.exact.get(machine) and self.views.unsure(machine)
 
     def observation(self, machine: str, stamp: float) -> MachineObservation | None:
         est = self.tracker.estimate(machine)
-        light = self.light_state(machine)
+        view = None
+        if self.exact.get(machine):
+            light = self.light_state(machine)
+        else:
+            view = self.views.latest(machine)          # each view's verdict goes out, the server weighs them
+            light = None if view is None else view.state
         if est is None and light is None:
             return None
         pose: Pose2D | None = est.pose if est is not None else None
@@ -113,7 +107,9 @@ class SightingCollector:
         tag = next(iter(sorted(est.tag_ids)), None) if est is not None else None
         return MachineObservation(machine, pose, stamp, side, tag,
                                   est.zone if est is not None else None, light,
-                                  est.confidence if est is not None else 0.0)
+                                  est.confidence if est is not None else 0.0,
+                                  None if view is None else view.confidence,
+                                  None if view is None else view.view)
 
     def machines_in_zone(self, zone: int, min_confidence: float = 0.3) -> list[str]:
         out = []

@@ -86,7 +86,7 @@ class PerceptionService:
         for light in dets.lights:
             owner = self.profile.machine_for_tag(light.tag_id) if light.tag_id is not None else None
             key = owner[0] if owner is not None else UNASSIGNED
-            self._filter(key).add(dets.stamp, int(light.state))
+            self._filter(key).add(dets.stamp, int(light.state), light.probabilities or None)
             if owner is not None:
                 updated.add(key)
         for machine in sorted(updated):      # a set: its order changes with the hash seed

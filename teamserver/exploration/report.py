@@ -11,8 +11,11 @@ unchanged.  A property is reported
   the profile's points (2016 zone +3/-2: p > 0.4; type +5/-4: p > 0.44;
   2025 zone and rotation +1/-1: p > 0.5).
 
-2016 entries carry the type string announced for the light code; 2017+
-entries carry zone and rotation, a rotation only with (or after) its zone.
+2016 entries carry the type string announced for the light code, and only
+once ``light_ok(machine, code)`` says the robots' views of the tower agree
+on it (:class:`~.lights.LightGate`), whatever the time left: a light code
+the views do not agree on is not worth its -4; 2017+ entries carry zone
+and rotation, a rotation only with (or after) its zone.
 """
 from __future__ import annotations
 
@@ -30,8 +33,9 @@ def expected_points(p: float, ok: int, wrong: int) -> float:
 
 class Reporter:
     def __init__(self, profile: Profile, team_prefix: str, *, thresh: float = 0.9,
-                 margin: float = 20.0):
+                 margin: float = 20.0, light_ok: Callable[[str, tuple[str, ...]], bool] | None = None):
         self.profile = profile
+        self.light_ok = light_ok
         self.prefix = team_prefix
         self.thresh = thresh
         self.margin = margin
@@ -58,7 +62,8 @@ class Reporter:
             zone_known = M.ZONE in done or M.ZONE in new
             if self.profile.exploration_reports == "type+zone":
                 if "type" not in done and g.light is not None and due(
-                        g.light_confidence, s.explore_type_ok, s.explore_type_wrong):
+                        g.light_confidence, s.explore_type_ok, s.explore_type_wrong) and (
+                        self.light_ok is None or self.light_ok(name, g.light)):
                     t = type_string(g.light)
                     if t is not None:
                         new["type"] = t

@@ -142,7 +142,8 @@ class KnowledgeBase:
     def _fuse(self, obs: M.Observation) -> None:
         belief = self.machine(obs.machine).props[obs.prop]
         value = tuple(obs.value) if isinstance(obs.value, list) else obs.value
-        if obs.robot == REFBOX:
+        if obs.robot == REFBOX or M.is_view_source(obs.robot):
+            # the refbox's truth, and a robot's view of a tower: its latest statement replaces the last
             belief.add_fixed(obs.robot, value, obs.confidence, obs.time)
         else:
             belief.add(obs.robot, value, obs.confidence, obs.time)

@@ -90,6 +90,23 @@ class Observation(Record):
         self.confidence = float(self.confidence)
 
 
+#: joins a robot and its view of a signal tower in an observation's source ("R1#v2")
+VIEW_MARK = "#v"
+
+
+def view_source(robot: str, view: int) -> str:
+    """The source name of a light read by ``robot`` from its ``view`` of the
+    tower: each view of a tower votes once, its latest reading (see
+    :class:`~.kb.KnowledgeBase`), and views are the independent readings the
+    exploration's light gate counts (:mod:`teamserver.exploration.lights`)."""
+    return f"{robot}{VIEW_MARK}{int(view)}"
+
+
+def is_view_source(source: str) -> bool:
+    return VIEW_MARK in source
+
+
+
 @dataclass
 class Robot(Record):
     """A connected (or once connected) robot agent, keyed by its jersey ``number``."""

@@ -210,8 +210,9 @@ class AgentLink:
             out.append(M.Observation(name, M.ORIENTATION, deg, m.orientation.confidence,
                                      robot, now))
         if m.HasField("lights") and 0 < m.lights.pattern < 8:
+            source = M.view_source(robot, m.lights.view) if m.lights.HasField("view") else robot
             out.append(M.Observation(name, M.LIGHT, lights_of_pattern(m.lights.pattern),
-                                     m.lights.confidence, robot, now))
+                                     m.lights.confidence, source, now))
         if m.HasField("type"):
             out.append(M.Observation(name, M.TYPE, m.type.value, m.type.confidence, robot, now))
         for o in out:

@@ -66,3 +66,31 @@ def test_a_blink_at_the_game_cameras_rate_and_one_odd_frame_among_few():
     for t, s in ((0.0, 1), (0.3, 1), (0.7, 0), (1.0, 1), (1.4, 1), (1.8, 1)):
         g.add(t, s)
     assert g.pattern().green != BLINK
+
+
+def _answer(state, p=0.97, other=None, q=0.0):
+    """The light network's probabilities: ``p`` on ``state``, ``q`` on ``other``, the rest spread."""
+    rest = (1.0 - p - q) / (7 if other is None else 6)
+    return [p if s == state else q if s == other else rest for s in range(8)]
+
+
+def test_a_blink_is_decided_over_the_window_and_holds_over_frames_a_lamp_is_read_unsure_in():
+    """Green blinks at 2 Hz beside a steady red, 10 frames a second; every fourth
+    frame the network half sees red dark (red on with probability 0.4).  Taken
+    frame by frame that is a red lamp off a quarter of the time: a blink.  Taken
+    light by light, the unsure frames leave red out and keep green: red ON, green BLINK."""
+    f, blind = LightFilter(), LightFilter()
+    for i in range(20):
+        t = 0.1 * i
+        green = 1 if (i // 2.5) % 2 == 0 else 0
+        if i % 4 == 3:
+            state, probs = green, _answer(green, 0.58, green | 4, 0.4)     # red read off, unsure
+        else:
+            state, probs = green | 4, _answer(green | 4)
+        f.add(t, state, probs)
+        blind.add(t, state)
+        if i == 4:
+            assert f.pattern().green == UNKNOWN                           # not from a few frames
+    p = f.pattern()
+    assert (p.green, p.yellow, p.red) == (BLINK, OFF, ON)
+    assert blind.pattern().red != ON                                      # frame by frame: red lost

@@ -1,0 +1,157 @@
+"""A station's light read view by view: when is a reading good enough to tell?
+
+A detector's reading of a signal tower carries its confidence (the light
+network's probability of the state it names).  The frames a robot takes
+standing at one place are not independent: a glare, a neighbour's glow or
+a tinted backdrop that fools one of them fools the next.  So readings are
+grouped into *views*: a view of a station's tower is what the robot read
+of it from one place; a new view begins when the robot has moved more than
+``view_distance`` metres from where the view began, or when it had not read
+that tower for ``view_gap`` seconds.
+
+A view's verdict (:meth:`LightViews.verdicts`) is the state that, among its
+readings of the last ``window`` seconds, has at least ``min_votes`` and a
+``share`` of them, spread over ``span`` seconds (read again after a moment,
+not one frame counted thrice); its confidence is the mean probability the
+readings give that state (a frame that named another state pulls it down).
+A view is *confident* from ``view_confidence`` and *sure* from
+``sure_confidence``.
+
+The station's light is *settled* for the robot (:meth:`LightViews.settled`)
+when a sure view reads it and the confident views that read it outnumber
+those that do not.  Several confident views of one robot are not enough:
+in a rendered game (seed 1) one robot driving past a ring station read its
+green lamp unlit from three places 0.3-7 m and 7 s apart, at 0.95-0.98
+each, while every view that read it right was above 0.98.  The team server
+reports a code on a sure view, or on confident views of two robots
+(``teamserver.exploration.lights``).  A light read but not settled is
+:meth:`LightViews.unsure`: the exploration then reads it again after a
+moment and from a second view offset sideways
+(:class:`~.explore.ExploreZone`) rather than leave with it.
+"""
+from __future__ import annotations
+
+import math
+from collections import Counter, deque
+from dataclasses import dataclass, field
+
+#: seconds of a view a verdict looks at
+LIGHT_WINDOW = 8.0
+#: share of the readings in the window a light state needs
+LIGHT_SHARE = 0.8
+#: seconds between the first and the last reading of that state in the window
+LIGHT_SPAN = 0.35
+#: metres the robot moves before its readings are another view
+VIEW_DISTANCE = 0.3
+#: a view's confidence at which it votes for its state
+VIEW_CONFIDENCE = 0.9
+#: a view's confidence at which it alone settles the state
+SURE_CONFIDENCE = 0.99
+
+
+@dataclass(frozen=True)
+class Verdict:
+    view: int              # the view's number (1, 2, ... per station)
+    state: int             # 0..7
+    confidence: float      # mean probability of ``state`` over the view's readings
+    readings: int
+
+
+@dataclass
+class _View:
+    number: int
+    x: float | None
+    y: float | None
+    readings: deque = field(default_factory=lambda: deque(maxlen=200))   # (stamp, state, probabilities)
+
+
+class LightViews:
+    def __init__(self, view_distance: float = VIEW_DISTANCE, view_gap: float = LIGHT_WINDOW,
+                 window: float = LIGHT_WINDOW, min_votes: int = 3, share: float = LIGHT_SHARE,
+                 span: float = LIGHT_SPAN, view_confidence: float = VIEW_CONFIDENCE,
+                 sure_confidence: float = SURE_CONFIDENCE):
+        self.view_distance, self.view_gap, self.window = view_distance, view_gap, window
+        self.min_votes, self.share, self.span = min_votes, share, span
+        self.view_confidence, self.sure_confidence = view_confidence, sure_confidence
+        self._views: dict[str, list[_View]] = {}
+
+    # -- input ------------------------------------------------------------------
+    def add(self, machine: str, stamp: float, state: int, probabilities, position=None) -> int:
+        """One reading of ``machine``'s tower: ``state`` 0..7 with the reader's
+        class ``probabilities`` (8 values), read standing at ``position``
+        (x, y; None: unknown, the current view goes on).  Returns the view's number."""
+        if not 0 <= int(state) <= 7:
+            raise ValueError(f"light state must be 0..7, got {state}")
+        views = self._views.setdefault(machine, [])
+        x, y = (None, None) if position is None else (float(position[0]), float(position[1]))
+        cur = views[-1] if views else None
+        if cur is None or self._new_view(cur, stamp, x, y):
+            cur = _View(len(views) + 1, x, y)
+            views.append(cur)
+        elif cur.x is None and x is not None:
+            cur.x, cur.y = x, y
+        cur.readings.append((float(stamp), int(state), tuple(float(p) for p in probabilities)))
+        return cur.number
+
+    def _new_view(self, view: _View, stamp: float, x, y) -> bool:
+        if view.readings and stamp - view.readings[-1][0] > self.view_gap:
+            return True
+        if view.readings and stamp < view.readings[-1][0]:
+            return True                                   # time went backwards
+        return x is not None and view.x is not None and math.hypot(x - view.x, y - view.y) > self.view_distance
+
+    # -- verdicts -------------------------------------------------------------------
+    def verdict(self, machine: str, number: int | None = None) -> Verdict | None:
+        """The verdict of view ``number`` (default: the current one), or None."""
+        views = self._views.get(machine)
+        if not views:
+            return None
+        view = views[-1] if number is None else next((v for v in views if v.number == number), None)
+        return None if view is None else self._verdict(view)
+
+    def _verdict(self, view: _View) -> Verdict | None:
+        if not view.readings:
+            return None
+        latest = view.readings[-1][0]
+        recent = [r for r in view.readings if r[0] >= latest - self.window]
+        votes = Counter(s for _, s, _p in recent)
+        state, n = votes.most_common(1)[0]
+        stamps = [t for t, s, _p in recent if s == state]
+        if n < self.min_votes or n < self.share * len(recent) or stamps[-1] - stamps[0] < self.span:
+            return None
+        conf = sum(p[state] if len(p) > state else float(s == state) for _t, s, p in recent) / len(recent)
+        return Verdict(view.number, state, conf, len(recent))
+
+    def verdicts(self, machine: str) -> list[Verdict]:
+        """The verdict of every view of ``machine``'s tower that has one."""
+        return [v for view in self._views.get(machine, []) if (v := self._verdict(view)) is not None]
+
+    def latest(self, machine: str) -> Verdict | None:
+        """The newest view's verdict that there is (what to tell the team server now)."""
+        found = self.verdicts(machine)
+        return found[-1] if found else None
+
+    def settled(self, machine: str) -> int | None:
+        """The state the views settle on (see the module doc), or None."""
+        confident = [v for v in self.verdicts(machine) if v.confidence >= self.view_confidence]
+        for state in sorted({v.state for v in confident}):
+            agree = [v for v in confident if v.state == state]
+            if any(v.confidence >= self.sure_confidence for v in agree) and 2 * len(agree) > len(confident):
+                return state
+        return None
+
+    def read(self, machine: str) -> bool:
+        """Has any view of ``machine``'s tower any reading?"""
+        return any(v.readings for v in self._views.get(machine, []))
+
+    def unsure(self, machine: str) -> bool:
+        """Read, but not settled: worth reading again."""
+        return self.read(machine) and self.settled(machine) is None
+
+    def current_view(self, machine: str) -> int | None:
+        views = self._views.get(machine)
+        return views[-1].number if views else None
+
+    def views(self, machine: str) -> int:
+        """How many views of ``machine``'s tower there were."""
+        return len(self._views.get(machine, []))

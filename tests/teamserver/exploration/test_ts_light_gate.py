@@ -1,0 +1,178 @@
+"""No wrong light code reaches the refbox: the team server reports a station's
+light code only when views of two robots agree (or one view is sure), whatever
+the time left.  The robot side is the real pipeline (the
+exploration's sighting collector, the machine map, the agent's observation
+feed) reading a detector whose answers the test scripts."""
+from types import SimpleNamespace
+
+from rll_bt import rules
+from rll_bt.agent.observations import ObservationFeed
+from rll_bt.backend import Detections, LightDetection, Pose2D
+from skills.exploration.sightings import SightingCollector
+from skills.machines import MachineMap
+from teamserver.exploration.lights import LightGate
+from teamserver.knowledge import model as M
+from teamserver.knowledge.kb import KnowledgeBase
+from tests.support.teamserver import Lockstep
+
+P16 = rules.profile("rcll2016")
+ZONES = {"C-CS1": 11, "M-CS1": P16.mirror_zone(11)}
+GREEN_YELLOW = 3          # C-CS1's code in this game (its type string TYPE0003)
+RED_GREEN = 5             # what the fooled detector reads
+
+
+def probs(state, p):
+    return tuple(p if s == state else (1.0 - p) / 7 for s in range(8))
+
+
+class ScriptedReader:
+    """The robot's detections: the tag of a station in view and its tower read
+    as ``answer(position)`` says, (state, probability)."""
+
+    def __init__(self, answer):
+        self.answer, self.next = answer, None
+
+    def detections(self):
+        return self.next
+
+
+class Robot:
+    """One robot's perception and observation feed, its messages sent to the team server."""
+
+    def __init__(self, ls, agent, answer):
+        self.ls, self.agent = ls, agent
+        self.reader = ScriptedReader(answer)
+        self.where = Pose2D(0.0, 0.0, 0.0)
+        self.map = MachineMap()
+        self.feed = ObservationFeed(P16, ls.clock, robot_id=agent.number)
+        self.feed.attach(self.map)
+        ctx = SimpleNamespace(profile=P16, tags=self.reader, pose=lambda: self.where, estimate=lambda: None,
+                              machines=self.map)
+        self.collector = SightingCollector(ctx)
+
+    def look(self, machine, seconds, at, dt=0.2):
+        """Stand at ``at`` reading ``machine``'s tower for ``seconds``."""
+        self.where = Pose2D(at[0], at[1], 0.0)
+        tag = P16.tag_ids(machine)[0]
+        for _ in range(int(seconds / dt)):
+            state, p = self.reader.answer(machine, at)
+            self.reader.next = Detections(self.ls.clock.now(), (), (
+                LightDetection((0, 0, 8, 33), state, p, probs(state, p), "front", tag_id=tag),), None)
+            self.collector.look()
+            for m in self.feed.drain():
+                self.agent.t.send(m)
+            self.agent.observe(machine, zone=ZONES[machine], zconf=0.95)
+            self.agent.beat()
+            self.ls.refbox.game_state("EXPLORATION", "RUNNING", self.ls.clock.now())
+            self.ls.step(dt=dt)
+            check_no_wrong_type(self.ls)
+
+
+def start(ls):
+    ms = ls.refbox.ms
+    for a in ls.agents:
+        a.hello()
+    info = ms.ExplorationInfo()
+    for code, on in P16.light_codes.items():
+        sig = info.signals.add(type=f"TYPE{code:04d}")
+        for light in on:
+            sig.lights.add(color=ms.enum("LightColor").Value(light), state=1)
+    info.zones.add(zone=ZONES["C-CS1"], team_color=0)
+    ls.refbox.game_state("EXPLORATION", "RUNNING", 0)
+    ls.step()
+    ls.refbox.public.send(info)
+    ls.step()
+
+
+def reported_types(ls):
+    out = []
+    for m in ls.refbox.received:
+        if m.DESCRIPTOR.name == "MachineReport":
+            out += [(e.name, e.type) for e in m.machines if e.type]
+    return out
+
+
+def check_no_wrong_type(ls):
+    for name, t in reported_types(ls):
+        assert (name, t) == ("C-CS1", f"TYPE{GREEN_YELLOW:04d}"), f"wrong report {name} {t}"
+
+
+def test_a_wrong_unsure_view_then_right_views_report_only_the_right_code():
+    ls = Lockstep("rcll2016", robots=2)
+    start(ls)
+
+    def answer(machine, at):      # fooled (and unsure) from where it stands first, right elsewhere
+        return (RED_GREEN, 0.8) if at == (0.0, 0.0) else (GREEN_YELLOW, 0.95)
+
+    r = Robot(ls, ls.agents[0], answer)
+    r.look("C-CS1", 3.0, (0.0, 0.0))
+    assert r.collector.light_unsure("C-CS1")
+    assert reported_types(ls) == []
+    r.look("C-CS1", 3.0, (0.0, 0.45))          # a second view, sideways: right but one view
+    r.look("C-CS1", 3.0, (0.0, -0.45))         # a third view agrees: still one robot's
+    assert reported_types(ls) == []
+    Robot(ls, ls.agents[1], answer).look("C-CS1", 3.0, (1.0, 1.0))     # another robot agrees
+    assert set(reported_types(ls)) == {("C-CS1", f"TYPE{GREEN_YELLOW:04d}")}
+
+
+def test_one_robots_confident_wrong_views_are_not_reported_then_a_sure_view_is():
+    # the rendered game of seed 1: one robot read RS2's green lamp unlit from three places
+    ls = Lockstep("rcll2016", robots=1)
+    start(ls)
+    r = Robot(ls, ls.agents[0], lambda machine, at: (RED_GREEN ^ 1, 0.95 + 0.01 * at[0]))
+    for x in (0.0, 1.0, 2.0):
+        r.look("C-CS1", 2.0, (x, 0.0))
+    assert reported_types(ls) == []
+    r.reader.answer = lambda machine, at: (GREEN_YELLOW, 0.998)
+    for x in (3.0, 4.0, 5.0, 6.0):             # sure views, as many as the wrong ones and one more
+        r.look("C-CS1", 2.0, (x, 0.0))
+    assert reported_types(ls) == []
+    for x in (7.0,):                           # outvoted by two
+        r.look("C-CS1", 2.0, (x, 0.0))
+    assert set(reported_types(ls)) == {("C-CS1", f"TYPE{GREEN_YELLOW:04d}")}
+
+
+def test_one_confident_wrong_view_is_not_reported_even_at_the_deadline():
+    ls = Lockstep("rcll2016", robots=1)
+    start(ls)
+    r = Robot(ls, ls.agents[0], lambda machine, at: (RED_GREEN, 0.95))
+    r.look("C-CS1", 3.0, (0.0, 0.0))
+    light = ls.server.kb.estimate("C-CS1", M.LIGHT)
+    assert light.value == ("GREEN", "RED") and light.confidence >= 0.9     # the fused belief would report it
+    r.look("C-CS1", 2.0, (0.0, 0.0))
+    ls.refbox.game_state("EXPLORATION", "RUNNING", P16.phases.exploration_deadline - 5.0)
+    ls.step(n=20)                                                         # the last seconds: report what pays
+    assert reported_types(ls) == []
+
+
+def test_the_twin_across_the_field_is_a_second_view():
+    ls = Lockstep("rcll2016", robots=2)
+    start(ls)
+    right = lambda machine, at: (GREEN_YELLOW, 0.95)          # noqa: E731
+    Robot(ls, ls.agents[0], right).look("C-CS1", 3.0, (0.0, 0.0))
+    assert reported_types(ls) == []
+    Robot(ls, ls.agents[1], right).look("M-CS1", 3.0, (4.0, 4.0))
+    assert set(reported_types(ls)) == {("C-CS1", f"TYPE{GREEN_YELLOW:04d}")}
+
+
+def test_gate_rules():
+    kb = KnowledgeBase(P16)
+    gate = LightGate(kb)
+    gy, rg = ("GREEN", "YELLOW"), ("GREEN", "RED")
+
+    def view(robot, view, code, conf, machine="C-CS1"):
+        kb.add_observation(M.Observation(machine, M.LIGHT, code, conf, M.view_source(robot, view)))
+
+    assert gate.passes("C-CS1", gy)                           # nothing read through views: not gated
+    view("R1", 1, gy, 0.95)
+    assert not gate.passes("C-CS1", gy)                       # one confident view
+    view("R1", 1, gy, 0.995)
+    assert gate.passes("C-CS1", gy)                           # the same view, now sure: alone enough
+    view("R2", 1, rg, 0.93)
+    assert not gate.passes("C-CS1", gy) and not gate.passes("C-CS1", rg)   # contradicted
+    view("R2", 2, gy, 0.91)
+    view("R3", 1, gy, 0.92, machine="M-CS1")
+    assert gate.passes("C-CS1", gy)                           # three views (one the twin's) against one
+    view("R3", 2, rg, 0.7)
+    assert gate.passes("C-CS1", gy)                           # an unsure view does not vote
+    assert len(gate.views("C-CS1")) == 5
