@@ -276,9 +276,9 @@ class RobotAgent:
                                      text="cancelled before it started", stamp=self.clock.now()))
         elif where == "finished":
             self.server.result(self.book.result(tid))
-        else:
-            self.server.result(make_result(at, robot_id=self.config.robot_id, status="CANCELLED",
-                                           text="no such task on this robot", stamp=self.clock.now()))
+        else:       # not here (yet): a copy of the task that comes later (reordered, repeated) is refused
+            self._record(make_result(at, robot_id=self.config.robot_id, status="CANCELLED",
+                                     text="cancelled before it arrived", stamp=self.clock.now()))
 
     def _on_pause(self, at, where: str) -> None:
         entry = self.book.entry(int(at.task_id))

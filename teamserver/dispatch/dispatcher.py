@@ -55,7 +55,7 @@ class Dispatcher:
         pm = production
         self.fleet = Fleet(kb, clock, pm.locks, tasks)
         self.readiness = Readiness(kb, pm.locks, feeds, pm.slides, pm.caps, pm.buffers,
-                                   pm.world, config)
+                                   pm.world, config, tasks=tasks, clock=clock)
         self.holding = Holding(kb, self.readiness, pm.locks, feeds, config)
         self.matcher = Matcher(kb, self.fleet, self.readiness, self.holding, pm.locks, pm.caps,
                                pm.slides, pm.world, config)

@@ -6,7 +6,9 @@
   whose next step waited for what it held.
 - A task whose station goes BROKEN or DOWN before its PrepareMachine went
   out, its robot carrying nothing for it, goes back to the pool and the
-  robot is free again (:meth:`Dropouts.release_unusable`).
+  robot is free again (:meth:`Dropouts.release_unusable`); it goes to
+  another robot only once this one has provably stopped it (the cancel may
+  be lost in a cut: :meth:`~teamserver.dispatch.readiness.Readiness.held_by`).
 """
 from __future__ import annotations
 
@@ -49,6 +51,7 @@ class Dropouts:
     def drop(self, robot: M.Robot, why: str) -> None:
         log.warning("robot %d dropped: %s", robot.number, why)
         robot.status = M.LOST
+        self.tasks.stopped(robot.number)        # past its lease: it stopped what was cancelled on it
         task = self.kb.tasks.get(robot.task_id) if robot.task_id is not None else None
         robot.task_id = None
         if robot.holding:

@@ -5,6 +5,13 @@ A production task is *ready* when
 - its predecessors are DONE and its station locks are free (or held by its
   own product: :mod:`teamserver.production.locks`);
 - its station is neither BROKEN nor DOWN (:meth:`Readiness.station_usable`);
+- no robot may still run it: a task taken back from a robot (its station
+  went down, :mod:`.dropouts`) waits until that robot has provably stopped
+  it (acknowledged the cancel or sent a result,
+  :meth:`~teamserver.links.tasks.TaskLink.stop_owed`) or has been silent
+  past its lease (``heartbeat_timeout``, as a dropped robot: it stops
+  ``rll_bt.agent.lease.MARGIN`` s before), so that a cancel lost in a cut
+  never lets two robots run one task (:meth:`Readiness.held_by`);
 - the station can take its workpiece (:mod:`teamserver.production.feeding`);
 - a delivery's robot would reach the DS when the order's window opens
   (:meth:`Readiness.deliver_from`); a stored product's retrieval is not
@@ -24,6 +31,7 @@ from __future__ import annotations
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
+from ..links.tasks import TaskLink
 from ..production.caps import CapBuffers, Caps
 from ..production.feeding import FeedMonitor
 from ..production.locks import StationLocks
@@ -40,7 +48,7 @@ class Readiness:
 
     def __init__(self, kb: KnowledgeBase, locks: StationLocks, feeds: FeedMonitor,
                  slides: Slides, caps: Caps, buffers: CapBuffers, world: PlanningWorld,
-                 config: DispatchConfig):
+                 config: DispatchConfig, tasks: TaskLink | None = None, clock=None):
         self.kb = kb
         self.locks = locks
         self.feeds = feeds
@@ -49,6 +57,21 @@ class Readiness:
         self.buffers = buffers
         self.world = world
         self.config = config
+        self.tasks = tasks
+        self.clock = clock
+
+    def held_by(self, task: M.Task) -> int | None:
+        """The robot that may still run ``task`` (cancelled on it, its stop not proven,
+        heard within its lease), or None."""
+        number = self.tasks.stop_owed(task.id) if self.tasks is not None else None
+        if number is None:
+            return None
+        robot = self.kb.robots.get(number)
+        if robot is None or robot.status != M.ACTIVE or (
+                self.clock is not None and self.clock.now() - robot.last_heartbeat > self.config.heartbeat_timeout):
+            self.tasks.stopped(number, task.id)         # silent past its lease: it has stopped
+            return None
+        return number
 
     def station_usable(self, machine: str | None) -> bool:
         if machine is None:
@@ -68,6 +91,8 @@ class Readiness:
         if not self.locks.free_for(task):
             return False
         if not self.station_usable(task.machine):
+            return False
+        if self.held_by(task) is not None:
             return False
         if not self.feeds.accepts(task):
             return False

@@ -18,12 +18,21 @@ finished, given to another robot).  The robots' final results are
 acknowledged (:meth:`TaskLink.incoming`) and acted on once.  A robot of the
 league knows no ``LinkAck``: it gets each task once, and again when it
 comes back; its beacons say what it finished.
+
+A task taken back from a robot (cancelled, and put back in the pool) may
+still run on it: the cancel can be lost in a cut, and the robot goes on
+until its lease runs out (:mod:`rll_bt.agent.lease`).  So the link keeps
+each cancel's *stop owed* (:meth:`TaskLink.stop_owed`) until the robot has
+provably stopped: it acknowledged the cancel (an rll-bt agent stops the task
+before it acknowledges) or sent a final result of that assignment; the
+dispatcher gives the task to nobody meanwhile unless the robot has been
+silent past its lease (:mod:`teamserver.dispatch.readiness`).
 """
 from __future__ import annotations
 
 from collections.abc import Callable
 
-from rll_bt.comm.reliable import AT_TASK, Reliable, agent_task_what
+from rll_bt.comm.reliable import AT_SUCCEEDED, AT_TASK, Reliable, agent_task_what
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
@@ -31,6 +40,7 @@ from .agents import AgentLink, wire_id
 from .refbox import RefboxClient
 
 TASK, CANCEL, PREPARE = "task", "cancel", "prepare"
+MAX_STOPS = 256         # stops owed remembered (the oldest is given up)
 
 
 class TaskLink:
@@ -45,18 +55,20 @@ class TaskLink:
         self.refbox = refbox
         self.to_robot = to_robot
         self.to_refbox = to_refbox
-        self.queue: list[tuple] = []     # (TASK, task), (CANCEL, task, reason, robot), (PREPARE, task)
+        self.queue: list[tuple] = []     # (TASK, task), (CANCEL, task, reason, robot, wire), (PREPARE, task)
         self.reliable = Reliable(codec.clock)
         self._before: dict[tuple, list] = {}     # (robot, link key) -> the TaskDetail that goes before that task
+        # task id -> (robot, wire id, the cancel's link key): cancelled on a robot not yet known to have stopped
+        self._stops: dict[int, tuple[int, int, tuple | None]] = {}
 
     def send(self, task: M.Task) -> None:
         """Give ``task`` to its robot (``task.robot``)."""
         self.queue.append((TASK, task))
 
     def cancel(self, task: M.Task, reason: str) -> None:
-        """Tell ``task``'s robot to stop it (the robot it has now: the dispatcher may
-        put the task back in the pool before the queue is flushed)."""
-        self.queue.append((CANCEL, task, reason, task.robot))
+        """Tell ``task``'s robot to stop it (the robot and assignment it has now: the
+        dispatcher may put the task back in the pool before the queue is flushed)."""
+        self.queue.append((CANCEL, task, reason, task.robot, wire_id(task)))
 
     def prepare(self, task: M.Task) -> None:
         """Send ``task``'s PrepareMachine (``task.prepare``) to the refbox."""
@@ -72,7 +84,10 @@ class TaskLink:
             if kind == TASK:
                 self._deliver(robot, self.codec.task_msgs(t, color, robot))
             elif kind == CANCEL:
-                self._deliver(robot, [self.codec.cancel_msg(t, item[2], color, robot=number)])
+                msg = self.codec.cancel_wire(item[4], int(number or 0), color)
+                if number is not None:
+                    self._owe_stop(t, number, item[4], self.reliable.key(msg))
+                self._deliver(robot, [msg])
             elif kind == PREPARE:
                 self.to_refbox(self.refbox.prepare_machine(t.prepare))
         self.queue.clear()
@@ -85,6 +100,41 @@ class TaskLink:
             if robot is not None and robot.peer is not None and self._still_due(number, msg):
                 self._repeat(robot, msg)
         self._prune()
+
+    # -- stops owed ---------------------------------------------------------------------------
+    def _owe_stop(self, task: M.Task, number: int, wire: int, key) -> None:
+        self._stops.pop(task.id, None)
+        self._stops[task.id] = (int(number), int(wire), key)
+        while len(self._stops) > MAX_STOPS:
+            self._stops.pop(next(iter(self._stops)))
+
+    def stop_owed(self, task_id: int) -> int | None:
+        """The robot that may still run task ``task_id`` after it was cancelled on it
+        (the cancel neither acknowledged nor answered with a result yet), or None."""
+        s = self._stops.get(int(task_id))
+        return s[0] if s is not None else None
+
+    def stopped(self, number: int, task_id: int | None = None) -> None:
+        """Robot ``number`` has stopped task ``task_id`` (None: every task; it was
+        dropped, past its lease)."""
+        for tid in [tid for tid, s in self._stops.items()
+                    if s[0] == int(number) and (task_id is None or tid == int(task_id))]:
+            del self._stops[tid]
+
+    def _stop_heard(self, msg) -> None:
+        """A LinkAck or a final result from a robot: the stops it proves."""
+        if not self._stops or not hasattr(msg, "robot_id"):
+            return
+        number = int(msg.robot_id)
+        if msg.DESCRIPTOR.name == "LinkAck":
+            acked = {(int(i.comp_id), int(i.msg_type), int(i.id)) for i in msg.items}
+            done = [tid for tid, s in self._stops.items() if s[0] == number and s[2] in acked]
+        elif msg.DESCRIPTOR.name == "AgentTask" and agent_task_what(msg) >= AT_SUCCEEDED:
+            done = [tid for tid, s in self._stops.items() if s[0] == number and s[1] == int(msg.task_id)]
+        else:
+            return
+        for tid in done:
+            del self._stops[tid]
 
     def _deliver(self, robot: M.Robot | None, msgs: list) -> None:
         """Send ``msgs`` (an AgentTask last, what goes with it before), and keep the
@@ -140,6 +190,7 @@ class TaskLink:
         """A message from a robot: whether to act on it (an acknowledgement, or the
         repeat of a result already acted on: no; acknowledgements owed are sent at
         the next :meth:`flush`)."""
+        self._stop_heard(msg)
         if msg.DESCRIPTOR.name == "LinkAck":
             self.reliable.on_ack(int(msg.robot_id), msg)
             return False

@@ -6,6 +6,7 @@ the cut-off robot, which cannot hear that, stops the task before the server may 
 (its lease: the server's heartbeats say until when it heard the robot and how long it
 waits), so at no time do two robots run the same task."""
 import dataclasses
+import math
 
 import pytest
 
@@ -70,3 +71,51 @@ def test_a_robot_dropped_while_cut_off_has_stopped_its_task_so_no_task_runs_twic
         assert "lease" in r1.book.finished[cut["wire"]].outcome.text and cut["stopped"] - cut["start"] < 10.0
         assert game.teamserver.snapshot()["robots"][1]["status"] == "ACTIVE"
         assert not r1.server.delivery.unacknowledged
+
+
+def test_a_task_taken_back_under_a_cut_is_not_given_out_again_while_its_robot_may_still_run_it():
+    """A robot is cut off on its way to fetch from a station that goes DOWN for 2 s: the
+    team server takes the task back (the cancel is lost in the cut) and the station is
+    soon up again.  The robot goes on with the task until its lease runs out, so the
+    server gives the task to nobody (nor to the cut robot again, which would not hear it)
+    until the robot is provably off it; then another robot does it."""
+    net = NetFaults(cuts=tuple((f"R{n}", 1e6, 1e6 + 1.0) for n in (1, 2, 3)))     # cuts set below
+    opts = GameOptions(seed=7, robots=3, setup=1.0, exploration=3.0, production=300.0, strategy="oracle", net=net)
+    with LockstepGame(opts) as game:
+        kb = game.teamserver.server.kb
+
+        def on_the_way(g):      # (robot, task): a fetch from a station still 2 m away, another robot free
+            if g.refbox.status().phase != "PRODUCTION":
+                return None
+            free = [r.number for r in kb.active_robots() if r.task_id is None
+                    or kb.tasks[r.task_id].kind == "go_to"]
+            for n, a in g.agents.items():
+                t = kb.tasks.get(from_wire(a.run.task_id)[0]) if a.run is not None and not a.run.done else None
+                if t is None or t.state != "ASSIGNED" or t.prepared_at is not None or a.run.ticks == 0 \
+                        or t.kind not in ("get_workpiece", "retrieve_cap") or not set(free) - {n}:
+                    continue
+                st, pose = g.refbox.stations()[t.machine].pose, g.world.robot_pose("CYAN", n)
+                if math.hypot(st.x - pose.x, st.y - pose.y) > 2.0:
+                    return n, t
+            return None
+        assert game.run_until(on_the_way, limit=120.0), "no robot went to fetch from afar with another one free"
+        n, task = on_the_way(game)
+        wire, start = game.agents[n].run.task_id, game.clock.now()
+        link = game.agents[n].link
+        link.faults = dataclasses.replace(link.faults, cuts=((start, start + 20.0),))
+        game.station_down(task.machine, 2.0)
+        early: list = []
+
+        def watch(g):       # the task out under a new assignment while the cut robot still runs the old one
+            run = g.agents[n].run
+            if task.state == "ASSIGNED" and task.attempts > from_wire(wire)[1] and run is not None \
+                    and not run.done and run.task_id == wire:
+                early.append((round(g.clock.now() - start, 1), task.robot))
+        game.hooks.append(watch)
+        assert game.run_until(lambda g: task.state == "PENDING", limit=2.0), "the task was not taken back"
+        assert game.run_until(lambda g: task.state in ("ASSIGNED", "DONE") and task.robot != n, limit=30.0), \
+            f"task {task.id} was not given to another robot: {task.state}, robot {task.robot}"
+        assert not early, f"task {task.id} given out again while robot {n} still ran it: {early[:3]}"
+        assert game.clock.now() - start >= 9.0                 # R ran it until its lease was over ...
+        old = game.agents[n].book.finished[wire]               # ... then stopped it
+        assert not old.successful and "lease" in old.outcome.text

@@ -241,3 +241,18 @@ def test_a_cancelled_task_given_out_again_runs_again_and_a_late_copy_does_not(ri
     detail.issued_at = 40.0                                         # given out again after the cancel
     assert srv.send(detail) and srv.send(at)
     rig.until(lambda: srv.results(7, "SUCCEEDED"), what="task 7 run again and done")
+
+
+def test_a_task_whose_cancel_came_first_is_refused(rig):
+    """The cancel overtook its task (a copy repeated or delayed on a faulty link, the
+    team server meanwhile gave the task back to the pool): the robot answers the cancel
+    and never starts the task that comes after it; it runs the next assignment."""
+    srv = rig.server
+    srv.cancel(9)
+    rig.until(lambda: srv.results(9, "CANCELLED"), what="the cancel answered")
+    at, detail = make_task("get_workpiece", 9, machine="C-BS")
+    detail.issued_at = 5.0
+    assert srv.send(detail) and srv.send(at)                        # the task, late
+    rig.until(lambda: len(srv.results(9, "CANCELLED")) >= 2, what="the late task answered as cancelled")
+    assert rig.agent.run is None and not srv.running(9)
+    run_task(rig, 10, "get_workpiece", machine="C-BS")

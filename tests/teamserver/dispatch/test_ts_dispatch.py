@@ -216,6 +216,52 @@ def test_a_station_going_down_before_its_prepare_frees_the_robot_sent_there(tcp)
                for t in kb.tasks.values())
 
 
+def test_a_task_taken_back_goes_to_no_other_robot_until_its_robot_has_provably_stopped_it():
+    """The cancel of a task whose station went down is lost (its robot is cut off, or
+    only its acknowledgement is): the robot may still run the task until its lease runs
+    out, so the task waits, station back up or not, until the robot acknowledges the
+    cancel, answers it with a result, or has been silent past its lease."""
+    for proof in ("ack", "result", "silence"):
+        ls = Lockstep(config=ServerConfig(prefill_caps=False))
+        kb, bs = bs_task_after_setup(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])
+        first = next(a for a in ls.agents if a.number == bs.robot)
+        others = [a for a in ls.agents if a is not first]
+        first.ack = False                                      # nothing of it reaches the server but beacons
+        ls.station_states["C-BS"] = "DOWN"
+        ls.refbox.machines(ls.station_states)
+        ls.step(n=3)
+        assert kb.tasks[bs.id].state == M.PENDING and ls.server.tasks.stop_owed(bs.id) == first.number
+        ls.station_states["C-BS"] = "IDLE"                     # back up at once
+        ls.refbox.machines(ls.station_states)
+        for _ in range(16):                                    # 8 s: the robot still heard, the cancel unanswered
+            for a in ls.agents:
+                a.beat()
+            ls.step(dt=0.5)
+        assert kb.tasks[bs.id].state == M.PENDING, f"{proof}: task given away while robot {first.number} may run it"
+        assert first.cancels() and all(a.tasks() == [] or bs.id not in [t.task_id for t in a.tasks()]
+                                       for a in others)
+        if proof == "ack":
+            first.ack = True                                   # the next copy of the cancel is acknowledged
+            for _ in range(20):
+                first.beat()
+                ls.step(dt=0.5)
+                if kb.tasks[bs.id].state == M.ASSIGNED:
+                    break
+        elif proof == "result":
+            first.result(bs.id, status="CANCELLED")
+            ls.step(n=2)
+        else:
+            for _ in range(24):                                # 12 s silent: dropped, its lease over
+                for a in others:
+                    a.beat()
+                ls.step(dt=0.5)
+            assert kb.robots[first.number].status == M.LOST
+        ls.step(n=2)
+        assert kb.tasks[bs.id].state == M.ASSIGNED, f"{proof}: the task was not given out again"
+        assert ls.server.tasks.stop_owed(bs.id) is None
+        ls.close()
+
+
 def test_a_prepared_station_going_down_keeps_its_task(tcp):
     ls = tcp
     kb, bs = bs_task_after_setup(ls, [(5.0, 1.2, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])  # one at the BS
