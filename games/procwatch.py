@@ -253,7 +253,9 @@ def _game_topics(out: _Merged, result, profile) -> None:
                 k += 1
             last_phase = s["phase"]
         paths = {n: list(pts[i]) for n, pts in rec.paths.items() if i < len(pts)}
-        put("sample", s["t"], {**s, "now": now, "paths": paths, "stations": changes.get(s["t"], {}), **final})
+        # a change goes with one sample: the game's last sample (made when it ends) may share the time
+        # of the one before, and a change written with both was read back twice
+        put("sample", s["t"], {**s, "now": now, "paths": paths, "stations": changes.pop(s["t"], {}), **final})
     for robot, runs in rec.tasks.items():
         for i, run in enumerate(runs):
             if run.get("end") is not None and run["end"] > run["start"]:
