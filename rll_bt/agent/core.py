@@ -276,9 +276,15 @@ class RobotAgent:
                                      text="cancelled before it started", stamp=self.clock.now()))
         elif where == "finished":
             self.server.result(self.book.result(tid))
-        else:       # not here (yet): a copy of the task that comes later (reordered, repeated) is refused
-            self._record(make_result(at, robot_id=self.config.robot_id, status="CANCELLED",
-                                     text="cancelled before it arrived", stamp=self.clock.now()))
+        else:
+            result = make_result(at, robot_id=self.config.robot_id, status="CANCELLED",
+                                 text="cancelled before it arrived", stamp=self.clock.now())
+            if self.server.server_speaks_rllbt:
+                # its ids name one assignment each: a copy of the task that comes after its cancel
+                # (reordered, repeated) is refused (a league server may give the same id out again)
+                self._record(result)
+            else:
+                self.server.result(result)
 
     def _on_pause(self, at, where: str) -> None:
         entry = self.book.entry(int(at.task_id))
