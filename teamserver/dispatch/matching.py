@@ -48,6 +48,7 @@ class Matcher:
             return []
         self.caps.adopt_free_caps()
         self.slides.top_up_slides()
+        self.slides.waive_full_slide_puts()
         ready = [t for t in self.kb.open_tasks() if self.readiness.ready(t, game_time)]
         assigned: list[M.Task] = []
         # carry tasks: their holder, if idle

@@ -13,7 +13,13 @@ So
   more breaks the station);
 - a mount whose bases are all put but missing from the slide for
   ``settle`` seconds gets the missing ones fetched from the BS
-  (:meth:`Slides.top_up_slides`).
+  (:meth:`Slides.top_up_slides`);
+- a mount whose slide already holds what it costs (bases other products
+  discarded there) no longer waits for its own bases that the full slide
+  cannot take (:meth:`Slides.waive_full_slide_puts`): they go on the slide
+  once the mount has used some.  Else the mount waited for puts that waited
+  for the mount, and the robots holding its workpiece and its bases stood
+  still for the rest of the game (rcll2016 seed 10: from 540 s to the end).
 """
 from __future__ import annotations
 
@@ -67,6 +73,34 @@ class Slides:
                     and t.machine == machine and t.params.get("side") == M.SLIDE)
         return SLIDE_MAX - (st.loaded_with if st is not None else 0) - going
 
+    def waive_full_slide_puts(self) -> list[M.Task]:
+        """Drop from each pending ring mount whose slide holds what its ring costs the
+        pending puts of its bases that the slide has no room for (the puts stay, and
+        go once the mount made room); returns the mounts changed."""
+        changed = []
+        for t in self.kb.open_tasks():
+            if t.kind != M.MOUNT_RING or t.state != M.PENDING:
+                continue
+            st = self.kb.stations.get(t.machine or "")
+            cost = int(t.params.get("cost", 0))
+            if st is None or cost <= 0 or st.loaded_with < cost:
+                continue
+            waived = [d for d in t.deps if self._blocked_put(self.kb.tasks.get(d), t.machine)]
+            if not waived:
+                continue
+            t.deps = tuple(d for d in t.deps if d not in waived)
+            self.kb.save_task(t)
+            changed.append(t)
+            log.info("task %d: %s holds the %d base(s) it costs; it no longer waits for "
+                     "task(s) %s, which the full slide cannot take", t.id, t.machine, cost,
+                     waived)
+        return changed
+
+    def _blocked_put(self, task: M.Task | None, machine: str) -> bool:
+        return (task is not None and task.kind == M.PUT_WORKPIECE and task.state == M.PENDING
+                and task.params.get("side") == M.SLIDE and task.machine == machine
+                and self.room(machine, task.id) <= 0)
+
     def discard_to(self, task: M.Task, near, distance) -> None:
         """Send a discard that names no station to the nearest of our ring stations'
         slides with room (``distance(near, machine)``): there the base counts as an
@@ -104,8 +138,12 @@ class Slides:
                 if now - last < self.settle:
                     continue                # the refbox may not have counted the last one
                 st = self.kb.stations.get(t.machine)
-                missing = int(t.params.get("cost", 0)) - (st.loaded_with if st else 0)
-                out += self._top_up(p, t, missing)
+                coming = sum(1 for q in tasks.values() if q.id not in t.deps
+                             and q.kind == M.PUT_WORKPIECE and q.state in M.OPEN_STATES
+                             and q.machine == t.machine and q.params.get("side") == M.SLIDE)
+                missing = int(t.params.get("cost", 0)) - (st.loaded_with if st else 0) - coming
+                if missing > 0:             # (bases the mount no longer waits for still come)
+                    out += self._top_up(p, t, missing)
         return out
 
     def _top_up(self, product: M.Product, mount: M.Task, n: int) -> list[M.Task]:

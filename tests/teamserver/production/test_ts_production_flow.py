@@ -3,7 +3,7 @@ workpieces a station never took, stations left PREPARED with a stale instruction
 robots left holding what they cannot use yet, places the robots keep failing at."""
 from teamserver.knowledge import model as M
 from teamserver.server import ServerConfig
-from tests.support.teamserver import Lockstep, abandon_all_products, play, production_setup
+from tests.support.teamserver import Lockstep, Stations, abandon_all_products, play, production_setup
 from tests.teamserver.production.test_ts_storage import send_orders, setup_2025
 
 
@@ -224,6 +224,35 @@ def test_a_full_slide_takes_no_more_bases_until_a_mount_uses_some():
                        **{"C-RS1": {"loaded_with": 1}})
     ls.step()
     assert pm.slides.slide_ready(put) and not pm.slides.slide_ready(mount)
+
+
+def test_a_mount_whose_full_slide_holds_its_cost_does_not_wait_for_its_own_bases():
+    """Bases other products discarded fill the slide (3, the most it holds) before the
+    products' own bases are put: a mount goes with the bases there, its own bases go
+    on the slide after it, and the next mount gets them without fetching more
+    (rcll2016 seeds 9 and 10, rcll2025 seed 10: the mount waited for puts that waited
+    for room, and the robots held its workpiece and bases for the rest of the game)."""
+    ls = Lockstep()
+    production_setup(ls, [{"id": 5, "complexity": 1, "rings": ["RING_BLUE"]},    # 2 bases, RS1
+                          {"id": 6, "complexity": 1, "rings": ["RING_BLUE"], "delivery_gate": 2}])
+    ls.stations = Stations(ls)
+    ls.stations.slides["C-RS1"] = 3
+    ls.stations._send()
+    kb, bad = ls.server.kb, []
+
+    def until(gt):
+        if ls.stations.states["C-RS1"] == "BROKEN" or ls.stations.slides["C-RS1"] > 3:
+            bad.append(gt)
+        return delivered(ls, 5, 6)(gt)
+    assert play(ls, until, steps=1600)
+    assert not bad
+    products = [p for p in kb.products.values() if p.order_id in (5, 6)]
+    mounts = [t for p in products for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_RING]
+    puts = [t for p in products for t in kb.tasks_of(p.tasks) if t.kind == M.PUT_WORKPIECE]
+    assert len(mounts) == 2 and len(puts) == 4                  # no base fetched beyond the plan
+    first = min(mounts, key=lambda t: t.finished_at)
+    waived = [t for t in puts if t.product == first.product and t.id not in first.deps]
+    assert waived and all(t.assigned_at >= first.finished_at for t in waived if t.assigned_at)
 
 
 def test_a_cap_retrieved_ahead_that_the_station_never_took_blocks_nothing():
