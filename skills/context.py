@@ -80,8 +80,10 @@ class FunctionPose:
 class SkillContext:
     def __init__(self, backend: Backend, clock: Clock, profile: Profile, field_map: FieldMap,
                  pose_source: PoseSource, machines: MachineMap | None = None,
-                 tags: TagSource | None = None, settings: SkillSettings | None = None):
+                 tags: TagSource | None = None, settings: SkillSettings | None = None,
+                 robot_number: int = 0):
         self.backend = backend
+        self.robot_number = robot_number      # the robot's number in its team (0: not known); ranks giving way
         self.clock = clock
         self.profile = profile
         self.map = field_map

@@ -14,7 +14,8 @@ the agent puts into ``RunContext.services["skills"]``.  Without one (e.g.
 clock of the run context, the rules profile ``services["profile"]`` or
 ``task["profile"]`` (default ``rcll2016``) and the start pose
 ``services["start_pose"]`` or ``task["start_pose"]`` (without a start pose
-the robot localises globally).
+the robot localises globally); its ``robot_number`` is ``services["robot_number"]``
+(the agent's robot id: who gives way first, :mod:`.navigation.yielding`).
 
 Station sides follow the team protocol: ``INPUT``, ``OUTPUT``, ``SHELF``
 (with ``shelf_slot`` 0..2) or ``SLIDE``.  Zones are numbers or names of
@@ -56,13 +57,16 @@ def skills_service(run_ctx) -> SkillContext:
     profile = prof if isinstance(prof, rules.Profile) else rules.profile(str(prof))
     start = services.get("start_pose") or task.get("start_pose")
     preset = services.get("localisation") or task.get("localisation") or "standard"
+    number = int(services.get("robot_number") or 0)
     if start is None:
-        ctx = SkillContext.create(run_ctx.backend, run_ctx.clock, profile, Pose2D(), localisation=preset)
+        ctx = SkillContext.create(run_ctx.backend, run_ctx.clock, profile, Pose2D(), localisation=preset,
+                                  robot_number=number)
         ctx.pose_source.initialise_global()
         log.warning("no start pose given: localising globally")
         return ctx
     start = as_pose(start)
-    return SkillContext.create(run_ctx.backend, run_ctx.clock, profile, start, localisation=preset)
+    return SkillContext.create(run_ctx.backend, run_ctx.clock, profile, start, localisation=preset,
+                               robot_number=number)
 
 
 def as_pose(value) -> Pose2D:

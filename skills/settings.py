@@ -54,4 +54,10 @@ class SkillSettings:
     costmap_resolution: float = 0.05  # m
     obstacle_ttl: float = 4.0         # s, laser obstacles stay in the costmap
     block_replan_after: float = 1.0   # s blocked before replanning around it
+    # giving way to another robot (navigation.yielding): after yield_after + yield_step * (rank - 1, and
+    # a quarter step for the tie-break) seconds blocked by it with no way round, step aside for yield_hold
+    yield_after: float = 1.5          # s
+    yield_step: float = 5.5           # s per rank above 1 (the robot's number)
+    yield_hold: float = 6.0           # s standing aside before the robot tries its way again
+    max_yields: int = 2               # per navigation
     manipulation: ManipulationSettings = field(default_factory=ManipulationSettings)

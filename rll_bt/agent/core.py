@@ -70,6 +70,7 @@ class RobotAgent:
         self.services.setdefault("observations", self.feed)
         self.stations = self.services.setdefault("refbox_stations", StationStates())
         self.services.setdefault("profile", self.profile)
+        self.services.setdefault("robot_number", config.robot_id)
         if start_pose is not None:
             self.services.setdefault("start_pose", start_pose)
         self._n_services = len(self.services)

@@ -15,11 +15,16 @@ looks before it leaves: it turns toward its way out before it drives
 (:class:`~.controller.PathFollower`'s ``look_angle``).  A navigation that finds no path at its start
 clears those remembered obstacles (they were seen on an earlier way) and
 plans again before it gives up.  A robot that does not move (by odometry) although
-commanded counts as blocked too (something the laser does not see).  Losing localisation fails with
+commanded counts as blocked too (something the laser does not see).  Time blocked by
+another robot does not count toward the time limit taken from the distance.  Blocked
+by another robot with no way round it, a navigation steps aside for a while
+(:mod:`.yielding`: two robots each in the other's only way would otherwise wait
+for each other until both fail, again and again).  Losing localisation fails with
 ``LOCALISATION_LOST``; the time limit with ``TIMEOUT``.
 """
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
@@ -34,6 +39,9 @@ from .laserview import laser_view, points_now
 from .others import occupied, station_zones, unexplained
 from .planner import GridPlanner, NoPath
 from .safety import clear_distance, scan_points, speed_limit, to_field
+from .yielding import PATIENT, blocker, yield_delay, yield_spot
+
+log = logging.getLogger(__name__)
 
 #: metres from a goal another robot takes up (or backs off over) where the robot waits for it
 GOAL_WAIT = 1.0
@@ -73,6 +81,13 @@ class Navigate(Activity):
         self.blocked_time = 0.0
         self.lag = ctx.settings.control_period
         self.waiting = False             # another robot stands on the goal (or backs off over it)
+        self.yields = 0                  # times it stepped aside for another robot
+        self._yield: dict | None = None  # stepping aside: the spot, since, hold_until, the real target
+        self._blocker: tuple[float, float] | None = None     # centre of the nearest other robot
+        self._block_start: float | None = None               # this block began (s), or the blocker last moved
+        self._block_other: tuple[float, float] | None = None  # where the blocker stood then
+        self._no_way = False             # the last replan found no path
+        self._yield_retry = -math.inf    # no place to step aside to: look again then
         self._blocked_since: float | None = None
         self._last_poll: float | None = None
         self._user_timeout = timeout
@@ -101,6 +116,11 @@ class Navigate(Activity):
         self._stall_ref = None
         self._blocked_since = None
         self._last_poll = None
+        self.yields = 0
+        self._yield = None
+        self._yield_retry = -math.inf
+        self._block_start = None
+        self._no_way = False
         self.lag = self.ctx.settings.control_period      # s between polls, the worst lately
         self.follower = None             # a new start looks before it leaves
         try:
@@ -166,6 +186,7 @@ class Navigate(Activity):
             bearing = np.arctan2(remembered[:, 1], remembered[:, 0]) - pose.theta
             unseen = np.abs((bearing + np.pi) % (2.0 * np.pi) - np.pi) > half_fov
             moving = np.vstack([moving, remembered[unseen]])
+            self._blocker = blocker(moving + here, (pose.x, pose.y), ctx.robot.radius)
             # a robot at a station keeps the strip it backs off into; a goal
             # another robot stands on (or backs off over) is not driven to
             moving = np.vstack([moving, station_zones(ctx, moving + here) - here])
@@ -196,6 +217,8 @@ class Navigate(Activity):
         self.follower.lookahead = self._lookahead(pose)
         self.follower.speed_limit = self._tight_speed(pose)
         vx, vy, w = self.follower.command(pose, dt, cap)
+        if self._yield is not None:
+            return self._stepping_aside(now, pose, dt, vx, vy, w)
         if self.follower.done:
             self.message = f"reached {self.goal.describe()}" if hasattr(self.goal, "describe") else "reached"
             return Status.SUCCESS
@@ -210,9 +233,20 @@ class Navigate(Activity):
         if blocked:
             if self._blocked_since is None:
                 self._blocked_since = now
+            if self._block_start is None or self._blocker_moved():
+                self._block_start, self._block_other = now, self._blocker
             self.blocked_time += dt
+            if self._blocker is not None and self._user_timeout is None:
+                self.timeout += dt       # waiting for another robot is not driving slowly (max_blocked limits it)
             if now - self._blocked_since >= ctx.settings.block_replan_after:
                 self._replan_around(pose, points, now)
+            if self._no_way and not stalled and self._blocker is not None and self.max_blocked >= PATIENT \
+                    and self.yields < ctx.settings.max_yields and now >= self._yield_retry \
+                    and now - self._block_start >= yield_delay(ctx.settings, getattr(ctx, "robot_number", 0),
+                                                               (pose.x, pose.y), self._blocker) \
+                    and self._step_aside(now, pose):
+                ctx.backend.drive(0.0, 0.0, 0.0)
+                return Status.RUNNING
             if self.blocked_time > self.max_blocked:
                 why = " (another robot stands on the goal)" if self.waiting else ""
                 raise SkillFailure(SkillError.NAVIGATION_FAILED,
@@ -220,6 +254,8 @@ class Navigate(Activity):
                                    f"({self.target.x:.2f}, {self.target.y:.2f}){why}")
         else:
             self._blocked_since = None
+            self._block_start = None
+            self._no_way = False
             if self._off_path(pose) > 0.6:
                 self._try_plan(pose)
         ctx.backend.drive(vx, vy, w)
@@ -341,8 +377,76 @@ class Navigate(Activity):
         try:
             self._plan(pose)
             self.replans += 1
+            self._no_way = False
         except NoPath:
-            pass      # keep waiting; the obstacles expire or move
+            self._no_way = True   # keep waiting; the obstacles expire or move
+
+    # -- giving way (see .yielding) ----------------------------------------
+    def _blocker_moved(self, distance: float = 0.3) -> bool:
+        """Whether the other robot is not where it stood when the wait for
+        it began (it is doing something: its standing still is what counts)."""
+        a, b = self._blocker, self._block_other
+        if a is None or b is None:
+            return a is not b
+        return math.hypot(a[0] - b[0], a[1] - b[1]) > distance
+
+    def _step_aside(self, now: float, pose: Pose2D) -> bool:
+        """Head for a place out of the other robot's way; False (and try
+        again a block period later) when there is none."""
+        spot = yield_spot(self.ctx.costmap, self.planner, (pose.x, pose.y), self._blocker,
+                          (self.target.x, self.target.y))
+        if spot is None:
+            self._yield_retry = now + self.ctx.settings.block_replan_after
+            return False
+        saved = (self.target, self._goal_heading, self.path, self.follower)
+        self.target, self._goal_heading = Pose2D(spot[0], spot[1], pose.theta), None
+        self.follower = None              # looks before it leaves
+        try:
+            self._plan(pose)
+        except NoPath:
+            self.target, self._goal_heading, self.path, self.follower = saved
+            return False
+        self.yields += 1
+        self._yield = {"since": now, "hold_until": None, "blocked": 0.0, "real": saved[:2]}
+        log.info("%s: blocked by another robot at (%.2f, %.2f) with no way round: stepping aside to "
+                 "(%.2f, %.2f)", self.name, *self._blocker, *spot)
+        return True
+
+    def _stepping_aside(self, now: float, pose: Pose2D, dt: float, vx: float, vy: float, w: float) -> Status:
+        """A poll while stepping aside: drive to the spot (or stop where the
+        way there is blocked for 3 s), stand there ``yield_hold`` seconds,
+        then plan the real way again."""
+        y, ctx = self._yield, self.ctx
+        if y["hold_until"] is None:
+            stuck = self.follower.capped and self.follower.last_speed_wanted < 0.02
+            y["blocked"] = y["blocked"] + dt if stuck else 0.0
+            if not (self.follower.done or y["blocked"] > 3.0 or now - y["since"] > 15.0):
+                ctx.backend.drive(vx, vy, w)
+                return Status.RUNNING
+            y["hold_until"] = now + ctx.settings.yield_hold
+        if now < y["hold_until"]:
+            ctx.backend.drive(0.0, 0.0, 0.0)
+            return Status.RUNNING
+        self._yield = None
+        self.target, self._goal_heading = y["real"]
+        if self.timeout is not None:
+            self.timeout += now - y["since"]         # the time given to the other robot
+        self._blocked_since = self._block_start = None
+        self.blocked_time = 0.0          # made room: a new wait
+        self._no_way = False
+        self.follower = None
+        try:
+            self._plan(pose)
+        except NoPath:
+            self.ctx.costmap.clear_obstacles()
+            try:
+                self._plan(pose)
+            except NoPath:       # the laser check and the replans take it from here
+                self.path = np.array([[pose.x, pose.y], [self.target.x, self.target.y]])
+                self.follower = PathFollower(self.path, self._goal_heading, self.limits,
+                                             self.position_tolerance, self.heading_tolerance)
+        ctx.backend.drive(0.0, 0.0, 0.0)
+        return Status.RUNNING
 
     def _off_path(self, pose: Pose2D) -> float:
         f = self.follower

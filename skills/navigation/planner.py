@@ -69,6 +69,16 @@ class GridPlanner:
         row, col = cm.spec.cell_of(p[0], p[1])
         return int(row) * cm.spec.cols + int(col), p
 
+    def costs_from(self, start: tuple[float, float], limit: float) -> np.ndarray:
+        """The path cost (the costmap's weighted metres) from ``start`` to
+        every cell, an array of the costmap's shape: inf where it is more
+        than ``limit`` or no path leads; raises :class:`NoPath` when the
+        start is blocked."""
+        self._build()
+        s_node, _ = self._snap(*start, "start")
+        dist = dijkstra(self._graph, directed=False, indices=s_node, limit=limit)
+        return np.asarray(dist).reshape(self.costmap.spec.shape)
+
     def plan(self, start: tuple[float, float], goal: tuple[float, float]) -> np.ndarray:
         """Waypoints (K, 2) from ``start`` to ``goal`` (field frame), smoothed;
         raises :class:`NoPath`."""

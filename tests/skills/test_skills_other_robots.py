@@ -1,16 +1,21 @@
 """Other robots seen only through the laser (two teams on one field): a
 navigation looks before it leaves, keeps out of the strip a robot at a
-station backs off into, and waits for a goal another robot stands on."""
+station backs off into, waits for a goal another robot stands on, and two robots each in the
+other's only way do not wait for each other: one steps aside."""
 import math
 
 import numpy as np
 import pytest
 
+from rll_bt import rules
 from rll_bt.backend import Pose2D, wrap_angle
 from skills.activity import Status
+from skills.context import SkillContext
 from skills.errors import SkillError
+from skills.maps import FieldMap
 from skills.navigation import Navigate, PoseGoal, StationSideGoal, approach_pose
 from skills.navigation.others import BACK_OFF, station_zones, unexplained
+from skills.testing import FlatWorld
 from tests.support.skills_scene import STATIONS, Scene
 
 
@@ -68,3 +73,69 @@ def test_a_goal_another_robot_stands_at_is_waited_for_then_reached():
     nav = Navigate(scene.ctx, StationSideGoal("C-BS", "INPUT"))
     assert scene.run(nav, limit=120.0) is Status.SUCCESS, nav.message
     assert scene.world.collisions == 0
+
+
+#: the stations of the 2016 field of seed 1 (backends.sim.layout): C-RS2 and M-RS2 leave one gap
+#: at x = 0 between them, and C-CS2, M-CS2 close the ways round below them
+SEED1 = {
+    "C-BS": Pose2D(5.008, 1.14, 3 * math.pi / 2), "M-BS": Pose2D(-5.008, 1.14, 3 * math.pi / 2),
+    "C-DS": Pose2D(1.366, 5.253, 7 * math.pi / 4), "M-DS": Pose2D(-1.366, 5.253, 5 * math.pi / 4),
+    "C-RS1": Pose2D(0.971, 3.896, 0.0), "M-RS1": Pose2D(-0.971, 3.896, math.pi),
+    "C-RS2": Pose2D(-0.906, 1.939, 3 * math.pi / 2), "M-RS2": Pose2D(0.906, 1.939, 3 * math.pi / 2),
+    "C-CS1": Pose2D(2.563, 2.341, 5 * math.pi / 4), "M-CS1": Pose2D(-2.563, 2.341, 7 * math.pi / 4),
+    "C-CS2": Pose2D(-1.294, 0.762, 3 * math.pi / 4), "M-CS2": Pose2D(1.294, 0.762, math.pi / 4),
+}
+
+
+def _standoff(**settings):
+    """R1 just above the gap between C-RS2 and M-RS2 heading down to C-RS2's slide, R3 just
+    below it heading up and over to C-BS's output: each goal lies beyond the other robot
+    (the process game of seed 1, 435-785 s).  Both navigate at once; returns the two
+    navigations, the world and the longest time (s) both stood still together."""
+    profile = rules.profile("rcll2016")
+    world = FlatWorld.from_profile(profile, seed=5)
+    field = FieldMap.from_profile(profile)
+    for name, pose in SEED1.items():
+        world.add_station(name, pose, profile.tag_ids(name))
+    runs = [(1, Pose2D(0.0, 2.27, -1.63), Pose2D(-0.91, 1.31, math.pi / 2)),
+            (3, Pose2D(0.0, 1.45, 1.63), Pose2D(5.01, 1.95, -math.pi / 2))]
+    navs = []
+    for number, start, goal in runs:
+        ctx = SkillContext.create(world.add_robot(start), world.clock, profile, start, seed=number,
+                                  field_map=field, robot_number=number)
+        for key, value in settings.items():
+            setattr(ctx.settings, key, value)
+        for name, pose in SEED1.items():
+            ctx.machines.set(name, pose)
+        navs.append(Navigate(ctx, PoseGoal(goal)).start())
+    still, longest, last = 0.0, 0.0, [r.true_pose for r in world.robots]
+    while not all(n.status.done for n in navs) and world.clock.now() < 90.0:
+        for n in navs:
+            n.poll()
+        world.step(0.05)
+        world.step(0.05)
+        now = [r.true_pose for r in world.robots]
+        moved = max(math.hypot(a.x - b.x, a.y - b.y) + abs(wrap_angle(a.theta - b.theta)) for a, b in zip(now, last))
+        still = still + 0.1 if moved < 1e-3 and not any(n.status.done for n in navs) else 0.0
+        longest, last = max(longest, still), now
+    return navs, world, longest
+
+
+def test_two_robots_each_in_the_others_way_wait_for_each_other_without_giving_way():
+    """The standoff as it was: each plans round the other, finds no way and waits until it fails."""
+    navs, world, _ = _standoff(max_yields=0)      # (it gave up after 20 s blocked)
+    for nav in navs:
+        assert nav.status is Status.FAILURE and nav.error is SkillError.NAVIGATION_FAILED
+        assert "blocked for" in nav.message
+    assert world.collisions == 0
+
+
+def test_two_robots_each_in_the_others_way_one_steps_aside_and_both_arrive():
+    """R1 (the lower number) steps aside within a few seconds, R3 passes, then R1 goes its way:
+    both arrive, they never stand still together for long, and they touch nothing."""
+    navs, world, longest = _standoff()
+    for nav in navs:
+        assert nav.status is Status.SUCCESS, nav.message
+    assert navs[0].yields == 1 and navs[1].yields == 0
+    assert longest < 8.0
+    assert world.collisions == 0
