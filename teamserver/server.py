@@ -294,7 +294,9 @@ class TeamServer:
     def _league_beacon(self, r: M.Robot, m) -> None:
         """A league robot's beacon says what it runs and what it finished: a task
         it runs that is not its own is cancelled; a finished one still assigned
-        to it counts as its result (when the echoed AgentTask did not come)."""
+        to it counts as its result (when the echoed AgentTask did not come); a
+        task cancelled on it that it does not run any more is stopped."""
+        self.tasks.runs(r.number, int(m.task.task_id) if m.HasField("task") else None)
         if m.HasField("task"):
             self._not_yours(r, int(m.task.task_id))
         for f in m.finished_tasks:

@@ -24,7 +24,9 @@ still run on it: the cancel can be lost in a cut, and the robot goes on
 until its lease runs out (:mod:`rll_bt.agent.lease`).  So the link keeps
 each cancel's *stop owed* (:meth:`TaskLink.stop_owed`) until the robot has
 provably stopped: it acknowledged the cancel (an rll-bt agent stops the task
-before it acknowledges) or sent a final result of that assignment; the
+before it acknowledges), sent a final result of that assignment, or (a
+league robot, which knows no ``LinkAck``) its beacon says it runs something
+else or nothing (:meth:`TaskLink.runs`); the
 dispatcher gives the task to nobody meanwhile unless the robot has been
 silent past its lease (:mod:`teamserver.dispatch.readiness`).
 """
@@ -119,6 +121,12 @@ class TaskLink:
         dropped, past its lease)."""
         for tid in [tid for tid, s in self._stops.items()
                     if s[0] == int(number) and (task_id is None or tid == int(task_id))]:
+            del self._stops[tid]
+
+    def runs(self, number: int, wire: int | None) -> None:
+        """Robot ``number`` says (a league robot's beacon) it runs assignment ``wire``
+        (None: nothing): it has stopped the others cancelled on it."""
+        for tid in [tid for tid, s in self._stops.items() if s[0] == int(number) and s[1] != wire]:
             del self._stops[tid]
 
     def _stop_heard(self, msg) -> None:

@@ -3,6 +3,7 @@ assignment by travel cost, station locks, PrepareMachine timing, failures and re
 import pytest
 
 from teamserver.knowledge import model as M
+from teamserver.links.agents import from_wire
 from teamserver.server import ServerConfig
 from tests.support.teamserver import RS_2016, Lockstep, production_setup, task_kinds
 
@@ -221,12 +222,15 @@ def test_a_task_taken_back_goes_to_no_other_robot_until_its_robot_has_provably_s
     only its acknowledgement is): the robot may still run the task until its lease runs
     out, so the task waits, station back up or not, until the robot acknowledges the
     cancel, answers it with a result, or has been silent past its lease."""
-    for proof in ("ack", "result", "silence"):
-        ls = Lockstep(config=ServerConfig(prefill_caps=False))
+    for proof in ("ack", "result", "silence", "league beacon"):
+        ls = Lockstep(config=ServerConfig(prefill_caps=False), league=proof == "league beacon")
         kb, bs = bs_task_after_setup(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])
         first = next(a for a in ls.agents if a.number == bs.robot)
         others = [a for a in ls.agents if a is not first]
         first.ack = False                                      # nothing of it reaches the server but beacons
+        if proof == "league beacon":       # a league robot: no LinkAck; its beacon says what it runs
+            first.running = next(m for m in first.inbox if m.DESCRIPTOR.name == "AgentTask"
+                                 and from_wire(m.task_id)[0] == bs.id and not m.cancel_task)
         ls.station_states["C-BS"] = "DOWN"
         ls.refbox.machines(ls.station_states)
         ls.step(n=3)
@@ -247,6 +251,10 @@ def test_a_task_taken_back_goes_to_no_other_robot_until_its_robot_has_provably_s
                 ls.step(dt=0.5)
                 if kb.tasks[bs.id].state == M.ASSIGNED:
                     break
+        elif proof == "league beacon":
+            first.running = None                               # it stopped: its next beacon says so
+            first.beat()
+            ls.step(n=2)
         elif proof == "result":
             first.result(bs.id, status="CANCELLED")
             ls.step(n=2)
