@@ -87,25 +87,43 @@ SEED1 = {
 }
 
 
-def _standoff(**settings):
-    """R1 just above the gap between C-RS2 and M-RS2 heading down to C-RS2's slide, R3 just
-    below it heading up and over to C-BS's output: each goal lies beyond the other robot
-    (the process game of seed 1, 435-785 s).  Both navigate at once; returns the two
-    navigations, the world and the longest time (s) both stood still together."""
+#: seed 6: C-RS1 in the top-left corner, its input side a pocket between it, the walls and M-CS2
+SEED6 = {
+    "C-BS": Pose2D(4.483, 1.01, math.pi / 2), "M-BS": Pose2D(-4.483, 1.01, math.pi / 2),
+    "C-DS": Pose2D(1.193, 5.178, math.pi / 4), "M-DS": Pose2D(-1.193, 5.178, 3 * math.pi / 4),
+    "C-RS1": Pose2D(-4.635, 5.121, math.pi / 4), "M-RS1": Pose2D(4.635, 5.121, 3 * math.pi / 4),
+    "C-RS2": Pose2D(0.887, 2.419, 0.0), "M-RS2": Pose2D(-0.887, 2.419, math.pi),
+    "C-CS1": Pose2D(-5.226, 1.996, 3 * math.pi / 4), "M-CS1": Pose2D(5.226, 1.996, math.pi / 4),
+    "C-CS2": Pose2D(3.292, 5.026, 0.0), "M-CS2": Pose2D(-3.292, 5.026, math.pi),
+}
+
+#: the seed-1 standoff (the process game at 5a15334, 435-785 s): R1 just above the gap between
+#: C-RS2 and M-RS2 heading down to C-RS2's slide, R3 just below it heading up and over to C-BS's
+#: output, each goal beyond the other robot
+GAP = (SEED1, [(1, Pose2D(0.0, 2.27, -1.63), Pose2D(-0.91, 1.31, math.pi / 2)),
+               (3, Pose2D(0.0, 1.45, 1.63), Pose2D(5.01, 1.95, -math.pi / 2))])
+#: the seed-6 standoff (lockstep on 8651efe, 446-540 s): R2 in the pocket at C-RS1's input heading
+#: round to its output, R3 at the pocket's only exit waiting for the input spot R2 stands on
+POCKET = (SEED6, [(2, Pose2D(-3.98, 5.51, -1.37), Pose2D(-5.19, 4.60, math.pi / 4)),
+                  (3, Pose2D(-3.87, 4.72, 1.58), Pose2D(-4.09, 5.69, -3 * math.pi / 4))])
+
+
+def _standoff(scene, **settings):
+    """Two robots of ``scene`` (stations, [(number, start, goal)]) navigate at once; returns the
+    two navigations, the world and the longest time (s) both stood still together."""
+    stations, runs = scene
     profile = rules.profile("rcll2016")
     world = FlatWorld.from_profile(profile, seed=5)
     field = FieldMap.from_profile(profile)
-    for name, pose in SEED1.items():
+    for name, pose in stations.items():
         world.add_station(name, pose, profile.tag_ids(name))
-    runs = [(1, Pose2D(0.0, 2.27, -1.63), Pose2D(-0.91, 1.31, math.pi / 2)),
-            (3, Pose2D(0.0, 1.45, 1.63), Pose2D(5.01, 1.95, -math.pi / 2))]
     navs = []
     for number, start, goal in runs:
         ctx = SkillContext.create(world.add_robot(start), world.clock, profile, start, seed=number,
                                   field_map=field, robot_number=number)
         for key, value in settings.items():
             setattr(ctx.settings, key, value)
-        for name, pose in SEED1.items():
+        for name, pose in stations.items():
             ctx.machines.set(name, pose)
         navs.append(Navigate(ctx, PoseGoal(goal)).start())
     still, longest, last = 0.0, 0.0, [r.true_pose for r in world.robots]
@@ -121,21 +139,35 @@ def _standoff(**settings):
     return navs, world, longest
 
 
-def test_two_robots_each_in_the_others_way_wait_for_each_other_without_giving_way():
-    """The standoff as it was: each plans round the other, finds no way and waits until it fails."""
-    navs, world, _ = _standoff(max_yields=0)      # (it gave up after 20 s blocked)
+@pytest.mark.parametrize("scene", [GAP, POCKET], ids=["gap", "pocket"])
+def test_two_robots_each_in_the_others_way_wait_for_each_other_without_giving_way(scene):
+    """The standoffs as they were: each plans round the other, finds no way and waits until it fails."""
+    navs, world, _ = _standoff(scene, max_yields=0)      # (it gave up after 20 s blocked)
     for nav in navs:
         assert nav.status is Status.FAILURE and nav.error is SkillError.NAVIGATION_FAILED
         assert "blocked for" in nav.message
+    assert "another robot stands on the goal" in navs[1].message or scene is GAP
     assert world.collisions == 0
 
 
 def test_two_robots_each_in_the_others_way_one_steps_aside_and_both_arrive():
     """R1 (the lower number) steps aside within a few seconds, R3 passes, then R1 goes its way:
     both arrive, they never stand still together for long, and they touch nothing."""
-    navs, world, longest = _standoff()
+    navs, world, longest = _standoff(GAP)
     for nav in navs:
         assert nav.status is Status.SUCCESS, nav.message
     assert navs[0].yields == 1 and navs[1].yields == 0
     assert longest < 8.0
+    assert world.collisions == 0
+
+
+def test_a_robot_boxed_in_at_a_station_is_let_out_by_the_one_waiting_for_its_place():
+    """R2 in the pocket has no place to step aside to; R3, waiting at the pocket's exit for the
+    spot R2 stands on, steps aside at its turn (later: the higher number), lets R2 out and then
+    takes the spot: both arrive, 0 contacts."""
+    navs, world, longest = _standoff(POCKET)
+    for nav in navs:
+        assert nav.status is Status.SUCCESS, nav.message
+    assert navs[0].yields == 0 and navs[1].yields == 1
+    assert longest < 16.0
     assert world.collisions == 0
