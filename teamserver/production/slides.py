@@ -17,7 +17,10 @@ So
 - a mount whose slide already holds what it costs (bases other products
   discarded there) no longer waits for its own bases that the full slide
   cannot take (:meth:`Slides.waive_full_slide_puts`): they go on the slide
-  once the mount has used some.  Else the mount waited for puts that waited
+  once the mount has used some.  It still waits for what the put waited
+  for (the pickup of the base, and so the cap retrieval that freed a
+  cap-less base): the product's cap mount, after the ring, must find the
+  cap in its station (a MOUNT_CAP prepared without one breaks it).  Else the mount waited for puts that waited
   for the mount, and the robots holding its workpiece and its bases stood
   still for the rest of the game (rcll2016 seed 10: from 540 s to the end).
 """
@@ -88,7 +91,12 @@ class Slides:
             waived = [d for d in t.deps if self._blocked_put(self.kb.tasks.get(d), t.machine)]
             if not waived:
                 continue
-            t.deps = tuple(d for d in t.deps if d not in waived)
+            deps: list[int] = []
+            for d in t.deps:            # a waived put's own deps stay: what came before it
+                for e in (self.kb.tasks[d].deps if d in waived else (d,)):   # (a cap retrieved)
+                    if e not in deps:
+                        deps.append(e)
+            t.deps = tuple(deps)
             self.kb.save_task(t)
             changed.append(t)
             log.info("task %d: %s holds the %d base(s) it costs; it no longer waits for "

@@ -253,6 +253,11 @@ def test_a_mount_whose_full_slide_holds_its_cost_does_not_wait_for_its_own_bases
     first = min(mounts, key=lambda t: t.finished_at)
     waived = [t for t in puts if t.product == first.product and t.id not in first.deps]
     assert waived and all(t.assigned_at >= first.finished_at for t in waived if t.assigned_at)
+    for p in products:          # a cap mount only once its cap is in the station (one of
+        tasks = kb.tasks_of(p.tasks)                  # the bases is the cap retrieval's)
+        [retrieve] = [t for t in tasks if t.kind == M.RETRIEVE_CAP and t.state == M.DONE]
+        [mount_cap] = [t for t in tasks if t.kind == M.MOUNT_CAP and t.state == M.DONE]
+        assert mount_cap.assigned_at >= retrieve.finished_at
 
 
 def test_a_cap_retrieved_ahead_that_the_station_never_took_blocks_nothing():
