@@ -165,7 +165,7 @@ class TeamServer:
         self.explorer = Explorer(
             self.kb, self.clock, self.strategy,
             Reporter(self.profile, prefix, thresh=cfg.explore_thresh, margin=cfg.report_margin,
-                     light_ok=LightGate(self.kb).passes),
+                     lights=LightGate(self.kb)),
             Lookout(self.profile, prefix, thresh=cfg.explore_thresh), self.refbox,
             self.dispatcher.fleet, self.tasks, self.send_refbox,
             report_period=cfg.report_period, on_end=self._map_now)

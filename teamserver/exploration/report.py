@@ -11,11 +11,13 @@ unchanged.  A property is reported
   the profile's points (2016 zone +3/-2: p > 0.4; type +5/-4: p > 0.44;
   2025 zone and rotation +1/-1: p > 0.5).
 
-2016 entries carry the type string announced for the light code, and only
-once ``light_ok(machine, code)`` says the robots' views of the tower agree
-on it (:class:`~.lights.LightGate`), whatever the time left: a light code
-the views do not agree on is not worth its -4; 2017+ entries carry zone
-and rotation, a rotation only with (or after) its zone.
+2016 entries carry the type string announced for the light code.  When
+robots read the tower through views (a detector, not the simulator's
+oracle), ``lights`` (:class:`~.lights.LightGate`) decides instead of the
+fused belief: the code its sure views give is reported at once, and none
+while they give none, whatever the time left (a code read only
+confidently is not worth its -4).  2017+ entries carry zone and rotation,
+a rotation only with (or after) its zone.
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ from collections.abc import Callable
 from rll_bt.rules import Profile
 
 from ..knowledge import model as M
+from .lights import LightGate
 from .symmetry import ConsistentSet
 
 
@@ -33,9 +36,9 @@ def expected_points(p: float, ok: int, wrong: int) -> float:
 
 class Reporter:
     def __init__(self, profile: Profile, team_prefix: str, *, thresh: float = 0.9,
-                 margin: float = 20.0, light_ok: Callable[[str, tuple[str, ...]], bool] | None = None):
+                 margin: float = 20.0, lights: LightGate | None = None):
         self.profile = profile
-        self.light_ok = light_ok
+        self.lights = lights
         self.prefix = team_prefix
         self.thresh = thresh
         self.margin = margin
@@ -61,10 +64,13 @@ class Reporter:
                 new[M.ZONE] = g.zone
             zone_known = M.ZONE in done or M.ZONE in new
             if self.profile.exploration_reports == "type+zone":
-                if "type" not in done and g.light is not None and due(
-                        g.light_confidence, s.explore_type_ok, s.explore_type_wrong) and (
-                        self.light_ok is None or self.light_ok(name, g.light)):
-                    t = type_string(g.light)
+                light, p = g.light, g.light_confidence
+                if self.lights is not None and self.lights.views(name):
+                    light = self.lights.code(name)
+                    p = 1.0 if light is not None else 0.0
+                if "type" not in done and light is not None and due(
+                        p, s.explore_type_ok, s.explore_type_wrong):
+                    t = type_string(light)
                     if t is not None:
                         new["type"] = t
             elif zone_known and "rotation" not in done and g.orientation is not None and due(

@@ -1,7 +1,8 @@
 """The exploration reads a station's light view by view: a reading carries its
 confidence, a view tells its state only over a moment, and the light is settled
-only by a sure view that the other confident views do not outvote; every view's
-verdict goes to the team server with its confidence and its view number."""
+only by a sure view that no sure view contradicts (or that sure views outvote
+two to one); every view's verdict goes to the team server with its confidence
+and its view number."""
 from types import SimpleNamespace
 
 from rll_bt import rules
@@ -79,6 +80,9 @@ def test_confident_views_of_one_robot_that_agree_do_not_settle_without_a_sure_on
         for i in range(5):
             v.add("M-RS2", 5.0 * k + 0.2 * i, 4, probs(4, p), (0.5 * k, 0.0))
     assert v.views("M-RS2") == 3 and v.settled("M-RS2") is None and v.unsure("M-RS2")
+    for i in range(5):                                # a sure view of the right state: not held back by them
+        v.add("M-RS2", 20.0 + 0.2 * i, 5, probs(5, 0.995), (3.0, 0.0))
+    assert v.settled("M-RS2") == 5
 
 
 def test_confident_views_that_disagree_settle_nothing_until_outvoted():
@@ -87,9 +91,14 @@ def test_confident_views_that_disagree_settle_nothing_until_outvoted():
         for i in range(5):
             v.add("C-CS1", 10.0 * k + 0.2 * i, state, probs(state, 0.995), (k, 0.0))
     assert v.settled("C-CS1") is None                 # two sure views, two answers
-    for k in (2, 3):
-        for i in range(5):
-            v.add("C-CS1", 10.0 * k + 0.2 * i, 4, probs(4, 0.95), (k, 0.0))
+    for i in range(5):
+        v.add("C-CS1", 20.0 + 0.2 * i, 4, probs(4, 0.95), (2, 0.0))
+    assert v.settled("C-CS1") is None                 # a confident view does not decide it
+    for i in range(5):
+        v.add("C-CS1", 30.0 + 0.2 * i, 4, probs(4, 0.995), (3, 0.0))
+    assert v.settled("C-CS1") is None                 # two sure against one
+    for i in range(5):
+        v.add("C-CS1", 40.0 + 0.2 * i, 4, probs(4, 0.995), (4, 0.0))
     assert v.settled("C-CS1") == 4                    # three against one
 
 
