@@ -32,7 +32,7 @@ from rll_bt.backend import Capability, Pose2D
 from rll_bt.plugins import offers
 from rll_bt.tree import Input, Node, Output, register_service, write_error
 
-from .activity import Activity, Status
+from .activity import Activity, Sequence, Status
 from .context import SkillContext
 from .errors import SkillError
 from .exploration import ExploreZone
@@ -41,7 +41,7 @@ from .localisation.relocalise import Relocalise
 from .manipulation import ApproachStation, GrabFrom, PutOnto, place_for
 from .manipulation.station import back_off_distance
 from .navigation import Navigate, PoseGoal, StationSideGoal, ZoneGoal
-from .navigation.motions import MoveRelative, Turn
+from .navigation.motions import LookTurn, MoveRelative, Turn, facing_station, look_angle
 
 log = logging.getLogger(__name__)
 
@@ -252,13 +252,28 @@ class Put(SkillNode):
 
 
 class BackOff(SkillNode):
-    """Drive straight backwards ``distance`` metres (away from a station)."""
+    """Drive straight backwards ``distance`` metres (away from a station).
+    The laser does not see behind: the known map limits the way back, and
+    the other robots the laser saw there; in the open (no station ahead,
+    where no one keeps the strip behind free) the robot first turns to look
+    behind and back, so a robot that came up behind it unseen stops it."""
     distance = Input(float, "metres", default=0.35)
     requires_capabilities = Capability.DRIVE | Capability.ODOMETRY
 
     def make(self, sctx):
-        # the laser does not see behind: the known map limits the way back
-        return MoveRelative(sctx, -back_off_distance(sctx, abs(self.distance)), speed=0.2, partial=True)
+        return back_off(sctx, abs(self.distance))
+
+
+def back_off(sctx, distance: float) -> Activity:
+    """The :class:`BackOff` node's activity: back straight off ``distance``
+    metres at most, looking behind first unless a station stands ahead."""
+    def move():
+        return MoveRelative(sctx, -back_off_distance(sctx, distance), speed=0.2, partial=True)
+    if facing_station(sctx):
+        return move()
+    turn = look_angle(sctx)
+    return Sequence(sctx, [lambda: LookTurn(sctx, by=turn), lambda: LookTurn(sctx, by=-turn), move],
+                    name="back off")
 
 
 class TurnNode(SkillNode):

@@ -69,6 +69,11 @@ class MotionGuard:
         ctx.laser_memory.add(field[other], now, (pose.x, pose.y), laser_view(ctx, pose, self.max_range))
         return pts[~other], pts[other]
 
+    def see(self) -> None:
+        """Put what the latest scan shows of other robots into ``ctx.laser_memory``
+        (without moving: a turn that looks round before a blind move)."""
+        self._points()
+
     def _remembered(self) -> np.ndarray:
         """Remembered unexplained points in the robot frame."""
         ctx = self.ctx

@@ -1,5 +1,6 @@
 """Short motions without planning, closed on odometry: move by an offset
-in the robot frame (backing away from a station) and turn on the spot.
+in the robot frame (backing away from a station), turn on the spot, and
+look behind before a blind back-off in the open (:class:`LookTurn`).
 
 Both are non-blocking activities within the speed and acceleration limits.
 They do not plan, so keep them short; :class:`MoveRelative` slows and stops
@@ -132,3 +133,40 @@ class Turn(Activity):
         self._omega += float(np.clip(want - self._omega, -step, step))
         self.ctx.backend.drive(0.0, 0.0, self._omega)
         return Status.RUNNING
+
+
+class LookTurn(Turn):
+    """A :class:`Turn` whose laser scans go into ``ctx.laser_memory`` as it
+    turns (what the map does not explain: other robots), so that a move
+    toward where the laser is blind afterwards (backing off) keeps off a
+    robot that came to stand there unseen while this one looked the other way."""
+
+    name = "look behind"
+
+    def _on_start(self) -> None:
+        super()._on_start()
+        self.guard = MotionGuard(self.ctx)
+
+    def _step(self, now: float) -> Status:
+        self.guard.see()
+        return super()._step(now)
+
+
+def look_angle(ctx, half_width: float = 0.6) -> float:
+    """How far (rad) to turn so that the strip straight behind the robot,
+    ``half_width`` radians either side of its back, lies inside the laser's
+    view (its field of view less 0.1 rad): 106 degrees for a 240-degree laser."""
+    return max(math.pi + half_width - (ctx.robot.laser_fov / 2.0 - 0.1), 0.0)
+
+
+def facing_station(ctx, reach: float = 0.35) -> bool:
+    """Whether a station of the map stands straight ahead of the robot within
+    its radius plus ``reach`` metres (lining up at it, docked or just backed
+    off it).  Others keep out of the strip behind a robot at a station
+    (:mod:`.others`); a robot in the open has no such strip kept for it."""
+    pose = ctx.pose()
+    ds = np.linspace(0.0, ctx.robot.radius + reach, 12)
+    xs, ys = pose.x + math.cos(pose.theta) * ds, pose.y + math.sin(pose.theta) * ds
+    walls = ctx.map.clearance(xs, ys, exclude=tuple(ctx.map.obstacles))
+    every = ctx.map.clearance(xs, ys)
+    return bool(((every < 0.02) & (walls > every + 1e-6)).any())
