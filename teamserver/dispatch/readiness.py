@@ -8,7 +8,9 @@ A production task is *ready* when
 - no robot may still run it: a task taken back from a robot (its station
   went down, :mod:`.dropouts`) waits until that robot has provably stopped
   it (acknowledged the cancel or sent a result,
-  :meth:`~teamserver.links.tasks.TaskLink.stop_owed`) or has been silent
+  :meth:`~teamserver.links.tasks.TaskLink.stop_owed`), and no robot's latest
+  status says it runs the task
+  (:meth:`~teamserver.links.tasks.TaskLink.said_running`), unless that robot has been silent
   past its lease (``heartbeat_timeout``, as a dropped robot: it stops
   ``rll_bt.agent.lease.MARGIN`` s before), so that a cancel lost in a cut
   never lets two robots run one task (:meth:`Readiness.held_by`);
@@ -63,15 +65,19 @@ class Readiness:
     def held_by(self, task: M.Task) -> int | None:
         """The robot that may still run ``task`` (cancelled on it, its stop not proven,
         heard within its lease), or None."""
-        number = self.tasks.stop_owed(task.id) if self.tasks is not None else None
-        if number is None:
+        if self.tasks is None:
             return None
-        robot = self.kb.robots.get(number)
-        if robot is None or robot.status != M.ACTIVE or (
-                self.clock is not None and self.clock.now() - robot.last_heartbeat > self.config.heartbeat_timeout):
-            self.tasks.stopped(number, task.id)         # silent past its lease: it has stopped
-            return None
-        return number
+        owed, said = self.tasks.stop_owed(task.id), self.tasks.said_running(task.id)
+        for number in (owed, said):
+            if number is None:
+                continue
+            robot = self.kb.robots.get(number)
+            if robot is not None and robot.status == M.ACTIVE and (
+                    self.clock is None or self.clock.now() - robot.last_heartbeat <= self.config.heartbeat_timeout):
+                return number
+            if number == owed:
+                self.tasks.stopped(number, task.id)     # silent past its lease: it has stopped
+        return None
 
     def station_usable(self, machine: str | None) -> bool:
         if machine is None:

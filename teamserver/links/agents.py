@@ -72,6 +72,7 @@ class AgentLink:
         self._outcomes: dict[tuple[int, int], object] = {}   # (robot, task id) -> TaskOutcome
         self.hb_seq = 0
         self.heard: dict[int, float] = {}   # robot -> latest stamp (its clock) of its RobotStatus heard
+        self.running: dict[int, int] = {}   # robot -> the assignment (wire id) its latest RobotStatus says it runs
         self.docking = Docking(kb, clock)   # where a robot of the league waits (it sends no RobotStatus)
 
     def speaks_rllbt(self, robot: M.Robot | None) -> bool:
@@ -112,6 +113,7 @@ class AgentLink:
         self.seen(r)
         if m.HasField("restarted") and m.restarted:
             r.holding = None            # a rebooted robot has lost what it knew
+            self.running.pop(r.number, None)     # ... and runs nothing
         self.kb.save_robot(r)
         return r
 
@@ -180,6 +182,10 @@ class AgentLink:
         r.gripper = m.HasField("holding")
         r.waiting_at = m.waiting_at if m.HasField("waiting_at") else None
         r.state = self.ms.enum("RobotStatus.State").Name(m.state)
+        if m.HasField("current_task_id"):
+            self.running[r.number] = int(m.current_task_id)
+        else:
+            self.running.pop(r.number, None)
         self.kb.save_robot(r)
         return r, back
 

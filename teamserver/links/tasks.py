@@ -26,7 +26,9 @@ each cancel's *stop owed* (:meth:`TaskLink.stop_owed`) until the robot has
 provably stopped: it acknowledged the cancel (an rll-bt agent stops the task
 before it acknowledges), sent a final result of that assignment, or (a
 league robot, which knows no ``LinkAck``) its beacon says it runs something
-else or nothing (:meth:`TaskLink.runs`); the
+else or nothing (:meth:`TaskLink.runs`), and no robot's latest status says
+it runs the task (:meth:`TaskLink.said_running`: this also holds after a
+restart of the server, which forgets the stops owed); the
 dispatcher gives the task to nobody meanwhile unless the robot has been
 silent past its lease (:mod:`teamserver.dispatch.readiness`).
 """
@@ -38,7 +40,7 @@ from rll_bt.comm.reliable import AT_SUCCEEDED, AT_TASK, Reliable, agent_task_wha
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
-from .agents import AgentLink, wire_id
+from .agents import AgentLink, from_wire, wire_id
 from .refbox import RefboxClient
 
 TASK, CANCEL, PREPARE = "task", "cancel", "prepare"
@@ -115,6 +117,11 @@ class TaskLink:
         (the cancel neither acknowledged nor answered with a result yet), or None."""
         s = self._stops.get(int(task_id))
         return s[0] if s is not None else None
+
+    def said_running(self, task_id: int) -> int | None:
+        """A robot whose latest RobotStatus says it runs an assignment of task
+        ``task_id`` (also after a restart of the server, which forgot its stops owed), or None."""
+        return next((n for n, wire in self.codec.running.items() if from_wire(wire)[0] == int(task_id)), None)
 
     def stopped(self, number: int, task_id: int | None = None) -> None:
         """Robot ``number`` has stopped task ``task_id`` (None: every task; it was

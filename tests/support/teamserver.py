@@ -121,10 +121,13 @@ class FakeAgent:
             b.task.CopyFrom(self.running)
         self.t.send(b)
 
-    def status(self, state=1, holding=False, waiting_at=None):
+    def status(self, state=1, holding=False, waiting_at=None, task=None):
+        """rll-bt's RobotStatus (``task``: the wire id of the assignment it says it runs)."""
         if self.league:
             return self.beat()
         st = self.ms.RobotStatus(robot_id=self.number, state=state)
+        if task is not None:
+            st.current_task_id = int(task)
         st.pose.x, st.pose.y, st.pose.theta = self.pose
         if holding:
             st.holding.SetInParent()

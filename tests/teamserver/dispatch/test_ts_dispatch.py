@@ -3,7 +3,7 @@ assignment by travel cost, station locks, PrepareMachine timing, failures and re
 import pytest
 
 from teamserver.knowledge import model as M
-from teamserver.links.agents import from_wire
+from teamserver.links.agents import from_wire, wire_id
 from teamserver.server import ServerConfig
 from tests.support.teamserver import RS_2016, Lockstep, production_setup, task_kinds
 
@@ -268,6 +268,38 @@ def test_a_task_taken_back_goes_to_no_other_robot_until_its_robot_has_provably_s
         assert kb.tasks[bs.id].state == M.ASSIGNED, f"{proof}: the task was not given out again"
         assert ls.server.tasks.stop_owed(bs.id) is None
         ls.close()
+
+
+def test_a_task_a_robot_says_it_runs_goes_to_no_other_robot_also_after_a_restart_of_the_server(tmp_path):
+    """The server restarts after taking a task back (its cancel lost): it has forgotten
+    the stop it was owed, but the robot's status says it still runs the task, so the
+    task waits until the robot says it stopped (or falls silent past its lease)."""
+    ls = Lockstep(config=ServerConfig(prefill_caps=False), state=str(tmp_path / "ts.sqlite"))
+    kb, bs = bs_task_after_setup(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])
+    first, wire = next(a for a in ls.agents if a.number == bs.robot), wire_id(bs)
+    first.ack = False
+    ls.station_states["C-BS"] = "DOWN"
+    ls.refbox.machines(ls.station_states)
+    ls.step(n=3)
+    assert kb.tasks[bs.id].state == M.PENDING
+    ls.restart()
+    kb = ls.server.kb
+    assert ls.server.tasks.stop_owed(bs.id) is None                # forgotten
+    for a in ls.agents:
+        a.hello()
+    ls.refbox.game_state("PRODUCTION", "RUNNING", 30.0)
+    ls.station_states["C-BS"] = "IDLE"
+    ls.refbox.machines(ls.station_states)
+    for _ in range(16):                                            # 8 s: it says it runs the task
+        for a in ls.agents:
+            a.beat()
+            a.status(state=2, task=wire) if a is first else a.status()
+        ls.step(dt=0.5)
+    assert kb.tasks[bs.id].state == M.PENDING, "task given away while a robot said it ran it"
+    first.status()                                                 # stopped (the cancel repeated on each status)
+    ls.step(n=3)
+    assert kb.tasks[bs.id].state == M.ASSIGNED
+    ls.close()
 
 
 def test_a_prepared_station_going_down_keeps_its_task(tcp):
