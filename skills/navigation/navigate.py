@@ -417,6 +417,8 @@ class Navigate(Activity):
         way there is blocked for 3 s), stand there ``yield_hold`` seconds,
         then plan the real way again."""
         y, ctx = self._yield, self.ctx
+        if self.timeout is not None:
+            self.timeout += dt                       # the time given to the other robot
         if y["hold_until"] is None:
             stuck = self.follower.capped and self.follower.last_speed_wanted < 0.02
             y["blocked"] = y["blocked"] + dt if stuck else 0.0
@@ -429,8 +431,6 @@ class Navigate(Activity):
             return Status.RUNNING
         self._yield = None
         self.target, self._goal_heading = y["real"]
-        if self.timeout is not None:
-            self.timeout += now - y["since"]         # the time given to the other robot
         self._blocked_since = self._block_start = None
         self.blocked_time = 0.0          # made room: a new wait
         self._no_way = False

@@ -171,3 +171,12 @@ def test_a_robot_boxed_in_at_a_station_is_let_out_by_the_one_waiting_for_its_pla
     assert navs[0].yields == 0 and navs[1].yields == 1
     assert longest < 16.0
     assert world.collisions == 0
+
+
+def test_the_time_spent_standing_aside_does_not_count_toward_the_time_limit():
+    """R1 stands aside 25 s (longer than its navigation's time limit from the distance, ~25 s):
+    it is not timed out for it, and arrives after R3 has passed."""
+    navs, world, _ = _standoff(GAP, yield_hold=25.0)
+    assert navs[0].status is Status.SUCCESS, navs[0].message
+    assert navs[0].yields == 1 and navs[0].elapsed > 25.0 + 3.0      # stood aside, then drove its way
+    assert world.collisions == 0
