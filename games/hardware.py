@@ -6,7 +6,7 @@ the ``robotino`` backend, the code a real robot runs, on a robot
 configuration whose devices are emulators fed by the world
 (:meth:`~.interfaces.Simulation.emulated_hardware`): the base firmware and
 the gripper Arduino on ptys, the laser (URG on a pty or TiM on a TCP port)
-and the camera (MJPEG over HTTP).  Serial frames, laser telegrams and
+and the camera (MJPEG over HTTP), each robot's in a process of its own.  Serial frames, laser telegrams and
 camera frames cross real file descriptors; the agents see no simulator.
 Perception is the camera's (tags and lights detected on the frames).
 
@@ -34,7 +34,10 @@ class HardwareGame(ProcessGame):
     def _start_children(self) -> None:
         import yaml
         o = self.options
-        self.hw = self.world.emulated_hardware(laser=o.laser, camera_fps=o.camera_fps)
+        # each robot's devices in a process of their own: as threads of this process they waited for
+        # the world's renders and ray casts (one interpreter lock) and, on a loaded machine, went
+        # seconds without reading their ptys (backends/sim/hardware_process.py)
+        self.hw = self.world.emulated_hardware(laser=o.laser, camera_fps=o.camera_fps, devices="process")
         for n in self.robots:
             rig = self.hw.add((TEAM, n))
             path = self.dir / f"robot{n}.yaml"

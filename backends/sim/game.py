@@ -77,12 +77,12 @@ class PyBulletWorld(World):
             return SimBackend(self.pybullet, key)
         return SimBackend(self.pybullet, key, **{**self.robot_options, **options})
 
-    def emulated_hardware(self, *, laser: str = "urg", camera_fps: float = 5.0):
+    def emulated_hardware(self, *, laser: str = "urg", camera_fps: float = 5.0, devices: str = "threads"):
         """Every robot as emulated devices fed by this world (:mod:`.hardware`):
         ``add((team, n))`` gives a rig whose ``config()`` is the robot
         configuration for the robotino backend; ``sync()`` after each step."""
         from .hardware import WorldHardware
-        return WorldHardware(self.pybullet, laser=laser, camera_fps=camera_fps)
+        return WorldHardware(self.pybullet, laser=laser, camera_fps=camera_fps, devices=devices)
 
     def robot_pose(self, team: str, number: int) -> Pose2D:
         return self.pybullet.robot_pose(team, number)

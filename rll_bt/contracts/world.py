@@ -38,12 +38,13 @@ class World(abc.ABC):
     def robot_pose(self, team: str, number: int) -> Pose2D:
         """Where the robot really is (ground truth)."""
 
-    def emulated_hardware(self, *, laser: str = "urg", camera_fps: float = 5.0):
+    def emulated_hardware(self, *, laser: str = "urg", camera_fps: float = 5.0, devices: str = "threads"):
         """The robots as device emulators fed by this world (``rll-bt sim
         --hardware emulated``): an object with ``add((team, number))`` -> a
         rig with ``config()`` (a robot configuration for the ``robotino``
         backend), ``sync()`` (after every step, on the thread that steps),
-        ``stats()`` and ``stop()``."""
+        ``stats()`` and ``stop()``.  ``devices``: "threads" (in the world's
+        process) or "process" (each robot's devices in a process of their own)."""
         raise NotImplementedError(f"{type(self).__name__} emulates no hardware")
 
     def collision_log(self) -> list[tuple[float, str, str]]:

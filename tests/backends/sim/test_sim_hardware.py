@@ -76,11 +76,13 @@ def fresh(running, read, seconds=30.0):
             running.run(0.1)
 
 
-@pytest.fixture(params=["urg", "tim"])
+@pytest.fixture(params=[("urg", "threads"), ("tim", "threads"), ("urg", "process")], ids=lambda p: "-".join(p))
 def rigged(request, make_world):
+    """A robot's devices on the world: as threads of this process, or in a process of their own."""
+    laser, devices = request.param
     world = make_world("rcll2016", seed=3)
     world.add_robot("CYAN", 1, pose=Pose2D(3.0, 2.0, 0.3), laser_noise=0.0)
-    hw = WorldHardware(world, laser=request.param, camera_fps=1.0)     # renders hold the GIL: few of them
+    hw = WorldHardware(world, laser=laser, camera_fps=1.0, devices=devices)     # renders hold the GIL: few
     rig = hw.add(("CYAN", 1))
     running = Running(world, hw)
     backend = open_backend("robotino", robot_config=rig.config())
@@ -97,22 +99,29 @@ def test_scans_decode_to_the_ranges_the_world_computes(rigged):
     robot = world.robots[("CYAN", 1)]
     with running.lock:
         truth = sensors.laser_ranges(world.cid, robot, rig.angles, noisy=False)
-    dev = rig.rig.laser_device
-    if rig.rig.laser_kind == "urg":
-        m = dev.model
+    kind, model = laser_model(rig)
+    if kind == "urg":
+        m = model
         truth = truth[m.amin:m.amax + 1]
         limit = m.dmax / 1000.0
     else:
-        limit = dev.model.range_mm[1] / 1000.0
+        limit = model.range_mm[1] / 1000.0
     assert len(scan.ranges) == len(truth)
     seen = np.isfinite(truth) & (truth <= limit)
     assert seen.sum() > 0.5 * len(truth)
     assert np.allclose(scan.ranges[seen], truth[seen], atol=0.0006)          # millimetres on the wire
     assert np.all(np.isinf(scan.ranges[~seen]))
     angles = scan.angle_min + scan.angle_increment * np.arange(len(scan.ranges))
-    expected = rig.angles[m.amin:m.amax + 1] if rig.rig.laser_kind == "urg" else rig.angles
+    expected = rig.angles[m.amin:m.amax + 1] if kind == "urg" else rig.angles
     assert np.allclose(angles, expected, atol=1e-4)
     assert scan.mount.x == pytest.approx(robot.config.geometry.laser_mount[0])
+
+
+def laser_model(rig):
+    """(kind, the device model) of a rig's laser (the default models of the configuration's type)."""
+    from backends.devices.laser import tim_device, urg_device
+    kind = rig.config()["laser"]["type"]
+    return kind, (urg_device.MODELS["URG-04LX"] if kind == "urg" else tim_device.MODELS["TiM571"])
 
 
 def drive_episode(world, rig, backend, running, seconds=1.5):
@@ -120,9 +129,9 @@ def drive_episode(world, rig, backend, running, seconds=1.5):
     world's motion, the host's odometry, the watchdog stops of the episode and
     the longest time the real-time chain went without its cycle (the base not
     hearing the host, or the world not stepped): what a loaded machine took."""
-    robot, emu = world.robots[("CYAN", 1)], rig.rig.base
+    robot = world.robots[("CYAN", 1)]
     start, odo0 = robot.pose, backend.odometry().pose
-    stops0, t0 = emu.stats()["watchdog_motion_stops"], time.monotonic()
+    stops0, t0 = rig.stats()["watchdog_motion_stops"], time.monotonic()
     running.longest_gap = 0.0
     end, lost = t0 + seconds, False
     while time.monotonic() < end:
@@ -136,11 +145,15 @@ def drive_episode(world, rig, backend, running, seconds=1.5):
     running.run(0.8)
     if lost:
         fresh(running, lambda: backend.drive(0.0, 0.0, 0.0))
-    with emu.lock:                                  # the emulator's thread appends to the log
-        heard = [t for t, _ in emu.firmware.rx_log if t >= t0]
-    silence = max(np.diff(heard), default=math.inf) if len(heard) > 1 else math.inf
+    if hasattr(rig, "rig"):                         # devices in this process: when the base heard the host
+        emu = rig.rig.base
+        with emu.lock:                              # the emulator's thread appends to the log
+            heard = [t for t, _ in emu.firmware.rx_log if t >= t0]
+        silence = max(np.diff(heard), default=math.inf) if len(heard) > 1 else math.inf
+    else:
+        silence = 0.0
     return SimpleNamespace(moved=robot.pose.relative_to(start), odo=backend.odometry().pose.relative_to(odo0),
-                           stops=emu.stats()["watchdog_motion_stops"] - stops0,
+                           stops=rig.stats()["watchdog_motion_stops"] - stops0,
                            starved=math.inf if lost else max(silence, running.longest_gap))
 
 
