@@ -22,6 +22,9 @@ from .config import DispatchConfig
 from .fleet import Fleet
 from .readiness import Readiness
 
+#: kinds of task in which the robot picks a workpiece up
+PICKUPS = (M.GET_WORKPIECE, M.RETRIEVE_CAP)
+
 log = logging.getLogger("teamserver.dispatch")
 
 
@@ -82,7 +85,9 @@ class Dropouts:
         """Assigned tasks whose station went BROKEN or DOWN before their
         PrepareMachine went out, and whose robot carries nothing for it, go back
         to the pool: the robot is told to stop and is free for other work
-        instead of waiting at the station.  Returns the tasks released."""
+        instead of waiting at the station, once it said what it holds if it was
+        picking something up (:meth:`Fleet.hold_back`: it may have grabbed the
+        workpiece just before).  Returns the tasks released."""
         out = []
         for t in self.kb.open_tasks():
             if (t.state != M.ASSIGNED or t.carry or t.prepared_at is not None
@@ -96,6 +101,8 @@ class Dropouts:
             if robot is not None and robot.task_id == t.id:
                 robot.task_id = None
                 self.kb.save_robot(robot)
+                if t.kind in PICKUPS:
+                    self.fleet.hold_back(robot, t)
             log.info("task %d released: %s is %s", t.id, t.machine, state)
             out.append(t)
         return out

@@ -5,6 +5,13 @@ A robot is *idle* without a task; a robot driving to a parking spot (a
 GO_TO task) is *available* too: real work cancels its GO_TO.  Assigning a
 task takes its station locks, tells the robot through the task link and
 cancels the robot's parking.
+
+A robot whose pickup the server took back (:meth:`Fleet.hold_back`: its
+station went BROKEN or DOWN) may have grabbed the workpiece just before: it gets no
+new work until its result of that task says what its gripper holds
+(:meth:`Fleet.heard`), at most ``unsure_for`` seconds.  Given work at once,
+a robot with a product in its gripper fed that product to a cap station
+prepared for RETRIEVE_CAP, which broke it (rcll2016 seed 10 at 672a03b).
 """
 from __future__ import annotations
 
@@ -26,12 +33,30 @@ def travel(robot: M.Robot, pos) -> float:
 class Fleet:
     """See the module doc."""
 
-    def __init__(self, kb: KnowledgeBase, clock, locks: StationLocks, tasks: TaskLink):
+    def __init__(self, kb: KnowledgeBase, clock, locks: StationLocks, tasks: TaskLink,
+                 unsure_for: float = 15.0):
         self.kb = kb
         self.clock = clock
         self.locks = locks
         self.tasks = tasks
+        self.unsure_for = unsure_for
         self._idle_since: dict[int, float] = {}
+        self._unsure: dict[int, tuple[int, float]] = {}     # robot -> (task id, since)
+
+    def hold_back(self, robot: M.Robot, task: M.Task) -> None:
+        """``task`` (a pickup) was taken back from ``robot``: no new work for it until
+        its result of ``task`` says what it holds (see the module doc)."""
+        self._unsure[robot.number] = (task.id, self.clock.now())
+
+    def heard(self, number: int, task_id: int) -> None:
+        """Robot ``number``'s final result of task ``task_id`` arrived."""
+        if self._unsure.get(number, (None,))[0] == task_id:
+            del self._unsure[number]
+
+    def unsure(self, robot: M.Robot) -> bool:
+        """Is what ``robot`` holds unknown (a pickup taken back, its result not heard)?"""
+        got = self._unsure.get(robot.number)
+        return got is not None and self.clock.now() - got[1] < self.unsure_for
 
     def idle_for(self) -> float:
         """Seconds the robot idle longest (no work, empty gripper; parking is no work)
@@ -52,8 +77,8 @@ class Fleet:
 
     def available_robots(self) -> list[M.Robot]:
         """Robots that may get work: idle ones and parking ones."""
-        return [r for r in self.kb.active_robots()
-                if r.task_id is None or self.parking_task(r) is not None]
+        return [r for r in self.kb.active_robots() if not self.unsure(r)
+                and (r.task_id is None or self.parking_task(r) is not None)]
 
     def assign(self, task: M.Task, robot: M.Robot) -> None:
         """Give ``task`` to ``robot`` (which stops parking)."""

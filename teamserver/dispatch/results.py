@@ -63,6 +63,8 @@ class Results:
         if task.robot != robot_number or task.state != M.ASSIGNED:
             if status == "RUNNING" and task.robot != robot_number:
                 self.tasks.cancel(task, "task no longer yours")
+            elif status != "RUNNING":
+                self._taken_back(task, robot, holding)
             return
         if status == "RUNNING":
             return
@@ -103,6 +105,19 @@ class Results:
             self.kb.save_robot(robot)
             return
         self._failed(task, robot, error, holding)
+
+    def _taken_back(self, task: M.Task, robot: M.Robot, holding: bool | None) -> None:
+        """The final result of a task taken back from ``robot`` (cancelled, back in the
+        pool): if it says the gripper holds something the server booked nowhere, the
+        robot holds an unknown workpiece (it gets no work needing an empty gripper,
+        and is told to discard it)."""
+        self.discards.fleet.heard(robot.number, task.id)
+        now = self.kb.tasks.get(robot.task_id) if robot.task_id is not None else None
+        if holding and robot.holding is None and (now is None or now.kind == M.GO_TO):
+            robot.holding = "?"
+            self.kb.save_robot(robot)
+            log.warning("robot %d holds a workpiece after task %d was taken back: unknown, "
+                        "to be discarded", robot.number, task.id)
 
     def _failed(self, task: M.Task, robot: M.Robot, error: str, holding: bool | None) -> None:
         lost = False

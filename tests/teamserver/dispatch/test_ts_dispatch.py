@@ -217,6 +217,40 @@ def test_a_station_going_down_before_its_prepare_frees_the_robot_sent_there(tcp)
                for t in kb.tasks.values())
 
 
+def test_a_robot_whose_pickup_was_taken_back_gets_work_only_once_it_said_what_it_holds():
+    """A pickup taken back (its station went BROKEN) may have been grabbed already: the
+    robot gets no new work until its result says what it holds; holding something the
+    server booked nowhere, it is told to discard it and is sent to feed no station
+    (rcll2016 seed 10 at 672a03b: a robot given a RetrieveCap at once fed the product it
+    had just grabbed to the cap station, which broke)."""
+    ls = Lockstep(robots=2, config=ALONE)
+    place(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0)])                 # far from every station
+    production_setup(ls, [{"id": 1}, {"id": 2, "delivery_gate": 2, "cap_color": 2}])
+    ls.step(n=8)
+    kb, agent = ls.server.kb, ls.agents[0]
+    [first] = [t for t in kb.tasks.values() if t.state == M.ASSIGNED and t.robot == agent.number]
+    assert first.kind == M.RETRIEVE_CAP and first.prepared_at is None   # (a BS base waits too)
+    ls.station_states[first.machine] = "BROKEN"
+    ls.refbox.machines(ls.station_states)
+    ls.step(n=3)
+    assert first.id in [c.task_id for c in agent.cancels()]       # (and its parking before)
+    before = len(agent.tasks())
+    ls.step(n=6)
+    assert len(agent.tasks()) == before                 # no work for it meanwhile
+    agent.result(first.id, status="CANCELLED", holding=True)
+    ls.step(n=4)
+    robot = kb.robots[agent.number]
+    assert robot.holding == "?"
+    park = kb.tasks.get(robot.task_id) if robot.task_id is not None else None
+    if park is not None:                                # it may park meanwhile
+        assert park.kind == M.GO_TO
+        agent.result(park.id)
+    ls.step(n=4)
+    kinds = [k for _, k, _ in task_kinds(agent)[before:]]
+    assert kinds == ["discard"]                         # then it lets go, and feeds nothing
+    ls.close()
+
+
 def test_a_task_taken_back_goes_to_no_other_robot_until_its_robot_has_provably_stopped_it():
     """The cancel of a task whose station went down is lost (its robot is cut off, or
     only its acknowledgement is): the robot may still run the task until its lease runs
