@@ -150,26 +150,20 @@ def test_two_robots_each_in_the_others_way_wait_for_each_other_without_giving_wa
     assert world.collisions == 0
 
 
-def test_two_robots_each_in_the_others_way_one_steps_aside_and_both_arrive():
-    """R1 (the lower number) steps aside within a few seconds, R3 passes, then R1 goes its way:
-    both arrive, they never stand still together for long, and they touch nothing."""
-    navs, world, longest = _standoff(GAP)
+@pytest.mark.parametrize("scene, yields, longest_limit", [
+    # R1 (the lower number) steps aside within a few seconds, R3 passes, then R1 goes its way
+    (GAP, (1, 0), 8.0),
+    # R2 in the pocket has no place to step aside to; R3, waiting at the pocket's exit for the spot R2
+    # stands on, steps aside at its turn (later: the higher number), lets R2 out and then takes the spot
+    (POCKET, (0, 1), 16.0),
+], ids=["gap", "pocket"])
+def test_two_robots_each_in_the_others_way_one_steps_aside_and_both_arrive(scene, yields, longest_limit):
+    """Both arrive, they never stand still together for long, and they touch nothing."""
+    navs, world, longest = _standoff(scene)
     for nav in navs:
         assert nav.status is Status.SUCCESS, nav.message
-    assert navs[0].yields == 1 and navs[1].yields == 0
-    assert longest < 8.0
-    assert world.collisions == 0
-
-
-def test_a_robot_boxed_in_at_a_station_is_let_out_by_the_one_waiting_for_its_place():
-    """R2 in the pocket has no place to step aside to; R3, waiting at the pocket's exit for the
-    spot R2 stands on, steps aside at its turn (later: the higher number), lets R2 out and then
-    takes the spot: both arrive, 0 contacts."""
-    navs, world, longest = _standoff(POCKET)
-    for nav in navs:
-        assert nav.status is Status.SUCCESS, nav.message
-    assert navs[0].yields == 0 and navs[1].yields == 1
-    assert longest < 16.0
+    assert (navs[0].yields, navs[1].yields) == yields
+    assert longest < longest_limit
     assert world.collisions == 0
 
 
