@@ -232,7 +232,7 @@ def sparse_frame(world, robot, eye: np.ndarray, rot: np.ndarray, intr: CameraInt
                        (intr.width, intr.height), interpolation=cv2.INTER_LINEAR)
     for x, y, w, h, div in windows:
         show = drawn((x - 1, y - 1, x + w + 1, y + h + 1))
-        if div == 1:
+        if div == 1 or w < div or h < div:        # (a sliver narrower than its divisor: at full resolution)
             image[y:y + h, x:x + w] = world.render_view(eye, rot, intr, window=(x, y, w, h), stations=show).image
         else:
             part = world.render_view(eye, rot, _scaled(intr, div), window=(x // div, y // div, w // div, h // div),

@@ -152,3 +152,20 @@ def test_an_empty_view_is_not_rendered_again_for_small_moves(world):
     assert world.camera_image(robot).image is first
     world.step(1.2)                                      # but not for ever
     assert world.camera_image(robot).image is not first
+
+
+def test_a_window_narrower_than_its_divisor_is_drawn_at_full_resolution(world, monkeypatch):
+    """A window of 2 px at divisor 4 once made an empty render and cv2.resize raised out of the
+    hardware game's world (seed 2)."""
+    from backends.sim import sparse
+    robot = face(world, distance=2.2)
+    real = sparse.station_windows
+
+    def sliver(*args, **kw):
+        windows, shown = real(*args, **kw)
+        return [(100, 40, 2, 30, 4), (10, 10, 30, 3, 4)] + list(windows), shown
+    monkeypatch.setattr(sparse, "station_windows", sliver)
+    robot.camera_frame = None
+    image = world.camera_image(robot).image
+    intr, _ = sensors.camera_model(robot)
+    assert image.shape == (intr.height, intr.width, 3)
