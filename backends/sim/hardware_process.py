@@ -40,7 +40,7 @@ import time
 
 import numpy as np
 
-from .hardware import CoupledRig, device_spec
+from .hardware_parts import CoupledRig, device_spec
 
 log = logging.getLogger(__name__)
 
@@ -191,7 +191,7 @@ class _Devices:
     def __init__(self, spec: dict, shared: _Shared):
         from rll_bt.clock import WallClock
 
-        from .hardware import build_devices
+        from .hardware_parts import build_devices
         self.shared = shared
         self.floats, self.image = shared.view()
         self.rig, self.gripper_fw = build_devices(spec, clock=WallClock(), laser_source=self._laser_source,
@@ -240,7 +240,7 @@ class _Devices:
                     fw.target = list(position)
 
     def run(self, conn) -> None:
-        from .hardware import device_stats, rig_config
+        from .hardware_parts import device_stats, rig_config
         stop = self._stop
         copier = threading.Thread(target=self._copy_loop, name="world-copy", daemon=True)
         copier.start()
@@ -288,7 +288,7 @@ class _Devices:
 
 def serve(spec: dict, shared: _Shared, conn) -> None:
     """The child process: start the devices, say where they are, serve."""
-    from .hardware import rig_config
+    from .hardware_parts import rig_config
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     try:
         devices = _Devices(spec, shared)
