@@ -20,9 +20,7 @@ share one block of memory (:class:`_Shared`):
   sketch command it has taken;
 * devices -> world: the three wheels' actual speeds (rpm), the gripper
   sketch's moves, finger state, axis targets and command count, and how many
-  clients watch the camera, and when it last copied (a devices' process
-  silent for more than :data:`SILENT_STOP` stops the robot's wheels in the
-  world, as a real base's watchdog would).
+  clients watch the camera.
 
 A thread of the child copies between the block and the firmware objects
 every 2 ms under the firmware's lock; the world's process only reads and
@@ -36,7 +34,6 @@ import logging
 import math
 import multiprocessing as mp
 import threading
-import time
 
 import numpy as np
 
@@ -48,11 +45,7 @@ MAX_BEAMS = 2048
 # float slots of the shared block
 RANGES_SEQ, IMAGE_SEQ, HOLDING, G_BUSY, G_POS, G_ACK = 0, 1, 2, 3, 4, 7
 RPM, G_MOVES, G_OPEN, G_TARGET, G_COMMANDS, CLIENTS, IMAGE_H, IMAGE_W, BEAMS = 8, 11, 12, 13, 16, 17, 18, 19, 20
-COPIED = 21          # time.monotonic() of the child's last copy
 HEADER = 24
-#: the devices' process not heard from for this long (s): the wheels count as stopped, as a real
-#: base's firmware stops them when its host falls silent (a stalled emulator cannot run its watchdog)
-SILENT_STOP = 0.3
 
 
 class _Shared:
@@ -97,12 +90,6 @@ class ProcessRig(CoupledRig):
         self._ranges_seq = 0
         self._image_seq = 0
         self._final_stats: dict | None = None
-        self.silent_stops = 0        # world syncs that found the devices' process silent (wheels stopped)
-
-    @property
-    def pid(self) -> int:
-        """The devices' process."""
-        return self._proc.pid
 
     # -- commands to the child ---------------------------------------------------------------
     def _ask(self, *request, timeout: float = 10.0):
@@ -126,7 +113,7 @@ class ProcessRig(CoupledRig):
 
     def stats(self) -> dict:
         s = self._final_stats if self._final_stats is not None else self._ask("stats")
-        return {**s, "scans_computed": self.scans, "frames_rendered": self.frames, "silent_stops": self.silent_stops}
+        return {**s, "scans_computed": self.scans, "frames_rendered": self.frames}
 
     def stop(self) -> None:
         if self._proc.is_alive():
@@ -145,12 +132,6 @@ class ProcessRig(CoupledRig):
         f = self._floats
         with self._shared.lock:
             rpm = [float(v) for v in f[RPM:RPM + 3]]
-            if time.monotonic() - f[COPIED] > SILENT_STOP:
-                # the devices' process did not run (a loaded machine): the world would drive the robot
-                # on at the last wheel speeds, seconds at a time, while the host's odometry, which
-                # skips gaps of more than a second, lost that motion and its localisation with it
-                rpm = [0.0, 0.0, 0.0]
-                self.silent_stops += 1
             moves, is_open = int(f[G_MOVES]), bool(f[G_OPEN])
             target = [float(v) for v in f[G_TARGET:G_TARGET + 3]]
             commands = f[G_COMMANDS]
@@ -228,7 +209,6 @@ class _Devices:
                 f[G_MOVES], f[G_OPEN], f[G_COMMANDS] = fw.moves, 1.0 if fw.is_open else 0.0, fw.commands
                 f[G_TARGET:G_TARGET + 3] = [float(v) for v in fw.target]
                 f[CLIENTS] = cam.clients if cam is not None else 0
-                f[COPIED] = time.monotonic()
                 holding, busy, ack = f[HOLDING], f[G_BUSY] > 0, f[G_ACK]
                 position = None if math.isnan(f[G_POS]) else [float(v) for v in f[G_POS:G_POS + 3]]
             emu.firmware.distance[8] = holding

@@ -3,8 +3,6 @@ robotino backend drives the world's robot through the base firmware, its
 laser scans decode to the ranges the world computes, its camera frames are
 the world's renders, its gripper moves the world's gripper."""
 import math
-import os
-import signal
 import threading
 import time
 from types import SimpleNamespace
@@ -198,40 +196,3 @@ def test_the_gripper_moves_the_worlds_gripper_and_holding_comes_from_the_world(r
         time.sleep(0.02)
     assert backend.holding() is True
     robot.holding = None
-
-
-def test_a_silent_devices_process_stops_the_robot_in_the_world(make_world):
-    """A devices' process that does not run (stopped here with SIGSTOP; a loaded machine does the same
-    for seconds) stops the robot's wheels in the world, as a real base's watchdog would, instead of
-    the world driving on at the last wheel speeds."""
-    world = make_world("rcll2016", seed=3)
-    world.add_robot("CYAN", 1, pose=Pose2D(3.0, 2.0, 0.3), laser_noise=0.0)
-    hw = WorldHardware(world, laser="urg", camera_fps=1.0, devices="process")
-    rig = hw.add(("CYAN", 1))
-    running = Running(world, hw)
-    backend = open_backend("robotino", robot_config=rig.config())
-    robot = world.robots[("CYAN", 1)]
-    try:
-        start = robot.pose
-        end = time.monotonic() + 1.5
-        while time.monotonic() < end:
-            backend.drive(0.2, 0.0, 0.0)
-            running.run(0.05)
-        assert robot.pose.relative_to(start).x > 0.05          # it drives
-        os.kill(rig.pid, signal.SIGSTOP)
-        try:
-            running.run(0.6)                                   # past the silence limit
-            with running.lock:
-                before = robot.pose
-            running.run(1.5)
-            with running.lock:
-                moved = robot.pose.relative_to(before)
-        finally:
-            os.kill(rig.pid, signal.SIGCONT)
-        assert abs(moved.x) < 0.02 and abs(moved.y) < 0.02, moved
-        assert rig.stats()["silent_stops"] > 0
-    finally:
-        backend.stop()
-        backend.close()
-        running.stop()
-        hw.stop()
