@@ -228,9 +228,11 @@ def test_conveyor_waits_for_the_robots_workpiece(rig):
     running.call(lambda: running.world.step(1.0))
     # not IDLE again after its BUSY (an IDLE the station published just before it took the command
     # can arrive after the mark: the station's periodic status)
-    seen = refbox.since(mark, "C-CS2")
-    assert ("Status", "IDLE") not in seen[seen.index(("Status", "BUSY")) + 1:], seen
+    def after_busy():
+        seen = refbox.since(mark, "C-CS2")
+        return seen[seen.index(("Status", "BUSY")) + 1:]
+    assert ("Status", "IDLE") not in after_busy(), refbox.since(mark, "C-CS2")
     put(running, "C-CS2", "input", "BASE_RED", cap="CAP_BLACK")     # the robot arrives
-    refbox.wait(mark, "C-CS2", "Status", "IDLE")
+    wait_for(lambda: ("Status", "IDLE") in after_busy(), STEP_TIMEOUT, "C-CS2 IDLE after its BUSY")
     refbox.send("C-CS2", "RESET")                      # the referee clears the belt
     wait_for(lambda: at(running, "C-CS2", "input") is None, STEP_TIMEOUT, "belt cleared")
