@@ -57,6 +57,7 @@ class AmclConfig:
     # confidence
     confident: float = 0.6               # above this the pose is trusted
     lost: float = 0.2                    # below this for lost_updates updates: lost
+    unsure_side: float = 0.25            # reported confidence at most this until a tag confirms a global search
     lost_updates: int = 5
     fit_tolerance: float = 0.15          # metres, a beam agrees with the map within this
     station_slack: float = 0.5           # metres a beam may reach past a mapped station face (its pose may be off)

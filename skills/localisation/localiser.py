@@ -20,6 +20,10 @@ Relocalising (:class:`~skills.localisation.relocalise.Relocalise`) may
 :meth:`Localiser.boost` the particle and beam counts for a while, and starts
 a global search with a prior around the last estimate, so that in a
 mirror-symmetric field the hypothesis on the robot's own side wins.
+A global search with no prior at all (a restarted robot) leaves the localiser
+``side_unsure``: the laser cannot tell a place from its mirror image in the
+other half, so :attr:`Localiser.confidence` stays below the trees' ``localised``
+level until a station's tag confirms the pose (:meth:`Localiser.confirm`).
 """
 from __future__ import annotations
 
@@ -98,6 +102,9 @@ class Localiser:
         self.filter_updates = 0
         self.last_contradiction = 0.0      # share of beams through mapped walls at the estimate
         self._odom_history: deque[tuple[float, Pose2D]] = deque(maxlen=32)
+        # a global search with nothing known (a restarted robot): the laser cannot tell a place from its
+        # mirror image in the other team's half, so the pose is not trusted before a tag confirmed it
+        self.side_unsure = False
         self._base_config = self.config
 
     # -- set-up -----------------------------------------------------------
@@ -113,6 +120,8 @@ class Localiser:
         far apart (the mirror image of the robot's place in the other
         team's half) while any place can still win on the evidence."""
         self.filter.initialise_uniform()
+        if prior is None:
+            self.side_unsure = True
         if prior is not None:
             p = self.filter.particles
             d2 = (p[:, 0] - prior.x) ** 2 + (p[:, 1] - prior.y) ** 2
@@ -293,9 +302,16 @@ class Localiser:
         step = odom.relative_to(self._odom_at_update)
         return self._pose_at_update.compose(step)
 
+    def confirm(self) -> None:
+        """A station's tag confirmed the pose: which half the robot is in is known."""
+        self.side_unsure = False
+
     @property
     def confidence(self) -> float:
-        return 0.0 if self._estimate is None else self._estimate.confidence
+        """The estimate's confidence, held below ``unsure_side`` while the side is unsure
+        (what the agent reports and the trees' ``localised`` check read)."""
+        c = 0.0 if self._estimate is None else self._estimate.confidence
+        return min(c, self.config.unsure_side) if self.side_unsure else c
 
     @property
     def lost(self) -> bool:

@@ -24,6 +24,11 @@ never fell below ``hold`` confidence while the robot turned by
 ``look_around`` radians (a wrong pose often fits the part of the field in
 view, and fits badly somewhere else; the laser's 240 degrees plus half a
 turn see all round).
+While the localiser is ``side_unsure`` (a restarted robot's global search:
+the laser alone cannot tell the robot's place from its mirror image in the
+other half) only a tag decides: a tag is believed wherever the robot thought
+it was and even when the laser fits both places, and success needs a tag
+that agrees (:meth:`Localiser.confirm`).
 It fails with LOCALISATION_LOST when a full turn did not do it.
 """
 from __future__ import annotations
@@ -111,9 +116,10 @@ class Relocalise(Activity):
         moved = odom_now.relative_to(odom_then) if odom_then is not None else Pose2D()
         est = loc.pose() if loc.estimate() is not None else None
         fixes = [f.compose(moved) for f in pose_from_tag(self.ctx, dets)]     # from the image's time to now
+        unsure = getattr(loc, "side_unsure", False)
         for fix in fixes:
-            vouched = any(o is not fix and o.distance_to(fix) < 0.2 and abs(wrap_angle(o.theta - fix.theta)) < 0.1
-                          for o in fixes)
+            vouched = unsure or any(o is not fix and o.distance_to(fix) < 0.2
+                                    and abs(wrap_angle(o.theta - fix.theta)) < 0.1 for o in fixes)
             if self.last is not None and fix.distance_to(self.last) > self.tag_reach and not vouched:
                 continue
             d, a = ((math.inf, math.inf) if est is None
@@ -121,8 +127,10 @@ class Relocalise(Activity):
             fits = loc.fit_now(fix) or 0.0
             if d > self.tag_disagreement or a > self.tag_disagreement:
                 here = (loc.fit_now(est) or 0.0) if est is not None else 0.0
-                if fits >= self.tag_fit and fits >= here + 0.2:
+                if fits >= self.tag_fit and (unsure or fits >= here + 0.2):
                     loc.initialise(fix, (0.15, 0.15, 0.1))
+                    if unsure:
+                        loc.confirm()
                     self.tag_fixes += 1
                     self._good = 0
                     self._fair_from = None
@@ -130,6 +138,8 @@ class Relocalise(Activity):
                     return
             elif d <= self.tag_agreement and a <= self.tag_agreement and fits >= self.tag_fit:
                 self._agreed = True
+                if unsure:
+                    loc.confirm()
                 return
 
     def _step(self, now: float) -> Status:
@@ -148,7 +158,8 @@ class Relocalise(Activity):
                 self._fair_from = turned
             self._good = self._good + 1 if good else 0
             # never doubtful while the robot turned far enough to see all round
-            looked = self._fair_from is not None and turned - self._fair_from >= self.look_around
+            looked = (self._fair_from is not None and turned - self._fair_from >= self.look_around
+                      and not getattr(loc, "side_unsure", False))
             if self._good >= self.settle and (self._agreed or looked):
                 self.message = (f"relocalised, confidence {est.confidence:.2f}"
                                 + (f" ({self.tag_fixes} tag fixes)" if self.tag_fixes else ""))

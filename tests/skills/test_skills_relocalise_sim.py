@@ -163,3 +163,30 @@ def test_an_activity_started_without_a_pose_fails_as_lost_instead_of_raising():
     act = ExploreZone(ctx, world.profile.zones.all_zones[0]).start()
     assert act.status is Status.FAILURE
     assert act.error is SkillError.LOCALISATION_LOST
+
+
+@pytest.mark.parametrize("tags", [True, False])
+def test_a_restarted_robot_trusts_no_half_of_the_field_before_a_tag(tags):
+    """A restarted agent's global search: the laser cannot tell the robot's place
+    from its mirror image in the other half (seen in a process game: a restarted
+    robot reported a confident pose 6 m off). Its confidence stays below the
+    trees' ``localised`` level until a tag confirms a pose; relocalising then ends
+    on the true side, and without any tag it fails rather than settle on a side."""
+    truth = Pose2D(-3.95, 4.67, -1.47)
+    mirror = Pose2D(-truth.x, truth.y, math.pi - truth.theta)
+    world, ctx = kidnapped(1, truth, mirror, tags=tags)
+    loc = ctx.pose_source
+    loc.initialise_global()                                  # restarted: nothing known ...
+    loc.initialise(mirror, (0.02, 0.02, 0.02))               # ... and the laser settled on the mirror image
+    for _ in range(20):
+        world.step(0.1)
+        ctx.update()
+        assert loc.confidence <= loc.config.unsure_side
+    act = relocalise(world, ctx)
+    if tags:
+        assert act.status is Status.SUCCESS, act.message
+        assert error(world, ctx)[0] < 0.1
+        assert not loc.side_unsure and loc.confidence >= 0.5
+    else:
+        assert act.status is Status.FAILURE
+        assert loc.side_unsure and loc.confidence <= loc.config.unsure_side
