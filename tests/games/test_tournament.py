@@ -19,7 +19,8 @@ from games.tournament.play import game_part
 from rll_bt.cli import main
 from rll_bt.comm.ports import free_ports
 
-pytestmark = pytest.mark.slow  # whole games: `make test-fast` leaves them out
+pytestmark = [pytest.mark.slow,  # whole games: `make test-fast` leaves them out
+              pytest.mark.xdist_group("tournament")]   # one worker builds the module's games once
 
 CONFIGS = ["htn", "baseline"]
 #: short games of one robot a team: exploration and the first production seconds

@@ -15,6 +15,9 @@ from tests.support.mps_world import RunningWorld, wait_for
 #: s a step may take on a loaded machine (a step is ~1 world s; the world runs at 4x when it can)
 STEP_TIMEOUT = 60.0
 
+#: one worker starts the module's servers once (each worker that ran one of these tests built its own)
+pytestmark = pytest.mark.xdist_group("mps_mqtt")
+
 
 class FakeRefbox:
     """An MQTT client that publishes commands and records feedback, as the

@@ -20,6 +20,9 @@ PLC_PATH = ["0:Objects", "2:DeviceSet", "4:CPX-E-CEC-C1-PN", "4:Resources", "4:A
             "3:GlobalVars", "4:G"]
 MACHINES = ("C-BS", "C-CS1", "C-RS1", "C-DS", "C-SS")
 
+#: one worker starts the module's servers once (each worker that ran one of these tests built its own)
+pytestmark = pytest.mark.xdist_group("mps_opcua")
+
 
 class FakeRefboxPlc:
     """One station's PLC as the refbox's OpcUaMachine sees it."""
