@@ -188,7 +188,7 @@ class RobotinoEmulator:
                  link_dir: str | None = None, clock: Clock | None = None,
                  firmware: BaseFirmware | None = None,
                  gripper_firmware: GripperFirmware | None = None, idle_period: float = 0.005,
-                 host_spacing: float = 0.005):
+                 host_spacing: float = 0.005, stall_stop: float | None = None, on_step=None):
         self.clock = clock or WallClock()
         self.faults = faults or Faults()
         self._own_dir = link_dir is None
@@ -213,6 +213,15 @@ class RobotinoEmulator:
         self.stall_threshold = 0.1
         self.stalls = 0                 # reads more than stall_threshold after the one before
         self.longest_stall = 0.0
+        #: a step this long after the one before (s) means the emulator was not scheduled: the wheels
+        #: run on only this long into the gap, then stand until now (:meth:`BaseFirmware.skip`), and
+        #: the frames found waiting arrive now.  None: the frames are spread over the gap
+        #: (:func:`arrival_times`) and the motors run on through it
+        self.stall_stop = stall_stop
+        self.stall_stops = 0            # stalls that stopped turning wheels
+        #: called at the end of every step, under :attr:`lock`, with the step's time (what the
+        #: firmware's state is valid for): where a world takes the wheels' speeds
+        self.on_step = on_step
 
     # -- public ------------------------------------------------------------
     @property
@@ -287,6 +296,11 @@ class RobotinoEmulator:
             return list(self.firmware.setpoint_log)
 
     @property
+    def last_step(self) -> float | None:
+        """The time of the latest step (the firmware's state is valid for it); None before the first."""
+        return self._last_read
+
+    @property
     def watchdog_trips(self) -> int:
         with self.lock:
             return self.firmware.watchdog_trips
@@ -315,7 +329,8 @@ class RobotinoEmulator:
                    "corrupted": self._base.rx.corrupted + self._base.tx.corrupted,
                    "dropped": self._base.rx.dropped + self._base.tx.dropped,
                    "connects": self._base.connects,
-                   "emulator_stalls": self.stalls, "longest_stall_s": round(self.longest_stall, 3)}
+                   "emulator_stalls": self.stalls, "longest_stall_s": round(self.longest_stall, 3),
+                   "stall_stops": self.stall_stops}
             if self._grip is not None:
                 out["gripper_connects"] = self._grip.connects
             return out
@@ -352,6 +367,12 @@ class RobotinoEmulator:
             if last is not None and now - last > self.stall_threshold:
                 self.stalls += 1
                 self.longest_stall = max(self.longest_stall, now - last)
+            stalled = self.stall_stop is not None and last is not None and now - last > self.stall_stop
+            if stalled:
+                self.firmware.advance(last + self.stall_stop)
+                if any(m.ss for m in self.firmware.motors[:3]):
+                    self.stall_stops += 1
+                self.firmware.skip(now)
             for fd, ev in events:
                 ep = fds[fd]
                 if ev & select.POLLHUP and not ev & select.POLLIN:
@@ -361,7 +382,7 @@ class RobotinoEmulator:
                 if data:
                     ep.bytes_in += len(data)
                     data = ep.rx.apply(data)
-                    if ep is self._base:
+                    if ep is self._base and not stalled:
                         for when, chunk in arrival_times(data, last, now, self.host_spacing):
                             self._deliver(ep, chunk, when)
                     else:
@@ -375,6 +396,8 @@ class RobotinoEmulator:
                 self._grip.send(self.gripper.advance(now), now)
             for ep in self._endpoints():
                 ep.flush(now)
+            if self.on_step is not None:
+                self.on_step(now)
 
     def _deliver(self, ep: _Endpoint, data: bytes, now: float) -> None:
         if ep is self._base:

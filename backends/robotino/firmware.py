@@ -206,6 +206,23 @@ class BaseFirmware:
         for m in self.motors:
             m.stop()
 
+    def skip(self, now: float) -> None:
+        """The time up to ``now`` passes with the motors stopped and no loop run:
+        what an emulator that was not scheduled makes of a microcontroller (the
+        wheels stand, the encoders do not move, the watchdog's count goes on
+        from where it was: a host that is really silent still trips it)."""
+        self.stop_all()
+        for m in self.motors:
+            m.measured = 0
+        self.twist = (0.0, 0.0, 0.0)
+        target = int(now * 1000)
+        if target <= self.t_ms:
+            return
+        self.t_ms = target
+        while self._next_charger_info <= self.t_ms:
+            self._next_charger_info += self._charger_period_ms
+            self._charger_info_due.update(range(self.num_chargers))
+
     # -- receiving ----------------------------------------------------------
     def receive(self, data: bytes, now: float | None = None) -> None:
         """Bytes from the host (escaped, as on the wire)."""

@@ -67,7 +67,8 @@ class WorldRig(CoupledRig):
         self.rig.stop()
 
     def stats(self) -> dict:
-        return {**device_stats(self.rig), "scans_computed": self.scans, "frames_rendered": self.frames}
+        return {**device_stats(self.rig), "scans_computed": self.scans, "frames_rendered": self.frames,
+                "silent_stops": self.silent_stops}
 
     # -- what the device threads read ---------------------------------------------------
     def _laser_source(self, t: float) -> np.ndarray:
@@ -88,16 +89,20 @@ class WorldRig(CoupledRig):
         return rig_config(self.rig, **faults)
 
     # -- the world's side -----------------------------------------------------------------
-    def _exchange(self, world_time: float) -> list[float]:
+    def wall(self) -> float:
+        return self.clock.now()
+
+    def _exchange(self, world_time: float) -> tuple[list[float], float | None]:
         emu = self.rig.base
         with emu.lock:
             fw = emu.firmware
             # the wheels as the emulator's own thread last advanced them (advancing the firmware
             # here, before that thread has read what the host sent, would trip its watchdog)
             rpm = [m.ss for m in fw.motors[:3]]
+            stepped = emu.last_step
             fw.distance[8] = self.holding_volts()
             self._sync_gripper(world_time)
-        return rpm
+        return rpm, stepped
 
     def _put_ranges(self, ranges_mm: np.ndarray) -> None:
         with self._lock:

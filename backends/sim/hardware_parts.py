@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import logging
 import math
+import time
 
 import numpy as np
 
@@ -23,6 +24,13 @@ log = logging.getLogger(__name__)
 GRIPPER_ORIGIN = (0.0, -0.10, 0.0)
 HOLDING_SENSOR = "distance:8>1.5"
 HOLDING_VOLTS, EMPTY_VOLTS = 2.5, 0.3
+#: the base emulator not scheduled for this long (s): its wheels stop, in the emulated firmware (which
+#: then stands until the emulator runs again) and in the world at the same moment.  A real base's
+#: microcontroller never stalls; an emulator on a loaded machine does, and the world must not drive the
+#: robot on at the last wheel speeds meanwhile (the host's odometry, integrated from the speeds it
+#: polls, skips gaps of more than a second: the robot ended LOCALISATION_LOST), nor stop the wheels
+#: while the firmware reports them turning (the host would count motion the world did not make)
+SILENT_STOP = 0.3
 
 
 class WorldGripperFirmware(GripperFirmware):
@@ -114,7 +122,8 @@ def build_devices(spec: dict, *, clock: Clock, laser_source, frame_source, link_
     from backends.robotino.emulator import RobotinoEmulator
     from backends.robotino.rig import EmulatedRobot
     fw = WorldGripperFirmware()
-    emu = RobotinoEmulator(gripper=True, link_dir=link_dir, clock=clock, gripper_firmware=fw)
+    emu = RobotinoEmulator(gripper=True, link_dir=link_dir, clock=clock, gripper_firmware=fw,
+                           stall_stop=SILENT_STOP)
     rig = EmulatedRobot(**spec, emulator=emu, link_dir=emu.link_dir, clock=clock, laser_source=laser_source,
                         frame_source=frame_source)
     return rig, fw
@@ -141,7 +150,8 @@ def device_stats(rig) -> dict:
     return {"base_frames": s["frames"], "watchdog_trips": s["watchdog_trips"],
             "watchdog_motion_stops": s["watchdog_motion_stops"], "scans_sent": laser.scans_sent if laser else 0,
             "frames_sent": rig.camera_server.frames_sent if rig.camera_server else 0,
-            "emulator_stalls": s["emulator_stalls"], "longest_stall_s": s["longest_stall_s"]}
+            "emulator_stalls": s["emulator_stalls"], "longest_stall_s": s["longest_stall_s"],
+            "stall_stops": s["stall_stops"]}
 
 
 class CoupledRig:
@@ -163,10 +173,25 @@ class CoupledRig:
         self.camera_period = 1.0 / camera_fps if camera_fps > 0 else math.inf
         self._next_scan = self._next_frame = -math.inf
         self.scans = self.frames = 0
+        self.silent_stops = 0           # times the world stopped turning wheels for a stalled base emulator
+        self._silent = False
+
+    def wall(self) -> float:
+        """The devices' clock (the machine's monotonic clock)."""
+        return time.monotonic()
 
     def sync(self, world_time: float) -> None:
         r = self.robot
-        rpm = self._exchange(world_time)
+        rpm, stepped = self._exchange(world_time)
+        if stepped is not None and self.wall() - stepped > SILENT_STOP:
+            # the base emulator has not run for SILENT_STOP: its firmware stops the wheels at that
+            # moment when it runs again (RobotinoEmulator.stall_stop), so the world stops them now
+            if any(rpm) and not self._silent:
+                self.silent_stops += 1
+            self._silent = True
+            rpm = [0.0, 0.0, 0.0]
+        else:
+            self._silent = False
         vx, vy, w = self.kinematics.inverse(*rpm)
         r.drive(vx, vy, w, world_time)
         if world_time >= self._next_scan:
@@ -181,8 +206,9 @@ class CoupledRig:
     def holding_volts(self) -> float:
         return HOLDING_VOLTS if self.robot.holding is not None else EMPTY_VOLTS
 
-    def _exchange(self, world_time: float) -> list[float]:
-        """Hand the devices what the world has for them; the wheels' speeds (rpm)."""
+    def _exchange(self, world_time: float) -> tuple[list[float], float | None]:
+        """Hand the devices what the world has for them; the wheels' speeds (rpm) and the
+        time of the base emulator's step they are of (None: not stepped yet)."""
         raise NotImplementedError
 
     def _put_ranges(self, ranges_mm: np.ndarray) -> None:

@@ -18,13 +18,17 @@ share one block of memory (:class:`_Shared`):
   camera's last frame and its number, the holding sensor's volts, the world
   gripper's axes (in the sketch's steps), whether it is busy, and the last
   sketch command it has taken;
-* devices -> world: the three wheels' actual speeds (rpm), the gripper
+* devices -> world: the three wheels' actual speeds (rpm) and the time of
+  the base emulator's step they are of (a base emulator that has not run for
+  :data:`~.hardware_parts.SILENT_STOP` has its wheels stopped in the world,
+  as its firmware stops them at that moment when it runs again), the gripper
   sketch's moves, finger state, axis targets and command count, and how many
   clients watch the camera.
 
-A thread of the child copies between the block and the firmware objects
-every 2 ms under the firmware's lock; the world's process only reads and
-writes the block (:meth:`ProcessRig.sync`).  Commands (the configuration,
+The base emulator's thread copies between the block and the firmware objects
+at the end of each of its steps (:attr:`RobotinoEmulator.on_step`: when the
+host's frames or its own timers wake it, no polling of its own); the world's
+process only reads and writes the block (:meth:`ProcessRig.sync`).  Commands (the configuration,
 counts, a pulled cable, stop) go over a pipe.  The child exits when the
 world's process goes away.
 """
@@ -33,7 +37,6 @@ from __future__ import annotations
 import logging
 import math
 import multiprocessing as mp
-import threading
 
 import numpy as np
 
@@ -44,8 +47,10 @@ log = logging.getLogger(__name__)
 MAX_BEAMS = 2048
 # float slots of the shared block
 RANGES_SEQ, IMAGE_SEQ, HOLDING, G_BUSY, G_POS, G_ACK = 0, 1, 2, 3, 4, 7
-RPM, G_MOVES, G_OPEN, G_TARGET, G_COMMANDS, CLIENTS, IMAGE_H, IMAGE_W, BEAMS = 8, 11, 12, 13, 16, 17, 18, 19, 20
+RPM, G_MOVES, G_OPEN, G_TARGET, G_COMMANDS, CLIENTS, IMAGE_H, IMAGE_W = 8, 11, 12, 13, 16, 17, 18, 19
+STEPPED = 20           # the base emulator's step the wheels' speeds are of (time.monotonic(); nan: none yet)
 HEADER = 24
+BEAMS = HEADER         # the laser's ranges (mm) from here
 
 
 class _Shared:
@@ -57,6 +62,7 @@ class _Shared:
         self.image = ctx.RawArray("B", image_bytes)
         self.lock = ctx.Lock()
         self.floats[G_POS] = math.nan
+        self.floats[STEPPED] = math.nan
 
     def view(self) -> tuple[np.ndarray, np.ndarray]:
         return np.frombuffer(self.floats, dtype=np.float64), np.frombuffer(self.image, dtype=np.uint8)
@@ -91,6 +97,11 @@ class ProcessRig(CoupledRig):
         self._image_seq = 0
         self._final_stats: dict | None = None
 
+    @property
+    def pid(self) -> int:
+        """The devices' process."""
+        return self._proc.pid
+
     # -- commands to the child ---------------------------------------------------------------
     def _ask(self, *request, timeout: float = 10.0):
         self._conn.send(request)
@@ -113,7 +124,7 @@ class ProcessRig(CoupledRig):
 
     def stats(self) -> dict:
         s = self._final_stats if self._final_stats is not None else self._ask("stats")
-        return {**s, "scans_computed": self.scans, "frames_rendered": self.frames}
+        return {**s, "scans_computed": self.scans, "frames_rendered": self.frames, "silent_stops": self.silent_stops}
 
     def stop(self) -> None:
         if self._proc.is_alive():
@@ -128,10 +139,11 @@ class ProcessRig(CoupledRig):
         self._conn.close()
 
     # -- the world's side -----------------------------------------------------------------------
-    def _exchange(self, world_time: float) -> list[float]:
+    def _exchange(self, world_time: float) -> tuple[list[float], float | None]:
         f = self._floats
         with self._shared.lock:
             rpm = [float(v) for v in f[RPM:RPM + 3]]
+            stepped = None if math.isnan(f[STEPPED]) else float(f[STEPPED])
             moves, is_open = int(f[G_MOVES]), bool(f[G_OPEN])
             target = [float(v) for v in f[G_TARGET:G_TARGET + 3]]
             commands = f[G_COMMANDS]
@@ -141,7 +153,7 @@ class ProcessRig(CoupledRig):
             f[G_BUSY] = 1.0 if busy else 0.0
             f[G_POS:G_POS + 3] = position
             f[G_ACK] = commands
-        return rpm
+        return rpm, stepped
 
     def _put_ranges(self, ranges_mm: np.ndarray) -> None:
         n = len(ranges_mm)
@@ -181,7 +193,7 @@ class _Devices:
         if self.beams > MAX_BEAMS:
             raise ValueError(f"{self.beams} beams: at most {MAX_BEAMS} are shared")
         self._frame_sent = 0
-        self._stop = threading.Event()
+        self.rig.base.on_step = self.copy
 
     def _laser_source(self, t: float) -> np.ndarray:
         with self.shared.lock:
@@ -198,14 +210,16 @@ class _Devices:
             h, w = int(self.floats[IMAGE_H]), int(self.floats[IMAGE_W])
             return self.image[:h * w * 3].reshape(h, w, 3).copy()
 
-    def copy(self) -> None:
-        """Wheels, gripper sketch and camera clients out; holding and the world gripper in."""
+    def copy(self, now: float) -> None:
+        """Wheels (as of the base emulator's step at ``now``), gripper sketch and camera
+        clients out; holding and the world gripper in."""
         emu, fw, f = self.rig.base, self.gripper_fw, self.floats
         cam = self.rig.camera_server
         with emu.lock:
             rpm = [m.ss for m in emu.firmware.motors[:3]]
             with self.shared.lock:
                 f[RPM:RPM + 3] = rpm
+                f[STEPPED] = now
                 f[G_MOVES], f[G_OPEN], f[G_COMMANDS] = fw.moves, 1.0 if fw.is_open else 0.0, fw.commands
                 f[G_TARGET:G_TARGET + 3] = [float(v) for v in fw.target]
                 f[CLIENTS] = cam.clients if cam is not None else 0
@@ -221,9 +235,6 @@ class _Devices:
 
     def run(self, conn) -> None:
         from .hardware_parts import device_stats, rig_config
-        stop = self._stop
-        copier = threading.Thread(target=self._copy_loop, name="world-copy", daemon=True)
-        copier.start()
         try:
             while True:
                 try:
@@ -235,7 +246,6 @@ class _Devices:
                 what, args = request[0], request[1:]
                 try:
                     if what == "stop":
-                        stop.set()
                         conn.send(device_stats(self.rig))
                         return
                     if what == "stats":
@@ -253,17 +263,7 @@ class _Devices:
                 except (ValueError, AttributeError) as exc:
                     conn.send({"error": str(exc)})
         finally:
-            stop.set()
-            copier.join(2.0)
             self.rig.stop()
-
-    def _copy_loop(self) -> None:
-        while not self._stop.wait(0.002):
-            try:
-                self.copy()
-            except Exception:               # keep the devices fed
-                log.exception("copying between the world and the devices failed")
-                self._stop.wait(0.05)
 
 
 def serve(spec: dict, shared: _Shared, conn) -> None:

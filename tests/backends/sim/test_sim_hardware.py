@@ -171,7 +171,7 @@ def test_the_base_drives_the_worlds_robot_and_the_camera_shows_the_worlds_view(r
     moved, odo = ep.moved, ep.odo
     assert 0.15 < moved.x < 0.4 and abs(moved.y) < 0.03, ep
     # the host's odometry, integrated from the wheel speeds it polls, follows the world's motion
-    assert odo.x == pytest.approx(moved.x, abs=0.08), ep
+    assert odo.x == pytest.approx(moved.x, abs=0.08), (ep, rig.stats())
     assert ep.stops == 0, ep
     frame = fresh(running, backend.camera_image)
     assert frame.image.shape == (240, 320, 3) and abs(frame.stamp - time.monotonic()) < 1.5

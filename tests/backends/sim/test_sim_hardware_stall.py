@@ -1,0 +1,78 @@
+"""A robot's devices' process that stops running (SIGSTOP here; a loaded
+machine does the same for seconds): the world, the emulated base firmware
+and the host's odometry stay one story, and the host's base link goes on
+when the process runs again."""
+import os
+import signal
+import time
+
+import pytest
+
+from backends.sim.hardware import WorldHardware
+from backends.sim.hardware_parts import SILENT_STOP
+from rll_bt.backend import Pose2D, SensorLost, open_backend
+from tests.backends.sim.test_sim_hardware import Running, fresh
+
+
+def drive_for(running, backend, seconds, vx=0.2):
+    """Command ``vx`` for ``seconds`` (a lost sensor stops the robot: the command is then left)."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        try:
+            backend.drive(vx, 0.0, 0.0)
+        except SensorLost:
+            pass
+        running.run(0.05)
+
+
+def test_a_stalled_devices_process_stops_the_wheels_in_the_world_and_the_firmware_alike(make_world):
+    world = make_world("rcll2016", seed=3)
+    world.add_robot("CYAN", 1, pose=Pose2D(3.0, 2.0, 0.3), laser_noise=0.0)
+    hw = WorldHardware(world, laser="urg", camera_fps=1.0, devices="process")
+    rig = hw.add(("CYAN", 1))
+    running = Running(world, hw)
+    backend = open_backend("robotino", robot_config=rig.config())
+    robot = world.robots[("CYAN", 1)]
+    try:
+        fresh(running, lambda: backend.drive(0.0, 0.0, 0.0))
+        with running.lock:
+            start, odo0 = robot.pose, backend.odometry().pose
+        drive_for(running, backend, 1.0)
+        assert robot.pose.relative_to(start).x > 0.05                   # it drives
+        reopens0 = backend.base.stats().reopens + backend.base.stats().link_losses
+        os.kill(rig.pid, signal.SIGSTOP)
+        try:
+            drive_for(running, backend, SILENT_STOP + 0.4)              # the host keeps commanding
+            with running.lock:
+                stalled = robot.pose
+            drive_for(running, backend, 2.2)                            # past the host's no-data timeout (2 s)
+            with running.lock:
+                during = robot.pose.relative_to(stalled)
+        finally:
+            os.kill(rig.pid, signal.SIGCONT)
+        # the world stopped the wheels when the base emulator fell silent, not seconds later
+        assert abs(during.x) < 0.01 and abs(during.y) < 0.01, during
+        backend.stop()
+        running.run(1.0)
+        fresh(running, lambda: backend.drive(0.0, 0.0, 0.0))
+        running.run(0.5)
+        with running.lock:
+            moved, odo = robot.pose.relative_to(start), backend.odometry().pose.relative_to(odo0)
+        # the firmware stopped its motors at the same moment, so the odometry the host integrated from
+        # the speeds it polled counts no motion the world did not make, and misses little (the wheels
+        # ran on for SILENT_STOP after the last poll the host got an answer to)
+        assert odo.x <= moved.x + 0.02, (odo, moved)
+        assert odo.x == pytest.approx(moved.x, abs=0.2 * SILENT_STOP + 0.03), (odo, moved)
+        stats = rig.stats()
+        assert stats["silent_stops"] >= 1 and stats["stall_stops"] >= 1, stats
+        # the host's base link lost the silent device (a write timeout or no data) and reopened it
+        assert backend.base.stats().reopens + backend.base.stats().link_losses > reopens0
+        # ... and goes on: the robot drives again
+        with running.lock:
+            before = robot.pose
+        drive_for(running, backend, 1.0)
+        assert robot.pose.relative_to(before).x > 0.05
+    finally:
+        backend.close()
+        running.stop()
+        hw.stop()
