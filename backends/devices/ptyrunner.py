@@ -1,10 +1,14 @@
 """A device model behind a pseudo-terminal, as a USB serial device looks to
 its host.
 
-The model has ``receive(data, now)``, ``take_output() -> bytes`` and
-``advance(now)``; :class:`PtyRunner` publishes the pty's slave under the
-symlink ``link`` (what the host opens, like ``/dev/ttyACM1``), feeds the
-model what the host writes and writes back what it produces, in a thread.
+The model has ``receive(data, now)``, ``take_output() -> bytes``,
+``advance(now)`` and optionally ``next_due() -> float | None`` (when it next
+has something to send on its own); :class:`PtyRunner` publishes the pty's
+slave under the symlink ``link`` (what the host opens, like
+``/dev/ttyACM1``), feeds the model what the host writes and writes back what
+it produces, in a thread that sleeps until the host writes or the model is
+due (at most ``idle`` seconds: the host's opening and a pulled cable's
+return are looked at that often).
 Faults: :meth:`unplug` removes the device for a while (the link and the pty
 go away, as when the cable is pulled; a fresh pty comes back behind the same
 link), :meth:`set_silent` keeps the port but sends nothing (a hung device).
@@ -24,12 +28,13 @@ log = logging.getLogger(__name__)
 
 class PtyRunner:
     def __init__(self, model, link: str, *, clock: Clock | None = None, period: float = 0.002,
-                 on_connect=None):
+                 on_connect=None, idle: float = 0.05):
         from backends.robotino.emulator import PtyDevice
         self.model = model
         self.clock = clock or WallClock()
         self.pty = PtyDevice(link)
-        self.period = period
+        self.period = period            # the shortest sleep (a model due now is served this late at most)
+        self.idle = idle                # the longest sleep
         self.on_connect = on_connect
         self.lock = threading.RLock()
         self.silent = False
@@ -76,6 +81,14 @@ class PtyRunner:
         with self.lock:
             self.silent = silent
 
+    def _wait(self, now: float) -> float:
+        """How long to wait for the host: until the model is due, at least ``period``, at most ``idle``."""
+        due = getattr(self.model, "next_due", None)
+        when = due() if due is not None else now + self.period
+        if when is None:
+            return self.idle
+        return min(self.idle, max(self.period, when - now))
+
     def _run(self) -> None:
         while not self._stop.is_set():
             try:
@@ -97,7 +110,8 @@ class PtyRunner:
                     self.pty.open()
                     log.info("%s: plugged in again", self.link)
             if not self.pty.is_open:
-                self._stop.wait(self.period)
+                wait = self.idle if until is None else min(self.idle, max(until - now, self.period))
+                self._stop.wait(wait)
                 return
             was = self.pty.connected
             self.pty.connected = self.pty.poll_connected()
@@ -107,9 +121,9 @@ class PtyRunner:
                     self.on_connect(now)
         fd = self.pty.master
         if not self.pty.connected:
-            self._stop.wait(self.period)
+            self._stop.wait(self.idle)
             return
-        ready, _, _ = select.select([fd], [], [], self.period)
+        ready, _, _ = select.select([fd], [], [], self._wait(now))
         now = self.clock.now()
         with self.lock:
             if not self.pty.is_open:

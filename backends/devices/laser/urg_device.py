@@ -110,6 +110,11 @@ class UrgDevice:
         out, self._out = bytes(self._out), bytearray()
         return out
 
+    def next_due(self) -> float | None:
+        """When the stream's next scan is due (None: no stream runs)."""
+        s = self.stream
+        return None if s is None else s["next"] * self.model.scan_period + self.boot
+
     def advance(self, now: float) -> None:
         """Send the stream's scans that are due by ``now``."""
         s = self.stream
