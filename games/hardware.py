@@ -25,6 +25,10 @@ from .processes import ProcessGame
 
 class HardwareGame(ProcessGame):
     def __init__(self, options, **kw):
+        # each agent brings up four devices (the base's handshake, the gripper, the laser's stream, the
+        # camera's first frame; 30 s each at most): three agents starting at once on a loaded machine
+        # took more than the process game's 120 s to be ACTIVE (load 16: none was, after 271 s of wall time)
+        kw.setdefault("connect_timeout", 60.0 + 60.0 * options.robots)
         self.hw = None
         self.hardware_stats: dict = {}
         self._configs: dict[int, Path] = {}
