@@ -14,15 +14,47 @@ from rll_bt.backend import Pose2D, SensorLost, open_backend
 from tests.backends.sim.test_sim_hardware import Running, fresh
 
 
-def drive_for(running, backend, seconds, vx=0.2):
-    """Command ``vx`` for ``seconds`` (a lost sensor stops the robot: the command is then left)."""
+def drive_for(running, backend, seconds, vx=0.2, until=None):
+    """Command ``vx`` for ``seconds`` or until ``until()`` (a lost sensor stops the robot: the command is
+    then left); whether ``until()`` held."""
     end = time.monotonic() + seconds
     while time.monotonic() < end:
+        if until is not None and until():
+            return True
         try:
             backend.drive(vx, 0.0, 0.0)
         except SensorLost:
             pass
         running.run(0.05)
+    return until is None or until()
+
+
+def stalled_episode(running, rig, backend, robot):
+    """Drive, SIGSTOP the devices' process for 2.9 s while the host keeps commanding, SIGCONT, stop.
+    The world's motion during the silence and over the episode, the host's odometry over it, and the
+    longest time the world was not stepped (a loaded machine: the world drops what it cannot catch up)."""
+    fresh(running, lambda: backend.drive(0.0, 0.0, 0.0))
+    with running.lock:
+        start, odo0 = robot.pose, backend.odometry().pose
+    assert drive_for(running, backend, 20.0, until=lambda: robot.pose.relative_to(start).x > 0.1)
+    running.longest_gap = 0.0
+    os.kill(rig.pid, signal.SIGSTOP)
+    try:
+        drive_for(running, backend, SILENT_STOP + 0.4)                  # the host keeps commanding
+        with running.lock:
+            stalled = robot.pose
+        drive_for(running, backend, 2.2)                                # past the host's no-data timeout (2 s)
+        with running.lock:
+            during = robot.pose.relative_to(stalled)
+    finally:
+        os.kill(rig.pid, signal.SIGCONT)
+    backend.stop()
+    running.run(1.0)
+    fresh(running, lambda: backend.drive(0.0, 0.0, 0.0))
+    running.run(0.5)
+    with running.lock:
+        moved, odo = robot.pose.relative_to(start), backend.odometry().pose.relative_to(odo0)
+    return during, moved, odo, running.longest_gap
 
 
 def test_a_stalled_devices_process_stops_the_wheels_in_the_world_and_the_firmware_alike(make_world):
@@ -34,44 +66,28 @@ def test_a_stalled_devices_process_stops_the_wheels_in_the_world_and_the_firmwar
     backend = open_backend("robotino", robot_config=rig.config())
     robot = world.robots[("CYAN", 1)]
     try:
-        fresh(running, lambda: backend.drive(0.0, 0.0, 0.0))
-        with running.lock:
-            start, odo0 = robot.pose, backend.odometry().pose
-        drive_for(running, backend, 1.0)
-        assert robot.pose.relative_to(start).x > 0.05                   # it drives
-        reopens0 = backend.base.stats().reopens + backend.base.stats().link_losses
-        os.kill(rig.pid, signal.SIGSTOP)
-        try:
-            drive_for(running, backend, SILENT_STOP + 0.4)              # the host keeps commanding
-            with running.lock:
-                stalled = robot.pose
-            drive_for(running, backend, 2.2)                            # past the host's no-data timeout (2 s)
-            with running.lock:
-                during = robot.pose.relative_to(stalled)
-        finally:
-            os.kill(rig.pid, signal.SIGCONT)
+        losses0 = backend.base.stats().link_losses
+        # an episode in which this process's world went 250 ms without a step (a loaded machine) tests
+        # the machine: driven again, at most three times (the last one is asserted whatever it was)
+        for _ in range(3):
+            during, moved, odo, starved = stalled_episode(running, rig, backend, robot)
+            if starved < 0.25:
+                break
         # the world stopped the wheels when the base emulator fell silent, not seconds later
         assert abs(during.x) < 0.01 and abs(during.y) < 0.01, during
-        backend.stop()
-        running.run(1.0)
-        fresh(running, lambda: backend.drive(0.0, 0.0, 0.0))
-        running.run(0.5)
-        with running.lock:
-            moved, odo = robot.pose.relative_to(start), backend.odometry().pose.relative_to(odo0)
         # the firmware stopped its motors at the same moment, so the odometry the host integrated from
         # the speeds it polled counts no motion the world did not make, and misses little (the wheels
         # ran on for SILENT_STOP after the last poll the host got an answer to)
-        assert odo.x <= moved.x + 0.02, (odo, moved)
-        assert odo.x == pytest.approx(moved.x, abs=0.2 * SILENT_STOP + 0.03), (odo, moved)
+        assert odo.x <= moved.x + 0.02, (odo, moved, starved)
+        assert odo.x == pytest.approx(moved.x, abs=0.2 * SILENT_STOP + 0.03), (odo, moved, starved)
         stats = rig.stats()
         assert stats["silent_stops"] >= 1 and stats["stall_stops"] >= 1, stats
-        # the host's base link lost the silent device (a write timeout or no data) and reopened it
-        assert backend.base.stats().reopens + backend.base.stats().link_losses > reopens0
+        # the host's base link lost the silent device (a write timeout or no data) and reopened it ...
+        assert backend.base.stats().link_losses > losses0 and backend.base.stats().reopens > 0
         # ... and goes on: the robot drives again
         with running.lock:
             before = robot.pose
-        drive_for(running, backend, 1.0)
-        assert robot.pose.relative_to(before).x > 0.05
+        assert drive_for(running, backend, 20.0, until=lambda: robot.pose.relative_to(before).x > 0.05)
     finally:
         backend.close()
         running.stop()
