@@ -152,6 +152,35 @@ def fit_face(points: np.ndarray, half_width: float = 0.25, max_ahead: float = 1.
     return a * math.cos(yaw), yaw, int(keep.sum())
 
 
+def face_centre(points: np.ndarray, width: float, half_span: float = 0.6, inlier: float = 0.02,
+                gap: float = 0.04, slack: float = 0.05) -> float | None:
+    """Sideways position (robot frame, m) of the centre of the station face straight
+    ahead, from where its laser points end on either side: the run of points on the
+    face's line through the one nearest straight ahead, unbroken by gaps over
+    ``gap``; None unless the run is ``width`` long within ``slack`` (both edges
+    seen, nothing beside the station in line with its face)."""
+    fit = fit_face(points)
+    if fit is None:
+        return None
+    dist, yaw, _ = fit
+    b = math.tan(yaw)
+    a = dist / math.cos(yaw)
+    near = points[(np.abs(points[:, 1]) < half_span) & (points[:, 0] > 0.0)]
+    on = near[np.abs(near[:, 0] - (a + b * near[:, 1])) < inlier]
+    if len(on) < 8:
+        return None
+    ys = np.sort(on[:, 1])
+    breaks = np.nonzero(np.diff(ys) > gap)[0]
+    starts = np.concatenate([[0], breaks + 1])
+    ends = np.concatenate([breaks, [len(ys) - 1]])
+    mid = int(np.argmin(np.abs(ys)))
+    k = int(np.nonzero((starts <= mid) & (ends >= mid))[0][0])
+    lo, hi = float(ys[starts[k]]), float(ys[ends[k]])
+    if abs((hi - lo) / math.cos(yaw) - width) > slack:
+        return None
+    return 0.5 * (lo + hi)
+
+
 class Dock(Activity):
     name = "dock"
 

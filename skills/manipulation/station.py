@@ -22,12 +22,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from rll_bt.backend import CapabilityError, Pose2D
+
 from ..activity import Sequence
 from ..errors import SkillError, SkillFailure
 from ..navigation import Navigate, StationSideGoal
 from ..navigation.goals import approach_pose, feasible_distance, target_lateral
 from ..navigation.motions import MoveRelative
-from .align import AlignToTag, Dock
+from ..navigation.safety import scan_points
+from .align import AlignToTag, Dock, face_centre
 from .gripper import GripperSequence
 from .places import Place, check_place, gripper_height, gripper_target, lateral_offset
 
@@ -84,11 +87,13 @@ class ApproachStation(Sequence):
             use = tags_available(ctx) if self.use_tag is None else self.use_tag
             if use and self.use_tag is None and self.coarse < m.tag_min_distance:
                 use = False           # too close for the camera to see the tag whole
+            self.used_tag = use
             if use:
                 return AlignToTag(ctx, place, self.coarse, at_spot=not self.docked_shift)
-            # without tags: the navigation pose from the machine map is the alignment
+            # without tags: the navigation pose from the machine map is the alignment, its
+            # lateral error (up to the navigation's tolerance) taken out on the localiser's pose
             shift = 0.0 if self.docked_shift else -lateral_offset(place, ctx.profile)
-            return MoveRelative(ctx, 0.0, shift)
+            return MoveRelative(ctx, 0.0, shift + self._lateral_error(ctx, place))
 
         def to_spot():
             if not self.docked_shift:
@@ -98,9 +103,56 @@ class ApproachStation(Sequence):
                                    f"no room for the robot in front of {place.describe()}")
             return MoveRelative(ctx, 0.0, -lateral_offset(place, ctx.profile), speed=0.1)
 
+        def centre():
+            # without the tag: the laser sees the whole face from this close, its two
+            # edges put the robot on the belt line (the localiser's pose is 1-3 cm off
+            # beside a wall, and a slot takes a workpiece within 4 cm of its centre)
+            if self.used_tag:
+                return None
+            move = self._face_offset(ctx, place)
+            return MoveRelative(ctx, 0.0, move, speed=0.1) if move else None
+
         self.docked_shift = False
-        super().__init__(ctx, [navigate, align, lambda: Dock(ctx, m.final_distance), to_spot], timeout,
+        self.used_tag = False
+        super().__init__(ctx, [navigate, align, lambda: Dock(ctx, m.final_distance), centre, to_spot], timeout,
                          name=f"approach {place.describe()}")
+
+    def _face_offset(self, ctx, place: Place) -> float:
+        """Sideways move (m) that brings the station face's centre, as the laser
+        sees it, where it appears from the belt line's docked pose; 0 when the
+        laser does not show both edges or the move would be over ``MAX_LATERAL_FIX``."""
+        machine = ctx.machines.get(place.machine)
+        try:
+            scan = ctx.backend.laser_scan()
+        except CapabilityError:
+            return 0.0
+        if machine is None or scan is None:
+            return 0.0
+        mps = ctx.profile.mps
+        seen = face_centre(scan_points(scan, max_range=1.5), mps.width)
+        if seen is None:
+            return 0.0
+        goal = approach_pose(machine, place.side, ctx.settings.manipulation.final_distance,
+                             target_lateral("conveyor", mps), mps)
+        face = machine.compose(Pose2D((1.0 if place.side == "INPUT" else -1.0) * mps.depth / 2.0, 0.0, 0.0))
+        move = seen - face.relative_to(goal).y
+        return move if 0.003 <= abs(move) <= self.MAX_LATERAL_FIX else 0.0
+
+    #: m; a larger lateral error than this after the navigation is not the navigation's tolerance
+    #: (a pose the localiser just corrected): no correction then, the laser's dock goes on as before
+    MAX_LATERAL_FIX = 0.08
+
+    def _lateral_error(self, ctx, place: Place) -> float:
+        """Sideways (robot frame, m) from the robot's believed pose to the belt line
+        in front of the station: the navigation stops within its position
+        tolerance (3 cm), and without the tag nothing else lines the robot up
+        sideways; a slot takes a workpiece only within 4 cm of its centre."""
+        here = ctx.pose()
+        if here is None or ctx.machines.get(place.machine) is None:
+            return 0.0
+        goal, _ = StationSideGoal(place.machine, place.side, self.coarse, "conveyor").resolve(ctx)
+        err = goal.relative_to(here).y
+        return err if abs(err) <= self.MAX_LATERAL_FIX else 0.0
 
 
 def _handling(ctx, place: Place, steps_fn, approach: bool, use_tag, timeout, name):

@@ -132,3 +132,17 @@ def test_exploring_a_zone_reports_the_station_its_pose_and_light():
     assert math.hypot(obs.pose.x - truth.x, obs.pose.y - truth.y) < 0.1
     assert obs.light_state == 5 and obs.zone == world.stations[name].zone
     assert world.collision_count == 0
+
+
+def test_a_put_without_the_tag_lines_up_on_the_edges_of_the_face():
+    """Seed 6: C-DS stands at 45 degrees by the wall, the robot does not fit at the
+    tag's distance, so no tag lines it up; beside the wall the localiser is 2 cm
+    off and two of three robots let the workpiece fall beside the belt (the game
+    delivered nothing). The laser's view of the whole face puts it on the belt."""
+    world, bot, ctx = make(seed=6, number=1, localisation="cheap")
+    world.spawn_workpiece("C-BS", "output", "BASE_BLACK", cap="CAP_GREY")
+    assert run(world, GrabFrom(ctx, Place("C-BS", "OUTPUT"))) is Status.SUCCESS
+    put = PutOnto(ctx, place_for("C-DS", "INPUT"))
+    assert run(world, put) is Status.SUCCESS, put.message
+    assert world.workpiece_at("C-DS", "input") is not None
+    assert world.collision_count == 0
