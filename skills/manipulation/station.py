@@ -119,7 +119,8 @@ class ApproachStation(Sequence):
 
     def _face_offset(self, ctx, place: Place) -> float:
         """Sideways move (m) that brings the station face's centre, as the laser
-        sees it, where it appears from the belt line's docked pose; 0 when the
+        sees it, where it appears from the docked pose in front of the place's
+        spot (of the belt line when the robot shifts to the spot later); 0 when the
         laser does not show both edges or the move would be over ``MAX_LATERAL_FIX``."""
         machine = ctx.machines.get(place.machine)
         try:
@@ -132,8 +133,9 @@ class ApproachStation(Sequence):
         seen = face_centre(scan_points(scan, max_range=1.5), mps.width)
         if seen is None:
             return 0.0
+        spot = "conveyor" if self.docked_shift else place.spot     # (a docked shift follows)
         goal = approach_pose(machine, place.side, ctx.settings.manipulation.final_distance,
-                             target_lateral("conveyor", mps), mps)
+                             target_lateral(spot, mps), mps)
         face = machine.compose(Pose2D((1.0 if place.side == "INPUT" else -1.0) * mps.depth / 2.0, 0.0, 0.0))
         move = seen - face.relative_to(goal).y
         return move if 0.003 <= abs(move) <= self.MAX_LATERAL_FIX else 0.0
