@@ -115,6 +115,8 @@ class PtyRunner:
                 return
             was = self.pty.connected
             self.pty.connected = self.pty.poll_connected()
+            if was and not self.pty.connected:
+                self.pty.hung_up()
             if self.pty.connected and not was:
                 self.connects += 1
                 if self.on_connect is not None:
@@ -123,11 +125,12 @@ class PtyRunner:
         if not self.pty.connected:
             self._stop.wait(self.idle)
             return
-        ready, _, _ = select.select([fd], [], [], self._wait(now))
+        ready, _, _ = select.select([fd], [fd] if self.pty.pending else [], [], self._wait(now))
         now = self.clock.now()
         with self.lock:
             if not self.pty.is_open:
                 return
+            self.pty.flush()
             if ready:
                 data = self.pty.read()
                 if data:

@@ -43,14 +43,25 @@ log = logging.getLogger(__name__)
 
 
 class PtyDevice:
-    """A pty pair whose slave is published as the symlink ``link``."""
+    """A pty pair whose slave is published as the symlink ``link``.
 
-    def __init__(self, link: str):
+    What the device sends goes out whole: a message the pty cannot take now
+    (the host has not read for a while and the line's buffer is full) waits
+    in ``pending`` and goes out as the host reads (:meth:`flush`), as a USB
+    device's data waits while the host does not poll; a new message that
+    would take the waiting bytes past ``backlog`` is dropped whole (a device
+    that cannot send skips it), never cut: a message cut mid-way reached a
+    URG host as a corrupt data line, the laser was lost and the robot stopped.
+    """
+
+    def __init__(self, link: str, backlog: int = 1 << 16):
         self.link = link
         self.master: int | None = None
         self.slave_name = ""
         self.connected = False
-        self.tx_overflow = 0
+        self.tx_overflow = 0            # bytes of whole messages dropped
+        self.backlog = backlog
+        self.pending = bytearray()
 
     @property
     def is_open(self) -> bool:
@@ -80,6 +91,7 @@ class PtyDevice:
             os.close(self.master)
         self.master = None
         self.connected = False
+        self.pending.clear()
 
     def poll_connected(self) -> bool:
         """Whether a host holds the slave open (no POLLHUP on the master)."""
@@ -97,22 +109,37 @@ class PtyDevice:
             return b""
         except OSError as exc:
             if exc.errno == errno.EIO:      # the host closed its side
-                self.connected = False
+                self.hung_up()
                 return b""
             raise
 
     def write(self, data: bytes) -> None:
-        view = memoryview(data)
-        while view:
+        """Send one or more whole messages (see the class doc)."""
+        if not data:
+            return
+        if self.pending and len(self.pending) + len(data) > self.backlog:
+            self.tx_overflow += len(data)
+            return
+        self.pending += data
+        self.flush()
+
+    def hung_up(self) -> None:
+        """The host closed its side: what waited for it is dropped."""
+        self.connected = False
+        self.pending.clear()
+
+    def flush(self) -> None:
+        """Send what waits, as far as the pty takes it now."""
+        while self.pending and self.master is not None:
             try:
-                n = os.write(self.master, view)
+                n = os.write(self.master, self.pending)
             except BlockingIOError:
-                self.tx_overflow += len(view)
                 return
             except OSError:
                 self.connected = False
+                self.pending.clear()
                 return
-            view = view[n:]
+            del self.pending[:n]
 
 
 class _Endpoint:
@@ -146,6 +173,7 @@ class _Endpoint:
             if self.pty.connected:
                 self.pty.write(data)
                 self.bytes_out += len(data)
+        self.pty.flush()
 
     def next_due(self) -> float | None:
         return self.queue[0][0] if self.queue else None
@@ -355,7 +383,7 @@ class RobotinoEmulator:
         fds = {}
         for ep in self._endpoints():
             if ep.pty.is_open and ep.pty.connected:
-                poller.register(ep.pty.master, select.POLLIN)
+                poller.register(ep.pty.master, select.POLLIN | (select.POLLOUT if ep.pty.pending else 0))
                 fds[ep.pty.master] = ep
         due = [d for d in (ep.next_due() for ep in self._endpoints()) if d is not None]
         if due:
@@ -376,7 +404,7 @@ class RobotinoEmulator:
             for fd, ev in events:
                 ep = fds[fd]
                 if ev & select.POLLHUP and not ev & select.POLLIN:
-                    ep.pty.connected = False
+                    ep.pty.hung_up()
                     continue
                 data = ep.pty.read()
                 if data:

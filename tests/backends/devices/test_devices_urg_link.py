@@ -7,7 +7,7 @@ import time
 import numpy as np
 import pytest
 
-from backends.devices.laser import LaserMount
+from backends.devices.laser import LaserMount, scip
 from backends.devices.laser.urg import UrgLaser
 from backends.devices.laser.urg_device import URG_04LX, UTM_30LX, UrgDevice
 from backends.devices.ptyrunner import PtyRunner
@@ -118,3 +118,29 @@ def test_a_silent_sensor_is_a_lost_link(urg, wait_for):
 def test_no_device_is_a_clear_failure(tmp_path):
     with pytest.raises(Exception, match="no scan within"):
         UrgLaser(str(tmp_path / "nothing")).start(wait=0.5)
+
+
+def test_a_host_that_does_not_read_for_a_while_gets_whole_scans(urg):
+    """The host stops reading a running stream for 2 s (an agent busy elsewhere; the pty's buffer holds
+    about 1 s of the URG-04LX's scans): the sensor's messages wait, or are dropped whole, never cut, so
+    every block the host reads afterwards decodes (a cut scan reached the host as a corrupt data line,
+    the laser was lost and the robot stopped)."""
+    import serial
+    dev, runner = urg(URG_04LX)
+    m = dev.model
+    port = serial.Serial(runner.link, 115200, timeout=0)
+    try:
+        port.write(b"SCIP2.0\n" + scip.scan_command("MD", m.amin, m.amax, 1, 0, 0))
+        time.sleep(2.0)                                   # not read
+        reader, blocks = scip.BlockReader(), []
+        end = time.monotonic() + 1.0
+        while time.monotonic() < end:
+            blocks += reader.feed(port.read(65536))
+            time.sleep(0.01)
+    finally:
+        port.close()
+    scans = [b for b in blocks if b.command == "MD" and b.status == "99"]
+    assert len(scans) >= 15                               # what waited, and the stream going on
+    stamps = [b.scan(3)[0] for b in scans]                # every one decodes (checksums, length)
+    assert all(b > a for a, b in zip(stamps, stamps[1:]))
+    assert all(len(b.scan(3)[1]) == m.amax - m.amin + 1 for b in scans)
