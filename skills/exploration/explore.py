@@ -20,7 +20,12 @@ views do not agree yet, :mod:`.light_views`) is read again before the robot
 goes on: after a moment (``reread_wait`` seconds facing the station, when
 the view is not even confident), then from a second view ``side_offset``
 metres sideways of where the robot stands, facing the station (at most
-``max_sideways`` of them per station).  The zone is explored when the activity succeeds:
+``max_sideways`` of them per station).  When the tags' source reads towers
+view by view (``light_views``: the camera's perception), a light missing
+or unsure is read from where its tower shows whole
+(:func:`~.light_views.light_viewpoints`: off the output face), a second
+view from another such place, rather than from in front of a face at
+1.2 m or sideways (where the station hides the lowest lamp).  The zone is explored when the activity succeeds:
 ``found`` lists the stations seen in it (possibly none).  It fails with
 NAVIGATION_FAILED only when no viewpoint could be reached.
 """
@@ -37,7 +42,13 @@ from ..errors import SkillError, SkillFailure
 from ..navigation import Navigate, PoseGoal, approach_pose
 from ..navigation.goals import feasible_distance
 from ..navigation.motions import Turn
+from .light_views import light_viewpoints
 from .sightings import SightingCollector
+
+#: share of the lowest lamp a light viewpoint should show (nearer ones showing less are taken last)
+GOOD_LAMP_VIEW = 0.45
+#: the least a light viewpoint may show (the camera's perception reads from 0.15)
+MIN_LAMP_VIEW = 0.25
 
 
 def ring_viewpoints(ctx, zone: int, radius: float | None = None, count: int = 8) -> list[Pose2D]:
@@ -108,6 +119,8 @@ class ExploreZone(Activity):
         self.sweep = sweep
         self.min_confidence = min_confidence
         self.collector = collector or getattr(ctx, "sightings", None) or SightingCollector(ctx)
+        # towers read view by view (the camera's perception): read them from where they show whole
+        self.light_places = bool(getattr(getattr(ctx, "tags", None), "light_views", False))
         self.found: list[str] = []
         self.visited = 0
         self.child: Activity | None = None      # (set before _on_start: a start that fails still stops)
@@ -201,7 +214,8 @@ class ExploreZone(Activity):
                 return _Linger(self.ctx, est.pose, self.reread_wait)
             if self.sideways.get(m, 0) < self.max_sideways:
                 self.sideways[m] = self.sideways.get(m, 0) + 1
-                goal = self._sideways_pose(est.pose)
+                goal = self._light_pose(est.pose, away=True) if self.light_places else None
+                goal = goal or self._sideways_pose(est.pose)
                 if goal is None:
                     continue
                 self.rereads += 1
@@ -210,6 +224,28 @@ class ExploreZone(Activity):
                 return Navigate(self.ctx, PoseGoal(goal), position_tolerance=0.1, heading_tolerance=0.1,
                                 timeout=30.0, max_blocked=5.0)
         return None
+
+    def _free(self, x: float, y: float) -> bool:
+        if not bool(self.ctx.costmap.is_free(x, y)):
+            return False
+        seen = self.ctx.laser_memory.points[self.ctx.laser_memory.expiry > self.ctx.clock.now()]
+        return not (len(seen) and np.hypot(seen[:, 0] - x, seen[:, 1] - y).min() < 0.5)
+
+    def _light_pose(self, station: Pose2D, away: bool = False) -> Pose2D | None:
+        """A free place to read ``station``'s tower from (:func:`light_viewpoints`):
+        the nearest that shows :data:`GOOD_LAMP_VIEW` of its lowest lamp, else the
+        one that shows most; ``away``: at least 0.4 m from where the robot stands
+        (another view)."""
+        here = self.ctx.pose()
+        best = None
+        for seen, pose in light_viewpoints(station, self.ctx.profile):
+            far = math.hypot(pose.x - here.x, pose.y - here.y)
+            if seen < MIN_LAMP_VIEW or (away and far < 0.4) or not self._free(pose.x, pose.y):
+                continue
+            key = (seen < GOOD_LAMP_VIEW, far if seen >= GOOD_LAMP_VIEW else -seen)
+            if best is None or key < best[0]:
+                best = (key, pose)
+        return None if best is None else best[1]
 
     def _sideways_pose(self, station: Pose2D) -> Pose2D | None:
         """A free pose ``side_offset`` m sideways of the robot (across its line of
@@ -248,6 +284,14 @@ class ExploreZone(Activity):
         while missing and self.light_sides:
             side = self.light_sides.pop(0)
             est = self.collector.tracker.estimate(missing[0])
+            if self.light_places:
+                goal = self._light_pose(est.pose, away=side != "OUTPUT")
+                if goal is None:
+                    continue
+                self.phase = "go"
+                self.face_after_go = est.pose
+                return Navigate(self.ctx, PoseGoal(goal), position_tolerance=0.1, heading_tolerance=0.1,
+                                timeout=30.0, max_blocked=5.0)
             mps = self.ctx.profile.mps
             d = feasible_distance(self.ctx, est.pose, side, 1.2, mps.belt_offset_y, minimum=0.6)
             if d is None:

@@ -19,20 +19,35 @@ A view is *confident* from ``view_confidence`` and *sure* from
 
 The station's light is *settled* for the robot (:meth:`LightViews.settled`)
 by the rule the team server reports with (``teamserver.exploration.lights``):
-a sure view read it and no sure view read another state (or those that
-read it outnumber those by two).  Views below sure neither settle nor hold
-back: in rendered games (seeds 1 and 2) the views that read a tower wrong
-(a lit lamp missed, from several places, by several robots) were 0.75-0.98
-but one of about 270 views (0.993).  A light read but not settled is
+``min_sure`` (2) sure views read it and no sure view read another state (or
+those that read it outnumber those by two): one view, however sure, is not
+enough (in the rendered game of seed 1 at 112b3d3 one view read M-DS's
+green and yellow as yellow alone at 0.993).  Views below sure neither
+settle nor hold back.  A light read but not settled is
 :meth:`LightViews.unsure`: the exploration then reads it again after a
-moment and from a second view offset sideways
-(:class:`~.explore.ExploreZone`) rather than leave with it.
+moment and from a second place (:class:`~.explore.ExploreZone`) rather
+than leave with it.
+
+Where to read a tower from (:func:`light_viewpoints`): the tower stands on
+the cabinet near the output face, its lowest lamp just above the cabinet's
+top, and the camera (0.57 m) is lower than that top: the cabinet hides the
+lamp but from far enough off in front of the output face
+(:func:`skills.perception.light.region.lowest_lamp_visible`); from the input
+side the belt and the whole cabinet are in between, and from nearer than
+about 1.5 m the tower leaves the top of the image.  The camera's perception
+does not read a tower hidden in part (``skills.perception.source``): in the
+seed-1 world a cap station's green, yellow and red read from its input side
+came out as yellow and red at 0.999, its green alone as all dark at 0.99.
 """
 from __future__ import annotations
 
 import math
 from collections import Counter, deque
 from dataclasses import dataclass, field
+
+from rll_bt.backend import Pose2D
+
+from ..perception.light.region import lowest_lamp_visible
 
 #: seconds of a view a verdict looks at
 LIGHT_WINDOW = 8.0
@@ -44,8 +59,13 @@ LIGHT_SPAN = 0.35
 VIEW_DISTANCE = 0.3
 #: a view's confidence at which it votes for its state
 VIEW_CONFIDENCE = 0.9
-#: a view's confidence at which it alone settles the state
+#: a view's confidence at which it counts as sure
 SURE_CONFIDENCE = 0.99
+#: sure views that must agree before a state is settled
+MIN_SURE = 2
+#: where a tower is read from: metres from the output face to the robot's centre, degrees off its normal
+LIGHT_VIEW_DISTANCES = (1.8, 2.1, 2.4, 1.6)
+LIGHT_VIEW_ANGLES = (0.0, 15.0, -15.0, 30.0, -30.0, 45.0, -45.0, 60.0, -60.0)
 
 
 @dataclass(frozen=True)
@@ -68,7 +88,8 @@ class LightViews:
     def __init__(self, view_distance: float = VIEW_DISTANCE, view_gap: float = LIGHT_WINDOW,
                  window: float = LIGHT_WINDOW, min_votes: int = 3, share: float = LIGHT_SHARE,
                  span: float = LIGHT_SPAN, view_confidence: float = VIEW_CONFIDENCE,
-                 sure_confidence: float = SURE_CONFIDENCE):
+                 sure_confidence: float = SURE_CONFIDENCE, min_sure: int = MIN_SURE):
+        self.min_sure = min_sure
         self.view_distance, self.view_gap, self.window = view_distance, view_gap, window
         self.min_votes, self.share, self.span = min_votes, share, span
         self.view_confidence, self.sure_confidence = view_confidence, sure_confidence
@@ -136,7 +157,7 @@ class LightViews:
         for state in sorted(set(sure)):
             agree = sure.count(state)
             against = len(sure) - agree
-            if against == 0 or agree - against >= 2:
+            if agree >= self.min_sure and (against == 0 or agree - against >= 2):
                 return state
         return None
 
@@ -155,3 +176,30 @@ class LightViews:
     def views(self, machine: str) -> int:
         """How many views of ``machine``'s tower there were."""
         return len(self._views.get(machine, []))
+
+
+def light_viewpoints(station: Pose2D, profile) -> list[tuple[float, Pose2D]]:
+    """Places to read ``station``'s tower from (see the module doc): poses
+    in front of its output face (:data:`LIGHT_VIEW_DISTANCES`,
+    :data:`LIGHT_VIEW_ANGLES`), facing the tower, each with the share of the
+    lowest lamp its camera sees over the station; best first."""
+    mps, cam = profile.mps, profile.robot.camera_mount
+    c, s = math.cos(station.theta), math.sin(station.theta)
+
+    def world(x, y):
+        return station.x + c * x - s * y, station.y + s * x + c * y
+
+    tx, ty = world(mps.tower_x, mps.tower_y)
+    fx, fy = world(-mps.depth / 2.0, 0.0)
+    normal = station.theta + math.pi
+    out = []
+    for d in LIGHT_VIEW_DISTANCES:
+        for a in LIGHT_VIEW_ANGLES:
+            x, y = fx + d * math.cos(normal + math.radians(a)), fy + d * math.sin(normal + math.radians(a))
+            heading = math.atan2(ty - y, tx - x)
+            ex, ey = x + cam[0] * math.cos(heading), y + cam[0] * math.sin(heading)
+            dx, dy = ex - station.x, ey - station.y        # the camera in the machine's frame
+            seen = lowest_lamp_visible((c * dx + s * dy, -s * dx + c * dy, cam[2]), mps)
+            out.append((seen, Pose2D(x, y, heading)))
+    out.sort(key=lambda p: -p[0])
+    return out

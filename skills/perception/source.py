@@ -6,7 +6,11 @@ extrinsics) and the signal towers (:func:`.light.physical.default_reader`),
 searched where each station tag in view says its tower must be
 (:func:`.light.region.tower_region`) and, if ``full_frame_lights``, in the
 whole frame when no tag is in view.  Light
-detections found through a tag carry that tag's id.
+detections found through a tag carry that tag's id.  A tower is read through
+a tag only when the tag's pose puts all of it in the image and the camera
+sees enough of its lowest lamp over the station
+(:func:`.light.region.tower_readable`): a tower hidden in part is read as if
+its hidden lamps were dark, and sure of it.
 
 :func:`make_tag_source` picks the source by a setting, not by code in the
 skills: ``"auto"`` takes the backend's own detections when it has the
@@ -24,7 +28,7 @@ from rll_bt.backend import Backend, BackendError, Capability, CapabilityError, D
 from rll_bt.rules import Profile
 
 from ..machines import BackendTagSource as OracleSource
-from .light.region import tower_region
+from .light.region import tower_readable, tower_region
 from .tags import TagDetector
 
 log = logging.getLogger(__name__)
@@ -35,8 +39,12 @@ MODES = ("auto", "oracle", "camera")
 class CameraPerception:
     """A tag source running the detectors on the backend's camera frames."""
 
+    #: its light readings carry the reader's class probabilities, read view by view
+    #: (``skills.exploration.light_views``); the exploration reads towers from where they show whole
+    light_views = True
+
     def __init__(self, backend: Backend, profile: Profile, reader=None, camera: str = "front",
-                 full_frame_lights: bool = False, read_lights: bool = True):
+                 full_frame_lights: bool = False, read_lights: bool = True, min_lamp_visible: float = 0.15):
         self.backend = backend
         self.profile = profile
         self.camera = camera
@@ -44,6 +52,7 @@ class CameraPerception:
         self._reader = reader
         self.read_lights = read_lights
         self.full_frame_lights = full_frame_lights
+        self.min_lamp_visible = min_lamp_visible     # share of the lowest lamp seen over its station
         self._last: tuple[float, Detections] | None = None
         self._last_image = None
 
@@ -87,7 +96,8 @@ class CameraPerception:
                 if owner is None:
                     continue
                 where = tower_region(tag, owner[1], self.profile.mps, frame.intrinsics)
-                if where is None:
+                if where is None or not tower_readable(tag, owner[1], self.profile.mps, frame.intrinsics,
+                                                       frame.extrinsics.position[2], self.min_lamp_visible):
                     continue
                 region, height = where
                 for d in self.reader.read(frame.image, region=region, tower_height=height,

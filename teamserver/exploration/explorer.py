@@ -80,7 +80,7 @@ class Explorer:
                 if t.kind == M.EXPLORE_ZONE and t.state == M.ASSIGNED}
         self._redirect_blind(busy)
         for r in self.fleet.idle_robots():
-            view = ExplorationView.from_kb(self.kb, self.color, self.zones(), busy)
+            view = ExplorationView.from_kb(self.kb, self.color, self.zones(), busy, lights=self.reporter.lights)
             d = self.strategy.next_zone(view, r.pose)
             if d is None:
                 continue
@@ -111,7 +111,7 @@ class Explorer:
             zone = int(t.params["zone"])
             r = self.kb.robots.get(t.robot) if t.robot is not None else None
             view = ExplorationView.from_kb(self.kb, self.color, self.zones(),
-                                           (busy | claimed) - {zone}, cs)
+                                           (busy | claimed) - {zone}, cs, lights=self.reporter.lights)
             d = self.strategy.redirect(view, t.params.get("branch"), r.pose if r else None)
             if d is not None:
                 self.cancel(t, f"{self.profile.zone_name(d.zone)} was observed")

@@ -5,9 +5,10 @@ the tower a reading comes from (a view: what it read standing at one
 place; :mod:`skills.exploration.light_views`) and how sure the view is (the
 mean probability its readings give the state), and the knowledge base keeps
 each view's latest reading as one vote (:func:`~..knowledge.model.view_source`).
-:class:`LightGate` lets a light code be reported only when a view read it
-with ``sure_confidence`` or more and no sure view read another code (or
-the sure views that read it outnumber those by ``min_views``).  Views below
+:class:`LightGate` lets a light code be reported only when ``min_sure``
+(2) views read it with ``sure_confidence`` or more and no sure view read
+another code (or the sure views that read it outnumber those by
+``min_views``): a single sure view, wrong, cannot become a report.  Views below
 that level neither report a code nor hold one back, and the code reported
 is the one the sure views give (:meth:`LightGate.code`), whatever the
 belief fused from all views says (``teamserver.exploration.report``).
@@ -18,8 +19,10 @@ wrong (the reader missing a lit lamp, from several places, several robots)
 were 0.75-0.98 but one, at 0.993, while 81-87 % of the right views were
 0.99 or more.  Agreement of confident views is no evidence here: two views
 of one robot (seed 1) and views of two robots (seed 2) agreed on a wrong
-code.  ``min_sure`` sure views may be asked for (2 halves the risk of that
-one wrong sure view, at a price the README gives).
+code; but the wrong views came from where the station hid the tower's
+lowest lamp, which the camera's perception no longer reads
+(``skills.perception.light.region.tower_readable``).  Two sure views must
+agree (``min_sure``), so that one wrong sure view is never reported alone.
 
 In 2016 a station and its twin across the field show the same code
 (:mod:`.symmetry`), so the views of both count.  Readings without a view
@@ -35,11 +38,13 @@ from ..knowledge.kb import KnowledgeBase
 
 #: the confidence at which a view may tell a code
 SURE_CONFIDENCE = 0.99
+#: sure views (of one robot from two places, of two robots, or of the station and its twin) that must agree
+MIN_SURE = 2
 
 
 class LightGate:
     def __init__(self, kb: KnowledgeBase, sure_confidence: float = SURE_CONFIDENCE, min_views: int = 2,
-                 min_sure: int = 1):
+                 min_sure: int = MIN_SURE):
         self.kb = kb
         self.min_sure = min_sure
         self.sure_confidence = sure_confidence

@@ -5,11 +5,15 @@ where the consistent machine set (:mod:`.symmetry`) puts one of our machines,
 or where a robot reported one of ours; its confidence is how well that
 machine is identified: the lowest confidence of the properties a report
 needs (zone and light code in 2016, zone and orientation from 2017 on).
+A light code the light gate does not let out yet (read through views, not
+two sure views that agree: :class:`~.lights.LightGate`) is not known,
+however confident the belief fused from all views is: its zone stays weak,
+and the strategy sends a robot to read it again.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from rll_bt.rules import PREFIX, Profile, mirror_machine_name
 
@@ -76,8 +80,9 @@ class ExplorationView:
 
     @classmethod
     def from_kb(cls, kb, team: str, zones: list[int], busy: set[int] = frozenset(),
-                cs: ConsistentSet | None = None) -> ExplorationView:
-        """The view of ``kb``; ``cs``: its consistent set when already made."""
+                cs: ConsistentSet | None = None, lights=None) -> ExplorationView:
+        """The view of ``kb``; ``cs``: its consistent set when already made;
+        ``lights``: the light gate (see the module doc)."""
         cs = consistent_set(kb.profile, kb.machines) if cs is None else cs
         prefix = PREFIX[team] + "-"
         raw = {}
@@ -86,8 +91,12 @@ class ExplorationView:
             if name.startswith(prefix) and est is not None:
                 raw[name] = int(est.value)
         observed = set(kb.observed_machines())
+        own = cs.own(team)
+        if lights is not None:
+            own = {n: replace(g, light_confidence=0.0) if lights.views(n) and lights.code(n) is None else g
+                   for n, g in own.items()}
         return cls(kb.profile, team, list(zones), set(kb.visited), set(busy),
-                   cs.own(team), raw, cs, observed)
+                   own, raw, cs, observed)
 
     @property
     def n_mps(self) -> int:

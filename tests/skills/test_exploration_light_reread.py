@@ -3,7 +3,8 @@ after a moment, then from a second view sideways.  The simulator's tags are
 real; the tower is read by a detector whose answers the test controls: from
 the first place the robot stands looking at it after its first drive (a
 glare) it reads the wrong state, unsure, and right from anywhere else; like a
-camera in motion it reads nothing while the robot drives."""
+camera in motion it reads nothing while the robot drives.  One sure view does
+not settle a light: the robot takes a second one from another place."""
 import math
 
 import pytest
@@ -78,10 +79,10 @@ def test_an_unsure_light_is_read_again_after_a_moment_then_from_a_view_sideways(
     first = views.verdict(STATION, 1)
     assert first.state == wrong and first.confidence < VIEW_CONFIDENCE   # the glare: read, unsure
     assert (STATION, 1) in ex.lingered                  # read again after a moment, still wrong
-    assert ex.sideways.get(STATION) == 1                # then from a second view, sideways
-    assert ex.collector.light_state(STATION) == right   # which settles it
+    assert ex.sideways.get(STATION) == 2                # then from a view sideways, sure, and another
+    assert ex.collector.light_state(STATION) == right   # which settles it (two sure views)
     robot = world.robot_pose("CYAN", 1)
-    assert 0.3 < math.hypot(robot.x - look.x, robot.y - look.y) < 0.7
+    assert 0.3 < math.hypot(robot.x - look.x, robot.y - look.y) < 1.2
     told = [(o.light_state, o.light_confidence) for o in sent if o.machine == STATION and o.light_view]
     assert all(c < VIEW_CONFIDENCE for s, c in told if s == wrong)   # the wrong one only ever as unsure
     assert (right, pytest.approx(0.995, abs=1e-6)) in told

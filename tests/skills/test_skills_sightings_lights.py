@@ -1,8 +1,8 @@
 """The exploration reads a station's light view by view: a reading carries its
 confidence, a view tells its state only over a moment, and the light is settled
-only by a sure view that no sure view contradicts (or that sure views outvote
-two to one); every view's verdict goes to the team server with its confidence
-and its view number."""
+only by two sure views that no sure view contradicts (or that sure views
+outvote by two): one sure view, however sure, settles nothing alone; every
+view's verdict goes to the team server with its confidence and its view number."""
 from types import SimpleNamespace
 
 from rll_bt import rules
@@ -52,9 +52,12 @@ def test_a_sure_view_tells_its_state_only_over_a_moment():
     read(c, feed, tag, 0.2, 5)
     assert c.light_state("C-CS1") is None            # three frames within 0.2 s: not yet a moment
     read(c, feed, tag, 0.4, 5)
-    assert c.light_state("C-CS1") == 5
     last = c.sent[-1]
     assert (last.light_state, last.light_view) == (5, 1) and last.light_confidence >= 0.99
+    assert c.light_state("C-CS1") is None and c.light_unsure("C-CS1")   # one sure view: read again
+    for i in range(4):                                # from another place
+        read(c, feed, tag, 1.0 + 0.2 * i, 5, at=(0.5, 0.0))
+    assert c.light_state("C-CS1") == 5 and c.sent[-1].light_view == 2
 
 
 def test_a_reading_below_its_confidence_is_not_settled_but_read_again_from_a_second_view():
@@ -69,8 +72,11 @@ def test_a_reading_below_its_confidence_is_not_settled_but_read_again_from_a_sec
     assert c.light_state("C-CS1") is None             # one confident view is not enough
     for i in range(6):                                # a third view agrees, and is sure
         read(c, feed, tag, 4.0 + 0.2 * i, 5, p=0.995, at=(0.0, -0.45))
+    assert c.light_state("C-CS1") is None             # one sure view is not enough either
+    for i in range(6):                                # a fourth, sure too
+        read(c, feed, tag, 6.0 + 0.2 * i, 5, p=0.995, at=(0.5, -0.45))
     assert c.light_state("C-CS1") == 5 and not c.light_unsure("C-CS1")
-    assert [o.light_view for o in c.sent if o.light_view is not None][-1] == 3
+    assert [o.light_view for o in c.sent if o.light_view is not None][-1] == 4
 
 
 def test_confident_views_of_one_robot_that_agree_do_not_settle_without_a_sure_one():
@@ -80,8 +86,9 @@ def test_confident_views_of_one_robot_that_agree_do_not_settle_without_a_sure_on
         for i in range(5):
             v.add("M-RS2", 5.0 * k + 0.2 * i, 4, probs(4, p), (0.5 * k, 0.0))
     assert v.views("M-RS2") == 3 and v.settled("M-RS2") is None and v.unsure("M-RS2")
-    for i in range(5):                                # a sure view of the right state: not held back by them
-        v.add("M-RS2", 20.0 + 0.2 * i, 5, probs(5, 0.995), (3.0, 0.0))
+    for k in range(2):                                # sure views of the right state: not held back by them
+        for i in range(5):
+            v.add("M-RS2", 20.0 + 5.0 * k + 0.2 * i, 5, probs(5, 0.995), (3.0 + 0.5 * k, 0.0))
     assert v.settled("M-RS2") == 5
 
 
@@ -111,6 +118,8 @@ def test_frames_of_one_view_that_disagree_tell_nothing_until_they_leave_the_wind
     for i in range(4):
         read(c, feed, tag, t0 + 0.2 * i, 4)
     assert c.views.current_view("C-CS1") == 2
+    for i in range(4):                                # and a second sure view agrees
+        read(c, feed, tag, t0 + 2.0 + 0.2 * i, 4, at=(0.5, 0.0))
     assert c.light_state("C-CS1") == 4
 
 

@@ -153,3 +153,27 @@ def test_baselines_and_oracle():
         make_strategy("oracle")
     with pytest.raises(ValueError, match="unknown exploration strategy"):
         make_strategy("greedy")
+
+
+def test_a_light_the_gate_holds_back_leaves_its_zone_weak_and_it_is_explored_again():
+    # rendered perception, seed 1: C-DS read sure from one view only; the fused belief said known,
+    # the gate (two sure views) would not report it, and no robot went back
+    from teamserver.exploration.lights import LightGate
+    kb = KnowledgeBase(P16)
+    placement = {"C-BS": 9, "C-DS": 4, "C-RS1": 6, "C-RS2": 19, "C-CS1": 22, "C-CS2": 2}
+    codes = {"BS": ("GREEN",), "DS": ("YELLOW",), "RS1": ("RED",), "RS2": ("GREEN", "RED"),
+             "CS1": ("GREEN", "YELLOW"), "CS2": ("RED", "YELLOW")}
+    for name, z in placement.items():
+        observe(kb, name, z, zconf=0.97)
+        observe(kb, name, z, zconf=0.97, robot="R2")
+        for n in ((1,) if name == "C-DS" else (1, 2)):
+            kb.add_observation(M.Observation(name, M.LIGHT, codes[name[2:]], 0.995, M.view_source("R1", n)))
+        kb.mark_visited(z, 0.0)
+    zones = sorted(placement.values())
+    gate = LightGate(kb)
+    assert view(kb, zones=zones).hypotheses()[4] > 0.9                       # the fused belief: known
+    gated = ExplorationView.from_kb(kb, "CYAN", zones, set(), lights=gate)
+    assert gated.hypotheses()[4] == 0.0 and gated.m_found(0.9) == 5
+    assert Algorithm1().next_zone(gated).zone == 4                           # read again
+    kb.add_observation(M.Observation("M-DS", M.LIGHT, ("YELLOW",), 0.993, M.view_source("R2", 1)))
+    assert ExplorationView.from_kb(kb, "CYAN", zones, set(), lights=gate).m_found(0.9) == 6   # the twin's view

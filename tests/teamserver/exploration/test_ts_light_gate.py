@@ -1,6 +1,7 @@
 """No wrong light code reaches the refbox: the team server reports a station's
-light code only on a sure view no sure view contradicts, whatever the time
-left; confident views, of one robot or of two, do not report it.  The robot side is the real pipeline (the
+light code only on two sure views that agree and that no sure view
+contradicts, whatever the time left; one sure view alone, and confident
+views, of one robot or of two, do not report it.  The robot side is the real pipeline (the
 exploration's sighting collector, the machine map, the agent's observation
 feed) reading a detector whose answers the test scripts."""
 from types import SimpleNamespace
@@ -114,10 +115,12 @@ def test_a_wrong_unsure_view_then_right_views_report_only_the_right_code_once_a_
     assert reported_types(ls) == []            # confident is not sure
     r.reader.answer = lambda machine, at: (GREEN_YELLOW, 0.995)
     r.look("C-CS1", 3.0, (0.5, 0.0))           # a sure view
+    assert reported_types(ls) == []            # alone
+    r.look("C-CS1", 3.0, (1.0, 0.0))           # and a second one from another place
     assert set(reported_types(ls)) == {("C-CS1", f"TYPE{GREEN_YELLOW:04d}")}
 
 
-def test_confident_wrong_views_of_two_robots_are_not_reported_the_twins_sure_view_is():
+def test_confident_wrong_views_of_two_robots_are_not_reported_the_twins_sure_views_are():
     # the rendered game of seed 2: two robots read CS2's green lamp unlit at 0.94-0.97
     ls = Lockstep("rcll2016", robots=2)
     start(ls)
@@ -129,11 +132,13 @@ def test_confident_wrong_views_of_two_robots_are_not_reported_the_twins_sure_vie
     ls.refbox.game_state("EXPLORATION", "RUNNING", P16.phases.exploration_deadline - 5.0)
     ls.step(n=20)                                                         # the last seconds: report what pays
     assert reported_types(ls) == []
-    Robot(ls, ls.agents[1], lambda machine, at: (GREEN_YELLOW, 0.998)).look("M-CS1", 3.0, (4.0, 4.0))
+    twin = Robot(ls, ls.agents[1], lambda machine, at: (GREEN_YELLOW, 0.998))
+    twin.look("M-CS1", 3.0, (4.0, 4.0))
+    twin.look("M-CS1", 3.0, (4.5, 4.0))
     assert set(reported_types(ls)) == {("C-CS1", f"TYPE{GREEN_YELLOW:04d}")}
 
 
-def test_one_sure_view_is_reported_over_many_confident_wrong_ones_of_the_fused_belief():
+def test_two_sure_views_are_reported_over_many_confident_wrong_ones_of_the_fused_belief():
     # the rendered game of seed 1: one robot read RS2's green lamp unlit from four places, then sure
     ls = Lockstep("rcll2016", robots=1)
     start(ls)
@@ -143,6 +148,7 @@ def test_one_sure_view_is_reported_over_many_confident_wrong_ones_of_the_fused_b
     assert reported_types(ls) == []
     r.reader.answer = lambda machine, at: (GREEN_YELLOW, 0.993)
     r.look("C-CS1", 2.0, (4.0, 0.0))
+    r.look("C-CS1", 2.0, (4.5, 0.0))
     assert ls.server.kb.estimate("C-CS1", M.LIGHT).value == ("RED",)   # what all views together say
     assert set(reported_types(ls)) == {("C-CS1", f"TYPE{GREEN_YELLOW:04d}")}
 
@@ -160,14 +166,27 @@ def test_gate_rules():
     view("R2", 1, gy, 0.97)
     assert not gate.passes("C-CS1", gy)                       # confident views, of two robots: not enough
     view("R1", 1, gy, 0.995)
-    assert gate.passes("C-CS1", gy)                           # the same view, now sure
-    assert not LightGate(kb, min_sure=2).passes("C-CS1", gy)  # when two sure views are asked for
+    assert not gate.passes("C-CS1", gy) and gate.code("C-CS1") is None   # one sure view: not alone
+    assert LightGate(kb, min_sure=1).passes("C-CS1", gy)      # (unless one is all that is asked for)
+    view("R2", 1, gy, 0.991)
+    assert gate.passes("C-CS1", gy) and gate.code("C-CS1") == gy          # two sure views agree
     view("R2", 2, rg, 0.993)
     assert not gate.passes("C-CS1", gy) and not gate.passes("C-CS1", rg)   # contradicted by a sure view
     view("R3", 1, gy, 0.992, machine="M-CS1")
-    assert not gate.passes("C-CS1", gy)                       # two sure against one
-    view("R3", 2, gy, 0.999)
-    assert gate.passes("C-CS1", gy)                           # three (two of the twin) against one
+    assert gate.passes("C-CS1", gy) and gate.code("C-CS1") == gy          # three (one of the twin) against one
     view("R1", 2, rg, 0.98)
     assert gate.passes("C-CS1", gy)                           # a confident view does not hold it back
-    assert len(gate.views("C-CS1")) == 6
+    assert len(gate.views("C-CS1")) == 5                      # one vote a view: its latest reading
+
+
+def test_a_single_wrong_sure_view_never_becomes_a_report():
+    # the rendered game of seed 1 at 112b3d3: one view read M-DS's green and yellow as yellow at 0.993
+    kb = KnowledgeBase(P16)
+    gate = LightGate(kb)
+    kb.add_observation(M.Observation("M-DS", M.LIGHT, ("YELLOW",), 0.993, M.view_source("R2", 1)))
+    assert gate.code("C-DS") is None and gate.code("M-DS") is None
+    kb.add_observation(M.Observation("M-DS", M.LIGHT, ("GREEN", "YELLOW"), 0.998, M.view_source("R3", 1)))
+    assert gate.code("M-DS") is None                          # one against one
+    for n in (2, 3):
+        kb.add_observation(M.Observation("C-DS", M.LIGHT, ("GREEN", "YELLOW"), 0.997, M.view_source("R1", n)))
+    assert gate.code("M-DS") == gate.code("C-DS") == ("GREEN", "YELLOW")   # three against one
