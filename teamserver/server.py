@@ -344,12 +344,14 @@ class TeamServer:
             cancels, choice = pm.plan(gt, horizon)
             for t in cancels:
                 self.tasks.cancel(t, "plan repaired")
+                d.fleet.took_back(t)        # a pickup: no new work until it says what it holds
             self.last_choice = choice
             self._replan, self._last["plan"] = False, now
         if d.feeds.verify():
             cancels, _ = pm.plan(gt, self.profile.phases.production)
             for t in cancels:
                 self.tasks.cancel(t, "its workpiece was lost")
+                d.fleet.took_back(t)        # a pickup: no new work until it says what it holds
             self._last["plan"] = now
         d.feeds.unstick()
         d.dropouts.release_unusable()

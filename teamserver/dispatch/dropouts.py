@@ -19,11 +19,8 @@ from ..knowledge.kb import KnowledgeBase
 from ..links.tasks import TaskLink
 from ..production.products import Products
 from .config import DispatchConfig
-from .fleet import Fleet
+from .fleet import PICKUPS, Fleet
 from .readiness import Readiness
-
-#: kinds of task in which the robot picks a workpiece up
-PICKUPS = (M.GET_WORKPIECE, M.RETRIEVE_CAP)
 
 log = logging.getLogger("teamserver.dispatch")
 

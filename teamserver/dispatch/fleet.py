@@ -7,7 +7,8 @@ task takes its station locks, tells the robot through the task link and
 cancels the robot's parking.
 
 A robot whose pickup the server took back (:meth:`Fleet.hold_back`: its
-station went BROKEN or DOWN) may have grabbed the workpiece just before: it gets no
+station went BROKEN or DOWN, or its product was planned again,
+:meth:`Fleet.took_back`) may have grabbed the workpiece just before: it gets no
 new work until its result of that task says what its gripper holds
 (:meth:`Fleet.heard`), at most ``unsure_for`` seconds.  Given work at once,
 a robot with a product in its gripper fed that product to a cap station
@@ -21,6 +22,9 @@ from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
 from ..links.tasks import TaskLink
 from ..production.locks import StationLocks
+
+#: kinds of task in which the robot picks a workpiece up
+PICKUPS = (M.GET_WORKPIECE, M.RETRIEVE_CAP)
 
 
 def travel(robot: M.Robot, pos) -> float:
@@ -47,6 +51,13 @@ class Fleet:
         """``task`` (a pickup) was taken back from ``robot``: no new work for it until
         its result of ``task`` says what it holds (see the module doc)."""
         self._unsure[robot.number] = (task.id, self.clock.now())
+
+    def took_back(self, task: M.Task) -> None:
+        """``task`` (a copy as it was assigned) was cancelled on its robot because its
+        product is planned again: a pickup holds the robot back as :meth:`hold_back`."""
+        robot = self.kb.robots.get(task.robot) if task.robot is not None else None
+        if robot is not None and task.kind in PICKUPS:
+            self.hold_back(robot, task)
 
     def heard(self, number: int, task_id: int) -> None:
         """Robot ``number``'s final result of task ``task_id`` arrived."""

@@ -13,7 +13,9 @@ A production task is *ready* when
   (:meth:`~teamserver.links.tasks.TaskLink.said_running`), unless that robot has been silent
   past its lease (``heartbeat_timeout``, as a dropped robot: it stops
   ``rll_bt.agent.lease.MARGIN`` s before), so that a cancel lost in a cut
-  never lets two robots run one task (:meth:`Readiness.held_by`);
+  never lets two robots run one task (:meth:`Readiness.held_by`); nor, at the
+  same station, a task planned anew in place of a cancelled one (a product
+  planned again gets new tasks under new ids: :meth:`Readiness.station_held_by`);
 - the station can take its workpiece (:mod:`teamserver.production.feeding`);
 - a delivery's robot would reach the DS when the order's window opens
   (:meth:`Readiness.deliver_from`); a stored product's retrieval is not
@@ -71,13 +73,34 @@ class Readiness:
         for number in (owed, said):
             if number is None:
                 continue
-            robot = self.kb.robots.get(number)
-            if robot is not None and robot.status == M.ACTIVE and (
-                    self.clock is None or self.clock.now() - robot.last_heartbeat <= self.config.heartbeat_timeout):
+            if self._heard(number):
                 return number
             if number == owed:
                 self.tasks.stopped(number, task.id)     # silent past its lease: it has stopped
         return None
+
+    def station_held_by(self, task: M.Task) -> int | None:
+        """A robot that may still run another task at ``task``'s station, cancelled on
+        it (its stop not proven, heard within its lease), or None: a product planned
+        again (:mod:`teamserver.production.repair`) has new tasks under new ids, and a
+        new pickup at the output the cancelled one was fetching from must not send a
+        second robot there while the first may still grab the workpiece."""
+        if self.tasks is None or task.machine is None:
+            return None
+        for tid, number in self.tasks.stops_owed().items():
+            other = self.kb.tasks.get(tid)
+            if tid == task.id or other is None or other.machine != task.machine:
+                continue
+            if self._heard(number):
+                return number
+            self.tasks.stopped(number, tid)             # silent past its lease: it has stopped
+        return None
+
+    def _heard(self, number: int) -> bool:
+        """Robot ``number`` is active and heard within its lease."""
+        robot = self.kb.robots.get(number)
+        return robot is not None and robot.status == M.ACTIVE and (
+            self.clock is None or self.clock.now() - robot.last_heartbeat <= self.config.heartbeat_timeout)
 
     def station_usable(self, machine: str | None) -> bool:
         if machine is None:
@@ -98,7 +121,7 @@ class Readiness:
             return False
         if not self.station_usable(task.machine):
             return False
-        if self.held_by(task) is not None:
+        if self.held_by(task) is not None or self.station_held_by(task) is not None:
             return False
         if not self.feeds.accepts(task):
             return False

@@ -73,6 +73,8 @@ class TaskLink:
         """Tell ``task``'s robot to stop it (the robot and assignment it has now: the
         dispatcher may put the task back in the pool before the queue is flushed)."""
         self.queue.append((CANCEL, task, reason, task.robot, wire_id(task)))
+        if task.robot is not None:          # owed from now: the dispatcher may reassign in this tick
+            self._owe_stop(task, task.robot, wire_id(task), None)
 
     def prepare(self, task: M.Task) -> None:
         """Send ``task``'s PrepareMachine (``task.prepare``) to the refbox."""
@@ -89,8 +91,8 @@ class TaskLink:
                 self._deliver(robot, self.codec.task_msgs(t, color, robot))
             elif kind == CANCEL:
                 msg = self.codec.cancel_wire(item[4], int(number or 0), color)
-                if number is not None:
-                    self._owe_stop(t, number, item[4], self.reliable.key(msg))
+                if number is not None and self._stops.get(t.id, (None, None))[:2] == (int(number), int(item[4])):
+                    self._stops[t.id] = (int(number), int(item[4]), self.reliable.key(msg))
                 self._deliver(robot, [msg])
             elif kind == PREPARE:
                 self.to_refbox(self.refbox.prepare_machine(t.prepare))
@@ -117,6 +119,10 @@ class TaskLink:
         (the cancel neither acknowledged nor answered with a result yet), or None."""
         s = self._stops.get(int(task_id))
         return s[0] if s is not None else None
+
+    def stops_owed(self) -> dict[int, int]:
+        """Every task cancelled on a robot not yet known to have stopped it: task id -> robot."""
+        return {tid: s[0] for tid, s in self._stops.items()}
 
     def said_running(self, task_id: int) -> int | None:
         """A robot whose latest RobotStatus says it runs an assignment of task

@@ -304,6 +304,43 @@ def test_a_task_taken_back_goes_to_no_other_robot_until_its_robot_has_provably_s
         ls.close()
 
 
+def test_a_product_planned_again_sends_no_robot_where_its_cancelled_pickup_may_still_run():
+    """A product is planned again (a step of it failed) while one robot fetches its base
+    at the BS and another its cap, and the BS robot's cancel goes unanswered (lost on the
+    radio): the new plan's base pickup (a new task, a new id) goes to no robot, not even
+    an idle one, while the first may still grab the base; neither robot whose pickup
+    was cancelled gets new work until its result says what it holds."""
+    ls = Lockstep(robots=4, config=ALONE)
+    kb, bs = bs_task_after_setup(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0), (-4.5, 5.0, 0.0)])
+    first = next(a for a in ls.agents if a.number == bs.robot)
+    first.ack = False
+    before = {a.number: len(a.tasks()) for a in ls.agents}
+    ls.server.production.products.needs_repair(bs.product, "a step failed")
+    for _ in range(24):                                        # 12 s: a planning round, the robots heard
+        for a in ls.agents:
+            a.beat()
+        ls.step(dt=0.5)
+    assert kb.tasks[bs.id].state == M.CANCELLED and bs.id in [c.task_id for c in first.cancels()]
+    [again] = [t for t in kb.tasks.values() if t.machine == "C-BS" and t.kind == M.GET_WORKPIECE
+               and t.product == bs.product and t.id != bs.id]
+    assert again.state == M.PENDING, \
+        f"the new pickup went to robot {again.robot} while robot {first.number} may run the old"
+    cancelled = [a for a in ls.agents if any(kb.tasks[c.task_id].product == bs.product for c in a.cancels())]
+    assert first in cancelled and len(cancelled) == 2           # the base's and the cap's robots
+    assert all(len(a.tasks()) == before[a.number] for a in cancelled)
+    assert not [k for a in ls.agents for k in task_kinds(a)[before[a.number]:] if k[2] == "C-BS"]
+    for a in ls.agents:                                        # they stopped, empty-handed
+        for c in a.cancels():
+            if kb.tasks[c.task_id].kind != M.GO_TO:
+                a.result(c.task_id, status="CANCELLED", holding=False)
+    for _ in range(4):
+        for a in ls.agents:
+            a.beat()
+        ls.step(dt=0.5)
+    assert kb.tasks[again.id].state == M.ASSIGNED and ls.server.tasks.stop_owed(bs.id) is None
+    ls.close()
+
+
 def test_a_task_a_robot_says_it_runs_goes_to_no_other_robot_also_after_a_restart_of_the_server(tmp_path):
     """The server restarts after taking a task back (its cancel lost): it has forgotten
     the stop it was owed, but the robot's status says it still runs the task, so the
