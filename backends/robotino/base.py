@@ -37,7 +37,7 @@ from . import tags as T
 from .framing import ChecksumMismatch, Frame, FrameDecoder, encode_frame
 from .kinematics import OdometryIntegrator, OmniKinematics
 from .ramp import RampLimits, ramp
-from .serial_port import LINK_ERRORS, find_device, open_serial
+from .serial_port import LINK_ERRORS, find_device, open_serial, write_all
 
 log = logging.getLogger(__name__)
 
@@ -354,7 +354,7 @@ class RobotinoBase:
         if port is None:
             return
         try:
-            port.write(encode_frame(T.encode_tags(tags)))
+            write_all(port, encode_frame(T.encode_tags(tags)))
         except LINK_ERRORS as exc:
             with self._lock:
                 self._stats.write_errors += 1

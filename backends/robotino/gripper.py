@@ -26,7 +26,7 @@ from rll_bt.backend import BackendError, GripperState, GripperStatus
 from rll_bt.clock import Clock, WallClock
 
 from . import gripper_protocol as P
-from .serial_port import LINK_ERRORS, open_serial
+from .serial_port import LINK_ERRORS, open_serial, write_all
 
 log = logging.getLogger(__name__)
 
@@ -223,7 +223,7 @@ class ArduinoGripper:
             out, self._out = self._out, []
         for message in out:
             try:
-                self._port.write(message)
+                write_all(self._port, message)
             except LINK_ERRORS as exc:
                 self._lose(f"write failed ({exc})")
                 return

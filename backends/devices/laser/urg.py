@@ -65,9 +65,10 @@ class UrgLaser(LaserDriver):
 
     # -- link ---------------------------------------------------------------------
     def _write(self, data: bytes) -> None:
+        from backends.robotino.serial_port import write_all
         if self._port is None:
             raise LinkLost("port closed")
-        self._port.write(data)
+        write_all(self._port, data)
 
     def _blocks(self, timeout: float) -> list[scip.Block]:
         port = self._port

@@ -226,13 +226,18 @@ def test_periodic_unplugging_and_delayed_replies(wait_for):
             robot.close()
 
 
-def test_write_error_closes_and_reopens_the_port(emu, robot, wait_for):
+def test_write_error_closes_and_reopens_the_port(emu, robot, wait_for, monkeypatch):
     import serial
 
-    def broken_write(data):
-        raise serial.SerialException("write failed: [Errno 5] Input/output error")
+    from backends.robotino import base as base_module
+    broken, write_all = robot.base._port, base_module.write_all
 
-    robot.base._port.write = broken_write
+    def broken_write(port, data, *args, **kw):         # the port open now fails; a reopened one works
+        if port is broken:
+            raise serial.SerialException("write failed: [Errno 5] Input/output error")
+        return write_all(port, data, *args, **kw)
+
+    monkeypatch.setattr(base_module, "write_all", broken_write)
     assert wait_for(lambda: robot.link_stats().reopens >= 1, 1.0)
     stats = robot.link_stats()
     assert stats.write_errors == 1 and stats.link_losses == 1
