@@ -55,7 +55,10 @@ class OdometryPose:
         return False
 
     def pose(self) -> Pose2D:
-        return self.start.compose(self.backend.odometry().pose.relative_to(self.odom0))
+        return self.pose_with(self.backend.odometry().pose)
+
+    def pose_with(self, odom: Pose2D) -> Pose2D:
+        return self.start.compose(odom.relative_to(self.odom0))
 
     def estimate(self) -> None:
         return None
@@ -129,6 +132,26 @@ class SkillContext:
 
     def pose(self) -> Pose2D:
         pose = self.pose_source.pose()
+        if pose is None:
+            raise NotLocalised()
+        return pose
+
+    def pose_at(self, stamp: float) -> Pose2D:
+        """The pose at ``stamp`` (a sensor reading's time, e.g. of a camera
+        frame): the pose for the odometry of that moment, interpolated
+        between the readings recorded around it.  A reading's stamp and the
+        odometry read after it differ by a call to the robot (over a
+        network, with a loaded host, by tenths of a second, while the robot
+        turns): a tag seen then and placed from the pose now lands beside
+        where it is.  The pose now when ``stamp`` is not covered or the
+        pose source cannot say."""
+        pose_with = getattr(self.pose_source, "pose_with", None)
+        if pose_with is None:
+            return self.pose()
+        reading = self.backend.odometry()
+        self.odometry_history.add(reading.stamp, reading.pose)
+        then = self.odometry_history.interpolate(stamp)
+        pose = pose_with(reading.pose if then is None else then)
         if pose is None:
             raise NotLocalised()
         return pose

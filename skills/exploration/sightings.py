@@ -52,7 +52,8 @@ class SightingCollector:
         if dets is None or dets.stamp == self._last_stamp:
             return set()
         self._last_stamp = dets.stamp
-        pose = self.ctx.pose()
+        at = getattr(self.ctx, "pose_at", None)     # where the robot was when the frame was taken
+        pose = at(dets.stamp) if at is not None else self.ctx.pose()
         est = self.ctx.estimate()
         sigma = est.std_xy if est is not None else 0.0
         updated: set[str] = set()

@@ -296,9 +296,13 @@ class Localiser:
                             self._estimate.particles, self._estimate.lost)
 
     def pose(self) -> Pose2D | None:
+        return self.pose_with(self.backend.odometry().pose)
+
+    def pose_with(self, odom: Pose2D) -> Pose2D | None:
+        """The pose when the odometry read ``odom`` (the estimate moved on,
+        or back, by the odometry since the last update)."""
         if self._pose_at_update is None:
             return None
-        odom = self.backend.odometry().pose
         step = odom.relative_to(self._odom_at_update)
         return self._pose_at_update.compose(step)
 

@@ -75,7 +75,9 @@ class AlignToTag(Activity):
         if tag is None:
             self.seen_other.update(d.tag_id for d in dets.tags)
             return
-        target = odom.compose(tag.compose(Pose2D(self.distance, self.lateral, math.pi)))
+        # from where the robot was when the frame was taken (a backend call or more ago)
+        then = self.ctx.odometry_history.interpolate(dets.stamp)
+        target = (odom if then is None else then).compose(tag.compose(Pose2D(self.distance, self.lateral, math.pi)))
         self.targets = (self.targets + [target])[-self.window:]
         self.sightings += 1
         self.last_seen = now
@@ -87,7 +89,9 @@ class AlignToTag(Activity):
 
     def _step(self, now: float) -> Status:
         m = self.ctx.settings.manipulation
-        odom = self.ctx.backend.odometry().pose
+        reading = self.ctx.backend.odometry()
+        odom = reading.pose
+        self.ctx.odometry_history.add(reading.stamp, odom)
         self._look(odom, now)
         waited = now - (self.last_seen if self.last_seen is not None else self.started_at)
         if waited > m.tag_search_time and self.sightings < m.tag_sightings:

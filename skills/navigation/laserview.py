@@ -37,6 +37,22 @@ class OdometryHistory:
             return None
         return min(self._items, key=lambda item: abs(item[0] - stamp))[1]
 
+    def interpolate(self, stamp: float) -> Pose2D | None:
+        """The pose at ``stamp``, linear between the two recorded poses around
+        it (a recorded pose itself at its own stamp); None when ``stamp`` lies
+        outside the recorded span."""
+        items = self._items
+        if not items or stamp < items[0][0] or stamp > items[-1][0]:
+            return None
+        for (t0, p0), (t1, p1) in zip(items, list(items)[1:]):
+            if t0 <= stamp <= t1:
+                if stamp == t1:
+                    return p1
+                f = (stamp - t0) / (t1 - t0)
+                step = p1.relative_to(p0)
+                return p0.compose(Pose2D(step.x * f, step.y * f, step.theta * f))
+        return items[0][1]
+
 
 def points_now(points_then: np.ndarray, odom_then: Pose2D, odom_now: Pose2D) -> np.ndarray:
     """Points (K, 2) in the robot frame of a scan taken at ``odom_then``,
