@@ -131,6 +131,12 @@ class Results:
                 wp.location = "gone"
                 self.kb.save_workpiece(wp)
             robot.holding = None
+        if holding and not task.carry and task.kind != M.GET_WORKPIECE and robot.holding is None:
+            # it grabbed before it failed (a RetrieveCap's cap carrier, its cap
+            # station gone DOWN): unknown to the books, to be discarded, never fed
+            robot.holding = "?"
+            log.warning("robot %d holds a workpiece after its %s %d failed: unknown, to be discarded",
+                        robot.number, task.kind, task.id)
         self.kb.save_robot(robot)
         if error == "MACHINE_BROKEN" and task.machine:
             st = self.kb.stations.get(task.machine)

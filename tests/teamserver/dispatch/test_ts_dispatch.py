@@ -251,6 +251,28 @@ def test_a_robot_whose_pickup_was_taken_back_gets_work_only_once_it_said_what_it
     ls.close()
 
 
+def test_a_robot_whose_retrieve_cap_failed_holding_the_carrier_discards_it_and_feeds_nothing():
+    """A RetrieveCap that fails after the grab from the shelf (its cap station went
+    DOWN: MACHINE_BROKEN) leaves the cap carrier in the gripper, booked nowhere: the
+    robot discards it (processes game of seed 1 at 53618cd: the robot, empty in the
+    server's books, was given a base pickup, which its tree took as done with the
+    carrier in the gripper, and fed that capped base to a ring station: BROKEN)."""
+    ls = Lockstep(robots=2, config=ALONE)
+    place(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0)])                 # far from every station
+    production_setup(ls, [{"id": 1}, {"id": 2, "delivery_gate": 2, "cap_color": 2}])
+    ls.step(n=8)
+    kb, agent = ls.server.kb, ls.agents[0]
+    [first] = [t for t in kb.tasks.values() if t.state == M.ASSIGNED and t.robot == agent.number]
+    assert first.kind == M.RETRIEVE_CAP
+    before = len(agent.tasks())
+    agent.result(first.id, status="FAILED", error="MACHINE_BROKEN", holding=True)
+    ls.step(n=4)
+    assert kb.robots[agent.number].holding == "?"
+    kinds = [k for _, k, _ in task_kinds(agent)[before:]]
+    assert kinds and set(kinds) <= {"discard", "go_to"} and "discard" in kinds
+    ls.close()
+
+
 def test_a_task_taken_back_goes_to_no_other_robot_until_its_robot_has_provably_stopped_it():
     """The cancel of a task whose station went down is lost (its robot is cut off, or
     only its acknowledgement is): the robot may still run the task until its lease runs
