@@ -24,11 +24,12 @@ the profile (``Z9``, ``C_Z12``).
 from __future__ import annotations
 
 import logging
+import math
 
 from py_trees.common import Status as TreeStatus
 
 from rll_bt import rules
-from rll_bt.backend import Capability, Pose2D
+from rll_bt.backend import Capability, Pose2D, wrap_angle
 from rll_bt.plugins import offers
 from rll_bt.tree import Input, Node, Output, register_service, write_error
 
@@ -252,11 +253,13 @@ class Put(SkillNode):
 
 
 class BackOff(SkillNode):
-    """Drive straight backwards ``distance`` metres (away from a station).
+    """Back off ``distance`` metres straight back (away from a station).
     The laser does not see behind: the known map limits the way back, and
-    the other robots the laser saw there; in the open (no station ahead,
-    where no one keeps the strip behind free) the robot first turns to look
-    behind and back, so a robot that came up behind it unseen stops it."""
+    the other robots the laser saw there.  In the open (no station ahead,
+    where no one keeps the strip behind free) the robot turns until the way
+    back lies in the laser's view, moves along it sideways (the base is
+    holonomic) while the laser watches it, and turns back: a robot standing
+    behind it, or coming up while it backs off, stops it."""
     distance = Input(float, "metres", default=0.35)
     requires_capabilities = Capability.DRIVE | Capability.ODOMETRY
 
@@ -265,14 +268,24 @@ class BackOff(SkillNode):
 
 
 def back_off(sctx, distance: float) -> Activity:
-    """The :class:`BackOff` node's activity: back straight off ``distance``
-    metres at most, looking behind first unless a station stands ahead."""
-    def move():
-        return MoveRelative(sctx, -back_off_distance(sctx, distance), speed=0.2, partial=True)
+    """The :class:`BackOff` node's activity: ``distance`` metres at most along
+    the way straight back.  Facing a station it backs off at once.  In the
+    open it turns by :func:`look_angle` first, so that the way back (and the
+    strip either side of it) lies in the laser's view, backs off sideways there
+    with the live scan guarding the way, then turns back to its heading.
+    (Looking behind and turning back before a blind back-off was not enough:
+    a robot that came up behind during the turn back was remembered where it
+    had been and backed into; issue 20, seed 1 at cd41937, 970.5 s.)"""
     if facing_station(sctx):
-        return move()
+        return MoveRelative(sctx, -back_off_distance(sctx, distance), speed=0.2, partial=True)
+    heading = sctx.pose().theta
     turn = look_angle(sctx)
-    return Sequence(sctx, [lambda: LookTurn(sctx, by=turn), lambda: LookTurn(sctx, by=-turn), move],
+
+    def move():
+        way = wrap_angle(heading + math.pi - sctx.pose().theta)     # the way back, in the robot frame of now
+        d = back_off_distance(sctx, distance, heading=heading)
+        return MoveRelative(sctx, d * math.cos(way), d * math.sin(way), speed=0.2, partial=True)
+    return Sequence(sctx, [lambda: LookTurn(sctx, by=turn), move, lambda: LookTurn(sctx, by=-turn)],
                     name="back off")
 
 

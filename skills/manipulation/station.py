@@ -190,7 +190,7 @@ def _handling(ctx, place: Place, steps_fn, approach: bool, use_tag, timeout, nam
     return factories
 
 
-def back_off_distance(ctx, wanted: float, pose=None, step: float = 0.01) -> float:
+def back_off_distance(ctx, wanted: float, pose=None, step: float = 0.01, heading: float | None = None) -> float:
     """How far the robot can back straight off, at most ``wanted`` metres
     (0 when there is no room behind it): the laser does not see behind, so
     the known map decides; the robot keeps its radius plus 5 cm (a few of
@@ -198,8 +198,12 @@ def back_off_distance(ctx, wanted: float, pose=None, step: float = 0.01) -> floa
     Checked from the localised pose and, when given, from ``pose`` too (the
     pose docking should have left the robot at): the shorter way wins, as
     either may be off by a few centimetres or the station's mapped pose by
-    more."""
-    poses = [ctx.pose()] + ([pose] if pose is not None else [])
+    more.  ``heading`` (rad, field frame): the way back of a robot facing
+    that way rather than its own heading (one turned to watch it)."""
+    here = ctx.pose()
+    if heading is not None:
+        here = Pose2D(here.x, here.y, heading)
+    poses = [here] + ([pose] if pose is not None else [])
     return min(_room_behind(ctx, p, wanted, step) for p in poses)
 
 

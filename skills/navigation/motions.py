@@ -1,6 +1,7 @@
 """Short motions without planning, closed on odometry: move by an offset
 in the robot frame (backing away from a station), turn on the spot, and
-look behind before a blind back-off in the open (:class:`LookTurn`).
+turn while remembering what the laser sees (:class:`LookTurn`: a back-off
+in the open turns so the way back lies in the laser's view first).
 
 Both are non-blocking activities within the speed and acceleration limits.
 They do not plan, so keep them short; :class:`MoveRelative` slows and stops

@@ -48,6 +48,29 @@ def test_a_back_off_in_the_open_looks_behind_first_and_stops_short_of_the_robot_
     assert math.hypot(tp.x - BEHIND.x, tp.y - BEHIND.y) > 2 * 0.225 + 0.03
 
 
+def test_a_back_off_in_the_open_stops_for_a_robot_that_comes_up_behind_once_it_has_looked():
+    # issue 20, seed 1 at cd41937 (970.5 s): the robot looked behind and turned back; meanwhile a robot
+    # of the other team came on into the strip behind it, and it backed off blind against where that
+    # robot had been when it looked. Here the other robot comes to stand 0.16 m behind it just as it
+    # starts to move: it must see it there and stop short
+    scene = _scene(None)
+    act = back_off(scene.ctx, 0.35)
+    other = None
+    act.start()
+    while not act.status.done and scene.world.clock.now() < 60.0:
+        tp = scene.robot.true_pose
+        if other is None and math.hypot(tp.x - START.x, tp.y - START.y) > 0.01:
+            other = scene.world.add_robot(Pose2D(tp.x, tp.y - 0.62, math.pi / 2))
+        act.poll()
+        scene.advance(0.1)
+    assert other is not None
+    assert scene.world.collisions == 0
+    assert act.status is Status.SUCCESS, act.message          # a back-off may end short
+    tp, op = scene.robot.true_pose, other.true_pose
+    assert math.hypot(tp.x - op.x, tp.y - op.y) > 2 * 0.225 + 0.03
+    assert abs(wrap_angle(tp.theta - START.theta)) < 0.05
+
+
 def test_a_back_off_in_the_open_with_nothing_behind_backs_off_the_whole_way():
     scene = _scene(None)
     assert scene.run(back_off(scene.ctx, 0.35), limit=60.0) is Status.SUCCESS
