@@ -70,9 +70,10 @@ class ProcessGame:
         self.options = o = options
         self.wall = clock or WallClock()
         self.progress = progress
-        # 60 s and 20 s per process to start (imports, sockets; one team of three: 160 s, two: 240 s)
+        # 60 s and 60 s per process to start (imports, sockets; one team of three: 360 s): at load
+        # 18-27 one team's processes were not all up after 160 s three times in a row (0 points)
         n = 1 + sum(1 + t.robots for t in o.lineup().values() if not t.external)
-        self.connect_timeout = connect_timeout if connect_timeout is not None else 60.0 + 20.0 * n
+        self.connect_timeout = connect_timeout if connect_timeout is not None else 60.0 + 60.0 * n
         self._tmp = tempfile.TemporaryDirectory(prefix="rll-bt-game-")
         self.dir = Path(o.out) if o.out is not None else Path(self._tmp.name)
         self.dir.mkdir(parents=True, exist_ok=True)
@@ -379,6 +380,8 @@ class ProcessGame:
             return True
         if not self._wait_for_robots():
             self.recorder.note("not every process came up", alive=self._alive())
+            print(f"rll-bt sim: not every robot was ACTIVE at the team server within {self.connect_timeout:g} s "
+                  f"(alive: {', '.join(self._alive()) or 'none'}; see the logs in {self.dir})", file=sys.stderr)
             return False
         self._started = True
         self.refbox.start()
