@@ -55,7 +55,8 @@ class Matcher:
         for t in sorted(ready, key=lambda t: t.id):
             if t.carry:
                 r = idle.get(t.holder) if t.holder is not None else None
-                if r is not None and self.locks.free_for(t):
+                # (slide room again: a put assigned a moment ago in this loop took the last place)
+                if r is not None and self.locks.free_for(t) and self.slides.slide_ready(t):
                     self.slides.discard_to(t, r, self._travel)
                     self.fleet.assign(t, r)
                     assigned.append(t)
@@ -82,8 +83,8 @@ class Matcher:
         rows, cols = linear_sum_assignment(cost)
         for i, j in sorted(zip(rows, cols), key=lambda ij: cost[ij[0], ij[1]]):
             t, r = pool[j], free[i]
-            if not self.locks.free_for(t):
-                continue                    # another assignment just took the station
+            if not self.locks.free_for(t) or not self.slides.slide_ready(t):
+                continue                    # another assignment just took the station or the slide's room
             if t.id in blocking:
                 if stuck >= blocking[t.id]:
                     continue                # the next tick matches this robot anew

@@ -324,3 +324,23 @@ def test_2025_a_station_waiting_with_an_instruction_nothing_needs_is_fed_no_spar
     assert not feeds.accepts(want2)
     assert feeds.unstick() == []
     assert not [p for p in kb.products.values() if p.state == "ACTIVE"]
+
+
+def test_two_robots_holding_bases_for_a_slide_with_room_for_one_send_only_one():
+    """2025 seed 9: two robots holding bases were sent to C-RS1's slide in the same
+    dispatch round while it held 2 (room for 1: both saw the room before either was
+    assigned); the fourth base broke the station."""
+    ls = Lockstep()
+    production_setup(ls, [{"id": 5, "complexity": 1, "rings": ["RING_BLUE"]}])
+    srv, kb = ls.server, ls.server.kb
+    ls.step(n=3)
+    abandon_all_products(srv)
+    ls.refbox.machines(ls.station_states, {"C-RS1": ("RING_BLUE", "RING_GREEN")}, **{"C-RS1": {"loaded_with": 2}})
+    ls.step(n=3)
+    puts = [M.Task(kb.next_id("task"), M.PUT_WORKPIECE, {"machine": "C-RS1", "side": M.SLIDE},
+                   carry=True, holder=n) for n in (1, 2)]
+    for t in puts:
+        kb.save_task(t)
+    ls.step(n=3)
+    states = [kb.tasks[t.id].state for t in puts]
+    assert states.count(M.ASSIGNED) == 1 and states.count(M.PENDING) == 1, states
