@@ -217,18 +217,24 @@ def test_a_station_going_down_before_its_prepare_frees_the_robot_sent_there(tcp)
                for t in kb.tasks.values())
 
 
-def test_a_robot_whose_pickup_was_taken_back_gets_work_only_once_it_said_what_it_holds():
-    """A pickup taken back (its station went BROKEN) may have been grabbed already: the
-    robot gets no new work until its result says what it holds; holding something the
-    server booked nowhere, it is told to discard it and is sent to feed no station
-    (rcll2016 seed 10 at 672a03b: a robot given a RetrieveCap at once fed the product it
-    had just grabbed to the cap station, which broke)."""
+def _first_robot_with_its_first_task():
+    """Two robots far from every station, two orders: (ls, kb, the first robot, its first task)."""
     ls = Lockstep(robots=2, config=ALONE)
     place(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0)])                 # far from every station
     production_setup(ls, [{"id": 1}, {"id": 2, "delivery_gate": 2, "cap_color": 2}])
     ls.step(n=8)
     kb, agent = ls.server.kb, ls.agents[0]
     [first] = [t for t in kb.tasks.values() if t.state == M.ASSIGNED and t.robot == agent.number]
+    return ls, kb, agent, first
+
+
+def test_a_robot_whose_pickup_was_taken_back_gets_work_only_once_it_said_what_it_holds():
+    """A pickup taken back (its station went BROKEN) may have been grabbed already: the
+    robot gets no new work until its result says what it holds; holding something the
+    server booked nowhere, it is told to discard it and is sent to feed no station
+    (rcll2016 seed 10 at 672a03b: a robot given a RetrieveCap at once fed the product it
+    had just grabbed to the cap station, which broke)."""
+    ls, kb, agent, first = _first_robot_with_its_first_task()
     assert first.kind == M.RETRIEVE_CAP and first.prepared_at is None   # (a BS base waits too)
     ls.station_states[first.machine] = "BROKEN"
     ls.refbox.machines(ls.station_states)
@@ -257,12 +263,7 @@ def test_a_robot_whose_retrieve_cap_failed_holding_the_carrier_discards_it_and_f
     robot discards it (processes game of seed 1 at 53618cd: the robot, empty in the
     server's books, was given a base pickup, which its tree took as done with the
     carrier in the gripper, and fed that capped base to a ring station: BROKEN)."""
-    ls = Lockstep(robots=2, config=ALONE)
-    place(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0)])                 # far from every station
-    production_setup(ls, [{"id": 1}, {"id": 2, "delivery_gate": 2, "cap_color": 2}])
-    ls.step(n=8)
-    kb, agent = ls.server.kb, ls.agents[0]
-    [first] = [t for t in kb.tasks.values() if t.state == M.ASSIGNED and t.robot == agent.number]
+    ls, kb, agent, first = _first_robot_with_its_first_task()
     assert first.kind == M.RETRIEVE_CAP
     before = len(agent.tasks())
     agent.result(first.id, status="FAILED", error="MACHINE_BROKEN", holding=True)
