@@ -70,8 +70,7 @@ class ProcessGame:
         self.options = o = options
         self.wall = clock or WallClock()
         self.progress = progress
-        # 60 s and 60 s per process to start (imports, sockets; one team of three: 360 s): at load
-        # 18-27 one team's processes were not all up after 160 s three times in a row (0 points)
+        # 60 s and 60 s per process to start (one team of three: 360 s; 160 s was too short at load 18-27)
         n = 1 + sum(1 + t.robots for t in o.lineup().values() if not t.external)
         self.connect_timeout = connect_timeout if connect_timeout is not None else 60.0 + 60.0 * n
         self._tmp = tempfile.TemporaryDirectory(prefix="rll-bt-game-")
