@@ -77,11 +77,14 @@ def test_line_15_too_few_machines_found_explores_a_random_unvisited_zone():
     assert d.branch == "random-fallback" and d.zone in set(CYAN_ZONES) - {6}
 
 
+#: a field where every station of ours is found, and the light codes they show
+PLACEMENT = {"C-BS": 9, "C-DS": 4, "C-RS1": 6, "C-RS2": 19, "C-CS1": 22, "C-CS2": 2}
+CODES = {"BS": ("GREEN",), "DS": ("YELLOW",), "RS1": ("RED",), "RS2": ("GREEN", "RED"),
+         "CS1": ("GREEN", "YELLOW"), "CS2": ("RED", "YELLOW")}
+
 def test_line_19_all_found_revisits_the_lowest_confidence_zone():
     kb = KnowledgeBase(P16)
-    placement = {"C-BS": 9, "C-DS": 4, "C-RS1": 6, "C-RS2": 19, "C-CS1": 22, "C-CS2": 2}
-    codes = {"BS": ("GREEN",), "DS": ("YELLOW",), "RS1": ("RED",), "RS2": ("GREEN", "RED"),
-             "CS1": ("GREEN", "YELLOW"), "CS2": ("RED", "YELLOW")}
+    placement, codes = PLACEMENT, CODES
     for name, z in placement.items():
         observe(kb, name, z, zconf=0.97, light=codes[name[2:]], lconf=0.99 if name != "C-CS2"
                 else 0.95)
@@ -160,9 +163,7 @@ def test_a_light_the_gate_holds_back_leaves_its_zone_weak_and_it_is_explored_aga
     # the gate (two sure views) would not report it, and no robot went back
     from teamserver.exploration.lights import LightGate
     kb = KnowledgeBase(P16)
-    placement = {"C-BS": 9, "C-DS": 4, "C-RS1": 6, "C-RS2": 19, "C-CS1": 22, "C-CS2": 2}
-    codes = {"BS": ("GREEN",), "DS": ("YELLOW",), "RS1": ("RED",), "RS2": ("GREEN", "RED"),
-             "CS1": ("GREEN", "YELLOW"), "CS2": ("RED", "YELLOW")}
+    placement, codes = PLACEMENT, CODES
     for name, z in placement.items():
         observe(kb, name, z, zconf=0.97)
         observe(kb, name, z, zconf=0.97, robot="R2")
