@@ -9,6 +9,13 @@ stops (seed 7 of the rcll2016 benchmark stopped this way for its last
 stuck (:meth:`~Holding.blocks`), how many robots are stuck
 (:meth:`~Holding.stuck`) and how many may be (:meth:`~Holding.hold_limit`),
 and which tasks free a stuck robot (:meth:`~Holding.unblocking`).
+
+A pickup that clears a station's output for a stuck robot
+(:meth:`~Holding.swaps`) leaves its own robot holding, but the stuck one goes
+on at once: no more robots are stuck after it, so the limit does not hold it
+back.  Held back, the other product's workpiece stayed in the output and the
+stuck robot's step waited for that station for the rest of the game
+(rcll2025 seed 18: from 380 s, all three robots holding).
 """
 from __future__ import annotations
 
@@ -101,4 +108,25 @@ class Holding:
                 if t is not None and t.state == M.PENDING and d not in out:
                     out.add(d)
                     todo.extend(t.deps)
+        return out
+
+    def swaps(self, game_time: float | None) -> set[int]:
+        """Pending pickups that give up the station locks another product holds, for
+        which alone the next step of a stuck robot waits (that product's workpiece
+        in the station's output): taking one frees the stuck robot."""
+        bound = self._next_carries()
+        owners = self.locks.owners
+        out: set[int] = set()
+        for r in self.kb.active_robots():
+            nxt = bound.get(r.number) if r.holding else None
+            if nxt is None or self.readiness.ready(nxt, game_time):
+                continue
+            for other in {owners[lk] for lk in nxt.locks if owners.get(lk, nxt.product) != nxt.product}:
+                theirs = {lk for lk in nxt.locks if owners.get(lk) == other}
+                product = self.kb.products.get(other)
+                if product is None or not self.readiness.ready(nxt, game_time, but=other):
+                    continue
+                out |= {t.id for t in self.kb.tasks_of(product.tasks)
+                        if t.kind == M.GET_WORKPIECE and not t.carry and t.state == M.PENDING
+                        and theirs <= set(t.releases)}
         return out

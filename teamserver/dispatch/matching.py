@@ -6,7 +6,8 @@ times the seconds left until the order's window closes (an optimal
 assignment, ``scipy.optimize.linear_sum_assignment``), earlier products
 first on ties; tasks that free a stuck robot are preferred by ``unblock``
 metres.  Pickups that would leave one more robot stuck wait while
-``robots - 1`` are (:mod:`.holding`).  Locks are taken at assignment.
+``robots - 1`` are (:mod:`.holding`), but a pickup that frees a stuck robot
+by clearing its station's output.  Locks are taken at assignment.
 """
 from __future__ import annotations
 
@@ -67,13 +68,14 @@ class Matcher:
             return assigned
         # robots must stay able to fetch what the held workpieces wait for
         stuck, n = self.holding.stuck(game_time), len(self.kb.active_robots())
+        swaps = self.holding.swaps(game_time) if stuck else set()    # (take one, free one)
         blocking = {t.id: self.holding.hold_limit(t, n) for t in pool
-                    if self.holding.blocks(t, game_time)}
+                    if t.id not in swaps and self.holding.blocks(t, game_time)}
         pool = [t for t in pool if stuck < blocking.get(t.id, n)]
         if not pool:
             return assigned
         positions = self.world.positions()
-        frees = self.holding.unblocking(game_time) if stuck else set()
+        frees = (self.holding.unblocking(game_time) | swaps) if stuck else set()
         cost = np.zeros((len(free), len(pool)))
         for i, r in enumerate(free):
             for j, t in enumerate(pool):

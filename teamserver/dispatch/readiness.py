@@ -108,7 +108,9 @@ class Readiness:
         st = self.kb.stations.get(machine)
         return st is None or st.state not in UNUSABLE_STATES
 
-    def ready(self, task: M.Task, game_time: float | None) -> bool:
+    def ready(self, task: M.Task, game_time: float | None, but: str | None = None) -> bool:
+        """May ``task`` go now (see the module doc)?  ``but``: as if product ``but``
+        had given up its station locks."""
         if task.state != M.PENDING or task.kind == M.EXPLORE_ZONE:
             return False
         if game_time is None:
@@ -117,7 +119,7 @@ class Readiness:
             dep = self.kb.tasks.get(d)
             if dep is None or dep.state != M.DONE:
                 return False
-        if not self.locks.free_for(task):
+        if not self.locks.free_for(task, but):
             return False
         if not self.station_usable(task.machine):
             return False

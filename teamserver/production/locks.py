@@ -27,13 +27,14 @@ class StationLocks:
     def _set(self, locks: dict[str, str]) -> None:
         self.kb.set("locks", locks)
 
-    def free_for(self, task: M.Task) -> bool:
+    def free_for(self, task: M.Task, but: str | None = None) -> bool:
         """Its product may take the task's locks, and no other running task uses them
-        (a station serves one robot at a time, even within one product)."""
+        (a station serves one robot at a time, even within one product).  ``but``: a
+        product whose locks count as given up."""
         if not task.locks:
             return True
         locks = self.owners
-        if any(locks.get(lk, task.product) != task.product for lk in task.locks):
+        if any(locks.get(lk, task.product) not in (task.product, but) for lk in task.locks):
             return False
         mine = set(task.locks)
         return not any(t.id != task.id and t.state == M.ASSIGNED and mine & set(t.locks)

@@ -3,7 +3,7 @@ workpieces a station never took, stations left PREPARED with a stale instruction
 robots left holding what they cannot use yet, places the robots keep failing at."""
 from teamserver.knowledge import model as M
 from teamserver.server import ServerConfig
-from tests.support.teamserver import Lockstep, Stations, abandon_all_products, play, production_setup
+from tests.support.teamserver import RS_2016, Lockstep, Stations, abandon_all_products, play, production_setup
 from tests.teamserver.production.test_ts_storage import send_orders, setup_2025
 
 
@@ -344,3 +344,47 @@ def test_two_robots_holding_bases_for_a_slide_with_room_for_one_send_only_one():
     ls.step(n=3)
     states = [kb.tasks[t.id].state for t in puts]
     assert states.count(M.ASSIGNED) == 1 and states.count(M.PENDING) == 1, states
+
+
+def test_a_pickup_clearing_the_output_a_stuck_robot_waits_for_goes_while_two_robots_hold():
+    """rcll2025 seed 18: robot 3 held P5 for its ring at C-RS1, whose output held P2 (C-RS1
+    locked by P2); robot 2 held a base for C-RS1's full slide.  Fetching P2 leaves robot 1
+    holding it (its next ring waits for bases): with two of three robots stuck that pickup
+    was held back, robot 1 fetched a base for the full slide instead, and all three held
+    their workpieces for the rest of the game (from 380 s)."""
+    ls = Lockstep(config=ServerConfig(prefill_caps=False))
+    production_setup(ls, [])
+    kb, pm = ls.server.kb, ls.server.production
+    ls.refbox.machines(ls.station_states, RS_2016, **{"C-RS1": {"loaded_with": 3}})
+    ls.step(n=3)
+    ring = {"machine": "C-RS1", "ring_color": "RING_BLUE", "cost": 2}
+    base = {"machine": "C-BS", "side": M.OUTPUT, "base": "BASE_RED", "role": "extra"}
+    p5, p2, p6 = (pm.products.new("P", o) for o in (3, 2, 5))
+
+    def task(product, kind, params, **kw):
+        t = M.Task(kb.next_id("task"), kind, params, product=product.id, **kw)
+        kb.save_task(t)
+        product.tasks += (t.id,)
+        kb.save_product(product)
+        return t
+    mount5 = task(p5, M.MOUNT_RING, ring, carry=True, holder=3, locks=("C-RS1",))
+    get2 = task(p2, M.GET_WORKPIECE, {"machine": "C-RS1", "side": M.OUTPUT, "role": "main"},
+                locks=("C-RS1",), releases=("C-RS1",))
+    slide = {"machine": "C-RS1", "side": M.SLIDE}
+    extras = [task(p, M.GET_WORKPIECE, base, locks=("C-BS",), releases=("C-BS",)) for p in (p2, p6)]
+    put2, _ = (task(p, M.PUT_WORKPIECE, dict(slide, carry_from=e.id), carry=True, deps=(e.id,))
+               for p, e in zip((p2, p6), extras))
+    task(p2, M.MOUNT_RING, dict(ring, carry_from=get2.id), carry=True, deps=(get2.id, put2.id),
+         locks=("C-RS1",))
+    put6 = task(p6, M.PUT_WORKPIECE, slide, carry=True, holder=2)
+    pm.locks.grant({"C-RS1": p2.id})
+    for n, wp in ((3, "P5/wp"), (2, "P6/base")):
+        r = kb.robots[n]
+        r.holding = wp
+        kb.save_robot(r)
+    ls.step(n=3)
+    assert kb.tasks[get2.id].state == M.ASSIGNED and kb.tasks[get2.id].robot == 1
+    ls.agents[0].result(get2.id, holding=True)
+    ls.step(n=3)
+    assert kb.tasks[mount5.id].state == M.ASSIGNED and kb.tasks[mount5.id].robot == 3
+    assert kb.tasks[put6.id].state == M.PENDING
