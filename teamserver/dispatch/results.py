@@ -114,10 +114,32 @@ class Results:
         self.discards.fleet.heard(robot.number, task.id)
         now = self.kb.tasks.get(robot.task_id) if robot.task_id is not None else None
         if holding and robot.holding is None and (now is None or now.kind == M.GO_TO):
+            if self._grabbed(task, robot):
+                return
             robot.holding = "?"
             self.kb.save_robot(robot)
             log.warning("robot %d holds a workpiece after task %d was taken back: unknown, "
                         "to be discarded", robot.number, task.id)
+
+    def _grabbed(self, task: M.Task, robot: M.Robot) -> bool:
+        """A pickup from a station's output taken back and still in the pool (its station
+        went DOWN or BROKEN before it was prepared, which a pickup from an output never
+        is), whose robot says it holds a workpiece: it took that workpiece before it
+        stopped (it was given the pickup with an empty gripper).  The pickup is booked
+        done and the product goes on from the gripper, instead of the workpiece being
+        discarded as unknown and the pickup sent again to an empty output (rcll2016
+        seed 12 at 3b1cd15: C-CS1 went DOWN 1.4 s after the grab; GRAB_FAILED twice, the
+        product abandoned).  Returns whether it did so."""
+        if task.kind != M.GET_WORKPIECE or task.state != M.PENDING or task.robot is not None:
+            return False
+        task.state, task.robot, task.error = M.DONE, robot.number, None
+        task.finished_at = self.clock.now()
+        self.kb.save_task(task)
+        self.outcomes.task_done(task, robot)
+        self.kb.save_robot(robot)
+        log.info("robot %d took the workpiece of task %d before it was taken back: done",
+                 robot.number, task.id)
+        return True
 
     def _failed(self, task: M.Task, robot: M.Robot, error: str, holding: bool | None) -> None:
         lost = False
