@@ -138,10 +138,12 @@ class TeamServer:
         self.sent: list = []            # (where, message) of this tick, for tests and logs
         if team_color is not None and self.kb.get("team_color") is None:
             self.kb.set("team_color", team_color.upper())
-        # a restarted server: robots must reconnect; give them a full timeout to do so
+        # a restarted server: robots must reconnect; give them a full timeout to do so, and
+        # take it that each may hold the longest lease this server grants (.links.leases)
         for r in self.kb.robots.values():
             r.peer = None
             r.last_heartbeat = clock.now()
+            self.link.leases.restarted(r.number, self.config.dispatch.heartbeat_timeout, clock.now())
         if self.color is not None:
             self._colour_known(self.color)
 

@@ -94,7 +94,7 @@ class ServerLink:
             self.silent = False
             if rec.msg.DESCRIPTOR.full_name.startswith("rllbt."):
                 self.server_speaks_rllbt = True
-                self.lease.heard(rec.msg)
+                self.lease.heard(rec.msg, self.last_rx)
             if self.delivery is not None and not self.delivery.incoming(rec.msg):
                 continue                        # an acknowledgement
             out.append(rec)
@@ -184,6 +184,8 @@ class ServerLink:
             st.current_task_id = task_id
         if holding:
             st.holding.SetInParent()
+        if self.lease.lag is not None:
+            st.lease_lag = self.lease.lag       # the server lengthens the lease by it (.lease)
         if battery is not None:
             st.battery_voltage = battery.voltage
             if battery.soc is not None:

@@ -13,8 +13,10 @@ of a robot and applies :class:`LinkFaults` in both directions:
 - stream channels (the TCP link to the team server): TCP loses nothing, so a
   lost segment costs a retransmission (``rto`` seconds, doubling while losses
   follow one another), and frames stay in order; no duplicates;
-- both: a ``bandwidth`` cap in bit/s (frames queue behind each other) and
-  link ``cuts`` (intervals on the transport's clock).  On a datagram channel
+- both: a ``bandwidth`` cap in bit/s (frames queue behind each other),
+  ``stalls`` (intervals in which the link carries nothing yet loses nothing,
+  as in a chain of retransmissions: a frame due inside one arrives at its
+  end) and link ``cuts`` (intervals on the transport's clock).  On a datagram channel
   a cut loses what is sent or arrives during it; a stream is *disconnected*
   for the cut (the wrapper reports ``disconnected`` and ``connected`` events,
   sends fail, what was in flight is lost), as a real TCP link times out.
@@ -50,7 +52,7 @@ class LinkFaults:
 
     ``loss``, ``duplicate``, ``reorder``: probabilities per frame;
     ``delay``, ``jitter``: seconds (jitter is a standard deviation);
-    ``bandwidth``: bit/s or None; ``cuts``: ``(start, end)`` clock times;
+    ``bandwidth``: bit/s or None; ``cuts``, ``stalls``: ``(start, end)`` clock times;
     ``rto``: the first retransmission time of a stream frame whose segment was lost.
     """
 
@@ -62,6 +64,7 @@ class LinkFaults:
     bandwidth: float | None = None
     cuts: tuple[tuple[float, float], ...] = ()
     rto: float = 0.2
+    stalls: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self):
         for name in ("loss", "duplicate", "reorder"):
@@ -73,9 +76,9 @@ class LinkFaults:
                 raise ValueError(f"{name} must not be negative")
         if self.bandwidth is not None and self.bandwidth <= 0:
             raise ValueError("bandwidth must be positive (bit/s)")
-        for a, b in self.cuts:
+        for a, b in self.cuts + self.stalls:
             if b <= a:
-                raise ValueError(f"a cut must end after it starts: {a}-{b}")
+                raise ValueError(f"a cut or stall must end after it starts: {a}-{b}")
 
     @property
     def perfect(self) -> bool:
@@ -208,6 +211,9 @@ class FaultyTransport:
             ahead = not self.stream and rng.random() < f.reorder
             d = 0.0 if ahead else max(0.0, rng.gauss(f.delay, f.jitter) if f.jitter else f.delay)
             due = now + d + extra
+            for a, b in f.stalls:
+                if a <= due < b:
+                    due = b                         # held up: arrives when the stall ends
             if f.bandwidth is not None:
                 start = max(due, self._free[way])
                 self._free[way] = start + size * 8.0 / f.bandwidth

@@ -1,6 +1,7 @@
 """Robots and stations that drop out under an assigned task.
 
-- A robot silent for ``heartbeat_timeout`` seconds is dropped
+- A robot silent for ``heartbeat_timeout`` seconds and past every task
+  lease the server granted it (:mod:`teamserver.links.leases`) is dropped
   (:meth:`Dropouts.check_heartbeats`): its task goes back to the pool, or,
   if it carried a workpiece, the product is repaired; so is every product
   whose next step waited for what it held.
@@ -43,7 +44,7 @@ class Dropouts:
         now = self.clock.now()
         dropped = []
         for r in list(self.kb.robots.values()):
-            if r.status == M.ACTIVE and now - r.last_heartbeat > self.config.heartbeat_timeout:
+            if r.status == M.ACTIVE and self.tasks.past_lease(r, self.config.heartbeat_timeout, now):
                 self.drop(r, f"no heartbeat for {now - r.last_heartbeat:.1f} s")
                 dropped.append(r)
         return dropped

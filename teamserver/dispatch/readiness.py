@@ -11,8 +11,8 @@ A production task is *ready* when
   :meth:`~teamserver.links.tasks.TaskLink.stop_owed`), and no robot's latest
   status says it runs the task
   (:meth:`~teamserver.links.tasks.TaskLink.said_running`), unless that robot has been silent
-  past its lease (``heartbeat_timeout``, as a dropped robot: it stops
-  ``rll_bt.agent.lease.MARGIN`` s before), so that a cancel lost in a cut
+  past its lease (``heartbeat_timeout`` and every lease granted to it over, as a dropped
+  robot: :mod:`teamserver.links.leases`), so that a cancel lost in a cut
   never lets two robots run one task (:meth:`Readiness.held_by`); nor, at the
   same station, a task planned anew in place of a cancelled one (a product
   planned again gets new tasks under new ids: :meth:`Readiness.station_held_by`);
@@ -100,7 +100,7 @@ class Readiness:
         """Robot ``number`` is active and heard within its lease."""
         robot = self.kb.robots.get(number)
         return robot is not None and robot.status == M.ACTIVE and (
-            self.clock is None or self.clock.now() - robot.last_heartbeat <= self.config.heartbeat_timeout)
+            self.clock is None or not self.tasks.past_lease(robot, self.config.heartbeat_timeout, self.clock.now()))
 
     def station_usable(self, machine: str | None) -> bool:
         if machine is None:

@@ -30,6 +30,7 @@ from rll_bt.rules import Profile, machine_team, machine_type
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
 from .docking import Docking
+from .leases import Leases
 
 log = logging.getLogger("teamserver.links.agents")
 
@@ -71,7 +72,7 @@ class AgentLink:
         self.league_peers: set = set()   # peers that spoke without it
         self._outcomes: dict[tuple[int, int], object] = {}   # (robot, task id) -> TaskOutcome
         self.hb_seq = 0
-        self.heard: dict[int, float] = {}   # robot -> latest stamp (its clock) of its RobotStatus heard
+        self.leases = Leases()              # the robots' task leases (:mod:`.leases`)
         self.running: dict[int, int] = {}   # robot -> the assignment (wire id) its latest RobotStatus says it runs
         self.docking = Docking(kb, clock)   # where a robot of the league waits (it sends no RobotStatus)
 
@@ -109,7 +110,7 @@ class AgentLink:
         self.league_peers.discard(peer)
         r = self.robot(int(m.robot_id), peer)
         r.name = m.peer_name or r.name
-        self.heard.pop(r.number, None)     # a new connection, perhaps a new process with a new clock
+        self.leases.reset(r.number)        # a new connection, perhaps a new process with a new clock
         self.seen(r)
         if m.HasField("restarted") and m.restarted:
             r.holding = None            # a rebooted robot has lost what it knew
@@ -174,8 +175,8 @@ class AgentLink:
 
     def on_status(self, m, peer) -> tuple[M.Robot, bool]:
         r = self.robot(int(m.robot_id), peer)
-        if m.HasField("stamp"):
-            self.heard[r.number] = max(m.stamp, self.heard.get(r.number, -math.inf))
+        self.leases.status(r.number, m.stamp if m.HasField("stamp") else None,
+                           m.lease_lag if m.HasField("lease_lag") else None, self.clock.now())
         back = self.seen(r)
         if m.HasField("pose"):
             r.pose = (m.pose.x, m.pose.y, m.pose.theta)
@@ -276,13 +277,15 @@ class AgentLink:
         """The AgentTask that stops the assignment ``wire`` on robot ``robot``."""
         return render_cancel(wire, robot, color)
 
-    def heartbeat_msg(self, number: int, lease: float | None = None):
-        """A heartbeat to robot ``number``; with ``lease`` (the heartbeat timeout) its task
-        lease (:mod:`rll_bt.agent.lease`): the latest stamp of its statuses heard, and ``lease``."""
+    def heartbeat_msg(self, number: int, timeout: float | None = None):
+        """A heartbeat to robot ``number``; with ``timeout`` (the heartbeat timeout) its task
+        lease (:mod:`.leases`): the latest stamp of its statuses heard, and the seconds after
+        it the robot may work unheard (``timeout`` and the lag it reported), kept as granted."""
         self.hb_seq += 1
         hb = self.ms.Heartbeat(robot_id=number, seq=self.hb_seq, stamp=self.clock.now())
-        if lease is not None and number in self.heard:
-            hb.heard, hb.lease = self.heard[number], lease
+        granted = self.leases.grant(number, timeout) if timeout is not None else None
+        if granted is not None:
+            hb.heard, hb.lease = granted
         return hb
 
     def game_phase_msg(self, phase: str, state: str, game_time: float, color: str | None,

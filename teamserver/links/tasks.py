@@ -129,6 +129,11 @@ class TaskLink:
         ``task_id`` (also after a restart of the server, which forgot its stops owed), or None."""
         return next((n for n, wire in self.codec.running.items() if from_wire(wire)[0] == int(task_id)), None)
 
+    def past_lease(self, robot: M.Robot, timeout: float, now: float) -> bool:
+        """``robot`` may be given away: silent for ``timeout`` and past every lease
+        granted to it (:meth:`teamserver.links.leases.Leases.past`)."""
+        return self.codec.leases.past(robot.number, robot.last_heartbeat, timeout, now)
+
     def stopped(self, number: int, task_id: int | None = None) -> None:
         """Robot ``number`` has stopped task ``task_id`` (None: every task; it was
         dropped, past its lease)."""

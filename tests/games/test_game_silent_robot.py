@@ -68,7 +68,9 @@ def test_a_robot_dropped_while_cut_off_has_stopped_its_task_so_no_task_runs_twic
         assert not both, f"two robots ran the same task at once: {both[:3]}"
         # the step that outlasted the lease: stopped, FAILED for the lease, told when back; R1 back at work
         cut = next(c for c in cuts if "lost" in c and not r1.book.finished[c["wire"]].successful)
-        assert "lease" in r1.book.finished[cut["wire"]].outcome.text and cut["stopped"] - cut["start"] < 10.0
+        # (its lease: 10 s and the lag it measured, about 1 s on this perfect link, after its
+        # last status the server confirmed)
+        assert "lease" in r1.book.finished[cut["wire"]].outcome.text and cut["stopped"] - cut["start"] < 12.0
         assert game.teamserver.snapshot()["robots"][1]["status"] == "ACTIVE"
         assert not r1.server.delivery.unacknowledged
 

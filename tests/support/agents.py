@@ -134,6 +134,10 @@ class ScriptedServer:
         self.heartbeat_every = 20       # pumps between the server's heartbeats
         self.lease: float | None = None  # give the robot a task lease of so many s (rll_bt.agent.lease)
         self.heard: float | None = None  # the latest stamp of the robot's statuses
+        self.leases = None               # grant leases as rll-bt's team server does (follow_leases)
+        self.last_heard: float | None = None     # ... when the robot was last heard (server clock)
+        self.given_away: float | None = None     # ... when the server could first give its task away
+        self.granted: list[tuple[float, float]] = []    # ... (heard, lease) of its heartbeats
         self._outcomes: dict[int, object] = {}
         self._results: list[Res] = []
 
@@ -141,7 +145,11 @@ class ScriptedServer:
         self.pumps += 1
         if self.client is not None and self.pumps % self.heartbeat_every == 0 and not self.league:
             hb = TM.Heartbeat(robot_id=0, seq=self.pumps)
-            if self.lease is not None and self.heard is not None:
+            granted = self.leases.grant(1, self.timeout) if self.leases is not None else None
+            if granted is not None:
+                hb.heard, hb.lease = granted
+                self.granted.append(granted)
+            elif self.lease is not None and self.heard is not None:
                 hb.heard, hb.lease = self.heard, self.lease
             self.send(hb)
         for ev in self.t.events():
@@ -153,6 +161,14 @@ class ScriptedServer:
         for rx in self.t.receive():
             self.got.append((rx.source, rx.msg))
             name = rx.msg.DESCRIPTOR.name
+            if self.leases is not None:
+                self.last_heard = self.clock.now()
+                if name == "RobotHello":
+                    self.leases.reset(1)
+                elif name == "RobotStatus":
+                    self.leases.status(1, rx.msg.stamp if rx.msg.HasField("stamp") else None,
+                                       rx.msg.lease_lag if rx.msg.HasField("lease_lag") else None,
+                                       self.clock.now())
             if name == "RobotHello":
                 self.client = rx.source
                 self.send_phase()
@@ -163,6 +179,16 @@ class ScriptedServer:
                 self._outcomes[int(rx.msg.task_id)] = rx.msg
             elif name == "AgentTask" and (rx.msg.HasField("successful") or rx.msg.HasField("canceled")):
                 self._results.append(Res(rx.msg, self._outcomes.pop(int(rx.msg.task_id), None)))
+        if self.leases is not None and self.given_away is None and self.last_heard is not None and \
+                self.leases.past(1, self.last_heard, self.timeout, self.clock.now()):
+            self.given_away = self.clock.now()
+
+    def follow_leases(self, clock, timeout: float = 10.0) -> None:
+        """Grant robot 1 task leases as rll-bt's team server does (teamserver.links.leases,
+        drop timeout ``timeout``) and note in :attr:`given_away` when its task could first
+        go to another robot (silent ``timeout`` s and past every lease granted)."""
+        from teamserver.links.leases import Leases
+        self.leases, self.clock, self.timeout = Leases(), clock, timeout
 
     def of(self, name: str) -> list:
         return [m for _c, m in self.got if m.DESCRIPTOR.name == name]

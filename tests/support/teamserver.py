@@ -121,11 +121,16 @@ class FakeAgent:
             b.task.CopyFrom(self.running)
         self.t.send(b)
 
-    def status(self, state=1, holding=False, waiting_at=None, task=None):
-        """rll-bt's RobotStatus (``task``: the wire id of the assignment it says it runs)."""
+    def status(self, state=1, holding=False, waiting_at=None, task=None, stamp=None, lag=None):
+        """rll-bt's RobotStatus (``task``: the wire id of the assignment it says it runs;
+        ``stamp``, ``lag``: its clock's time and the lag of its lease confirmations)."""
         if self.league:
             return self.beat()
         st = self.ms.RobotStatus(robot_id=self.number, state=state)
+        if stamp is not None:
+            st.stamp = stamp
+        if lag is not None:
+            st.lease_lag = lag
         if task is not None:
             st.current_task_id = int(task)
         st.pose.x, st.pose.y, st.pose.theta = self.pose

@@ -125,3 +125,56 @@ def test_a_cut_shorter_than_the_lease_costs_nothing():
     srv.task(4, "get_workpiece", machine="C-BS")
     rig.until(lambda: _final(srv, 4), seconds=30.0, what="task 4 done")
     assert _final(srv, 4)[0].status == "SUCCEEDED" and rig.agent.server.lease.expiries == 0
+
+
+def _lossy_rig(faults):
+    """An agent whose link has ``faults`` and a scripted server granting leases as rll-bt's
+    team server does (drop timeout 10 s); the agent is running a task that drives until
+    halted (mount_cap) from 20 s on, its lag measured over those 20 s."""
+    clock = SimClock()
+    bus = Bus(clock)
+    srv = ScriptedServer(bus.stream_server("ts", registry=TEAM_REG, key=KEY))
+    srv.follow_leases(clock, timeout=10.0)
+    link = FaultyTransport(bus.stream_client("ts", registry=TEAM_REG, key=KEY), faults, clock=clock,
+                           stream=True, seed=1)
+    rig = Rig(link, srv, clock)
+    rig.until(lambda: rig.agent.gate.moving_allowed and rig.agent.server.lease.until is not None,
+              seconds=20.0, what="a lease")
+    rig.run(19.0 - clock.now())
+    srv.task(4, "mount_cap", machine="C-CS1")
+    rig.until(lambda: rig.agent.run is not None and rig.agent.run.ticks > 0, what="task 4 running")
+    return clock, srv, rig
+
+
+def test_a_stall_of_5_s_on_a_link_with_2_s_each_way_does_not_stop_the_task():
+    """Issue 24, "lease slack": with 2 s of delay each way a confirmation is 4-5 s old when it
+    reaches the robot, so a lease of the bare drop timeout (10 s) left 4.5 s of slack and a
+    stall of that length (a chain of retransmissions, here both ways) stopped a task the
+    server would have left the robot.  The robot reports that lag and the server lengthens the
+    lease by it: a 5 s stall costs nothing, and the server never could give the task away."""
+    stall = (25.0, 30.0)
+    clock, srv, rig = _lossy_rig(LinkFaults(delay=2.0, jitter=0.2, stalls=(stall,)))
+    lease = rig.agent.server.lease
+    assert 3.5 < lease.lag < 7.0, lease.lag                     # 2 s up, 2 s down, up to 1 s to the heartbeat
+    rig.run(stall[1] + 15.0 - clock.now())                      # the stall and 15 s after it
+    assert lease.expiries == 0 and rig.agent.run is not None and not rig.agent.run.done
+    assert srv.given_away is None
+    assert max(s.stamp for s in srv.of("RobotStatus")) > stall[1]      # heard again after the stall
+    assert min(lease for _heard, lease in srv.granted[-10:]) > 13.0      # 10 s and the lag
+
+
+def test_a_real_silence_still_stops_the_task_before_the_server_may_give_it_away():
+    """The same link cut for 40 s: the robot stops its task before the server could give it
+    to another robot (silent 10 s and past every lease it granted), and not long before."""
+    cut = (25.0, 65.0)
+    clock, srv, rig = _lossy_rig(LinkFaults(delay=2.0, jitter=0.2, cuts=(cut,)))
+    lease = rig.agent.server.lease
+    rig.until(lambda: rig.agent.run is None, seconds=30.0, what="task 4 stopped while cut off")
+    stopped = clock.now()
+    assert lease.expiries == 1 and rig.drives()[-1][1] == "stop"
+    rig.until(lambda: srv.given_away is not None, seconds=30.0, what="the server's drop")
+    assert cut[0] < stopped < srv.given_away < cut[1]
+    assert srv.given_away - stopped < 6.0          # the statuses it could not know had arrived, and the margin
+    assert stopped - cut[0] > 10.0                 # a whole drop timeout of silence at least
+    [result] = rig.agent.server.delivery.unacknowledged
+    assert result.task_id == 4 and not result.successful
