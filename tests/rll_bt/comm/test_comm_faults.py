@@ -127,6 +127,26 @@ def test_a_cut_disconnects_a_stream_and_it_comes_back(tm):
     assert all(e[1] and e[2] and e[3] and e[5] for e in after)
 
 
+def test_a_stall_holds_a_stream_both_ways_and_loses_nothing(tm):
+    """A stall (a chain of retransmissions): nothing arrives during it, what was due
+    in it arrives at its end, in order; nothing is lost and the link stays up."""
+    clock, server, robot = stream(tm, LinkFaults(delay=0.5, stalls=((2.0, 5.0),)))
+    sent, to_robot, to_server = [], [], []
+
+    def tick():
+        sent.append(clock.now())
+        server.send(tm.Other(x=len(sent) - 1))
+        assert robot.send(tm.Other(x=len(sent) - 1))
+        to_robot.extend((r.msg.x, clock.now()) for r in robot.receive())
+        to_server.extend((r.msg.x, clock.now()) for r in server.receive())
+        assert robot.connected and not robot.events()
+    run(clock, 0.25, 8.0, tick)
+    for got in (to_robot, to_server):
+        assert [x for x, _ in got] == list(range(len(got))) and sent[len(got) - 1] >= 7.0 - 1e-9
+        assert not [t for _x, t in got if 2.0 <= t < 5.0]                 # nothing during the stall
+        assert [sent[x] for x, t in got if t == 5.0] == [1.5 + 0.25 * i for i in range(13)]   # sent 1.5-4.5
+
+
 def test_a_cut_loses_datagrams_both_ways(tm):
     clock, far, robot = datagram(tm, LinkFaults(cuts=((1.0, 2.0),)))
     heard, sent = [], []
@@ -166,7 +186,8 @@ def test_settings_are_checked_and_cuts_parse():
     for bad in ("R2:330-300", "R2:300", "300-330", "R2:a-b"):
         with pytest.raises(ValueError):
             parse_cut(bad)
-    for kw in ({"loss": 1.0}, {"loss": -0.1}, {"delay": -1}, {"bandwidth": 0}, {"cuts": ((5.0, 4.0),)}):
+    for kw in ({"loss": 1.0}, {"loss": -0.1}, {"delay": -1}, {"bandwidth": 0}, {"cuts": ((5.0, 4.0),)},
+               {"stalls": ((5.0, 5.0),)}):
         with pytest.raises(ValueError):
             LinkFaults(**kw)
 
