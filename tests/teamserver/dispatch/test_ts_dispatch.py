@@ -373,6 +373,39 @@ def test_a_task_taken_back_goes_to_no_other_robot_until_its_robot_has_provably_s
         ls.close()
 
 
+def test_a_task_taken_back_from_a_robot_on_a_slow_link_waits_for_the_longer_lease_it_was_granted():
+    """The robot measured that the server's confirmations reach it 4.5 s late (2 s each way):
+    its lease is 14.5 s (teamserver.links.leases), so its task, taken back while it is cut
+    off (the cancel lost), goes to no other robot after the 10 s of silence that dropped a
+    robot before, only once that lease is surely over."""
+    ls = Lockstep(config=ALONE)
+    kb, bs = bs_task_after_setup(ls, [(0.5, 5.5, 0.0), (-5.0, 5.5, 0.0), (-5.5, 5.0, 0.0)])
+    first = next(a for a in ls.agents if a.number == bs.robot)
+    others = [a for a in ls.agents if a is not first]
+    first.ack = False
+    first.status(stamp=500.0, lag=4.5)             # its last word: the cut begins
+    ls.step(dt=0.1)
+    heard_at = ls.clock.now()
+    ls.station_states["C-BS"] = "DOWN"
+    ls.refbox.machines(ls.station_states)
+    ls.step(dt=0.1, n=3)
+    assert kb.tasks[bs.id].state == M.PENDING and ls.server.tasks.stop_owed(bs.id) == first.number
+    ls.station_states["C-BS"] = "IDLE"
+    ls.refbox.machines(ls.station_states)
+    given = None
+    while ls.clock.now() < heard_at + 20.0 and given is None:
+        for a in others:
+            a.beat()
+        ls.step(dt=0.25)
+        if kb.tasks[bs.id].state == M.ASSIGNED:
+            given = ls.clock.now()
+    assert (first.inbox and [(m.heard, m.lease) for m in first.inbox if m.DESCRIPTOR.name == "Heartbeat"
+                             and m.HasField("lease")][-1] == (500.0, pytest.approx(14.5)))
+    assert given is not None and heard_at + 14.5 < given < heard_at + 15.5, (heard_at, given)
+    assert kb.tasks[bs.id].robot != first.number and kb.robots[first.number].status == M.LOST
+    ls.close()
+
+
 def test_a_product_planned_again_sends_no_robot_where_its_cancelled_pickup_may_still_run():
     """A product is planned again (a step of it failed) while one robot fetches its base
     at the BS and another its cap, and the BS robot's cancel goes unanswered (lost on the
