@@ -108,6 +108,10 @@ class Caps:
             for t in (retrieve, pickup) + ((after,) if after.kind == M.DISCARD else ()):
                 t.state, t.error = M.CANCELLED, f"mounts the cap waiting in {cs}"
                 self.kb.save_task(t)
+            for t in self.kb.tasks_of(p.tasks):     # a waived mount waited for the pickup
+                if t.id != after.id and pickup.id in t.deps:
+                    t.deps = tuple(d for d in t.deps if d != pickup.id)
+                    self.kb.save_task(t)
             if after.kind == M.DISCARD:
                 for t in self.kb.tasks_of(p.tasks):
                     if after.id in t.deps:
@@ -162,7 +166,9 @@ class Caps:
             pick = [t for t in tasks if r.id in t.deps and t.kind == M.GET_WORKPIECE]
             if len(pick) != 1 or pick[0].state != M.PENDING:
                 return None
-            after = [t for t in tasks if pick[0].id in t.deps and t.carry]
+            # what carries the cap-less base on (a ring mount waived off its put to a
+            # full slide waits for the pickup too, but carries its own workpiece)
+            after = [t for t in tasks if t.params.get("carry_from") == pick[0].id]
             if len(after) != 1 or after[0].state != M.PENDING:
                 return None
             return r, pick[0], after[0]

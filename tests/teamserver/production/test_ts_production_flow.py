@@ -2,6 +2,7 @@
 workpieces a station never took, stations left PREPARED with a stale instruction,
 robots left holding what they cannot use yet, places the robots keep failing at."""
 from teamserver.knowledge import model as M
+from teamserver.production.caps import FREE
 from teamserver.server import ServerConfig
 from tests.support.teamserver import RS_2016, Lockstep, Stations, abandon_all_products, play, production_setup
 from tests.teamserver.production.test_ts_storage import send_orders, setup_2025
@@ -258,6 +259,35 @@ def test_a_mount_whose_full_slide_holds_its_cost_does_not_wait_for_its_own_bases
         [retrieve] = [t for t in tasks if t.kind == M.RETRIEVE_CAP and t.state == M.DONE]
         [mount_cap] = [t for t in tasks if t.kind == M.MOUNT_CAP and t.state == M.DONE]
         assert mount_cap.assigned_at >= retrieve.finished_at
+
+
+def test_a_mount_waived_off_its_cap_less_base_still_lets_its_product_take_a_free_cap():
+    """A ring mount whose full slide holds its cost no longer waits for the put of the
+    cap-less base, only for its pickup (the cap must be in its station before the cap
+    mount). A cap left free in that cap station (retrieved ahead, or by an abandoned
+    product) is then this product's to mount: its retrieval could never go while the
+    station holds a cap (rcll2016 seed 12 at 3b1cd15: the free cap was not offered to
+    order 7's C3, whose robot held it with two rings from 479.6 s to the end, because
+    its cap chain had two steps after the pickup, the put and the waived mount)."""
+    ls = Lockstep(config=ServerConfig(prefill_caps=False))
+    production_setup(ls, [{"id": 5, "complexity": 1, "rings": ["RING_BLUE"]}],   # 2 bases, RS1
+                     states={"C-CS2": "DOWN"})
+    ls.refbox.machines(ls.station_states, RS_2016, **{"C-RS1": {"loaded_with": 3}})
+    pm, kb = ls.server.production, ls.server.kb
+    ls.step(n=3)
+    [p] = [p for p in kb.products.values() if p.order_id == 5]
+    [pickup] = [t for t in kb.tasks_of(p.tasks) if t.params.get("role") == "capless"]
+    [mount] = [t for t in kb.tasks_of(p.tasks) if t.kind == M.MOUNT_RING]
+    assert pickup.id in mount.deps                          # waived: the slide is full
+    pm.buffers.take("C-CS2", FREE)                          # a cap the station holds for nobody
+    ls.step(n=3)
+    tasks = kb.tasks_of(p.tasks)
+    mount, pickup = kb.tasks[mount.id], kb.tasks[pickup.id]
+    assert pm.buffers.owners["C-CS2"] == p.id               # it mounts the free cap
+    assert pickup.state == M.CANCELLED and pickup.id not in mount.deps
+    assert all(kb.tasks[d].state != M.CANCELLED for t in tasks if t.state == M.PENDING
+               for d in t.deps)                             # nothing waits for a cancelled step
+    ls.close()
 
 
 def test_a_cap_retrieved_ahead_that_the_station_never_took_blocks_nothing():
