@@ -10,7 +10,8 @@ protocol, and the robot configuration file that points at them.
 
 ``laser_source(t)`` gives the distances (mm) the laser measures at device
 time ``t`` for its own beam angles (``rig.laser_angles()``, radians in the
-laser frame), ``frame_source()`` the BGR image the camera sees; by default a
+laser frame), or ``(distances, taken)`` measured at device time ``taken``,
+the scan's stamp (:mod:`backends.devices.laser.source`); ``frame_source()`` the BGR image the camera sees; by default a
 round room of ``room`` metres radius and a grey test image.  A simulator
 passes its own (``backends.sim.hardware``).
 """

@@ -16,7 +16,8 @@ Per robot (:class:`WorldRig`, on an :class:`~backends.robotino.rig.EmulatedRobot
 * the laser (URG on a pty, TiM on a TCP port): the ranges are the world's
   ray casts (:func:`backends.sim.sensors.laser_ranges`, the robot's laser
   noise included) for the device's own beam angles from the robot's laser
-  mount, taken every scan period;
+  mount, taken every scan period; the scan the device sends next is
+  stamped with the moment they were cast, not when it is sent;
 * the camera (MJPEG over HTTP): the frames the world renders from the
   robot's camera (:meth:`World.camera_image`), at ``camera_fps``;
 * the gripper Arduino on a pty: its commanded axis targets and finger state
@@ -55,6 +56,7 @@ class WorldRig(CoupledRig):
         super().__init__(world, key, self.rig.laser_angles(), dev.model.scan_period if dev else math.inf, camera_fps)
         self._lock = threading.Lock()
         self._ranges_mm: np.ndarray | None = None
+        self._cast = math.nan
         self._image = None
         self._image_seq = 0
         self._image_sent = -1
@@ -71,11 +73,12 @@ class WorldRig(CoupledRig):
                 "silent_stops": self.silent_stops}
 
     # -- what the device threads read ---------------------------------------------------
-    def _laser_source(self, t: float) -> np.ndarray:
+    def _laser_source(self, t: float):
         with self._lock:
             if self._ranges_mm is None:
                 return np.full(len(self.angles), np.nan)
-            return self._ranges_mm
+            # the ranges and the device time they were cast at (the scan's stamp)
+            return self._ranges_mm, self._cast - self.rig.laser_device.boot
 
     def _frame(self):
         with self._lock:
@@ -104,9 +107,9 @@ class WorldRig(CoupledRig):
             self._sync_gripper(world_time)
         return rpm, stepped
 
-    def _put_ranges(self, ranges_mm: np.ndarray) -> None:
+    def _put_ranges(self, ranges_mm: np.ndarray, cast: float) -> None:
         with self._lock:
-            self._ranges_mm = ranges_mm
+            self._ranges_mm, self._cast = ranges_mm, cast
 
     def _camera_wanted(self) -> bool:
         return self.rig.camera_server is not None and self.rig.camera_server.clients > 0

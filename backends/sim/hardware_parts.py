@@ -196,7 +196,8 @@ class CoupledRig:
         r.drive(vx, vy, w, world_time)
         if world_time >= self._next_scan:
             self._next_scan = max(self._next_scan + self.scan_period, world_time)
-            self._put_ranges(sensors.laser_ranges(self.world.cid, r, self.angles, noisy=True) * 1000.0)
+            # cast now (the devices' clock): the scan sent later says so in its stamp (devices/laser/source.py)
+            self._put_ranges(sensors.laser_ranges(self.world.cid, r, self.angles, noisy=True) * 1000.0, self.wall())
             self.scans += 1
         if world_time >= self._next_frame and self._camera_wanted():
             self._next_frame = max(self._next_frame + self.camera_period, world_time)
@@ -211,7 +212,8 @@ class CoupledRig:
         time of the base emulator's step they are of (None: not stepped yet)."""
         raise NotImplementedError
 
-    def _put_ranges(self, ranges_mm: np.ndarray) -> None:
+    def _put_ranges(self, ranges_mm: np.ndarray, cast: float) -> None:
+        """The laser's newest ranges (mm), cast at ``cast`` (:meth:`wall`)."""
         raise NotImplementedError
 
     def _camera_wanted(self) -> bool:

@@ -49,6 +49,7 @@ MAX_BEAMS = 2048
 RANGES_SEQ, IMAGE_SEQ, HOLDING, G_BUSY, G_POS, G_ACK = 0, 1, 2, 3, 4, 7
 RPM, G_MOVES, G_OPEN, G_TARGET, G_COMMANDS, CLIENTS, IMAGE_H, IMAGE_W = 8, 11, 12, 13, 16, 17, 18, 19
 STEPPED = 20           # the base emulator's step the wheels' speeds are of (time.monotonic(); nan: none yet)
+RANGES_CAST = 21       # when the world cast the laser's ranges (time.monotonic(): the scan's stamp)
 HEADER = 24
 BEAMS = HEADER         # the laser's ranges (mm) from here
 
@@ -155,10 +156,11 @@ class ProcessRig(CoupledRig):
             f[G_ACK] = commands
         return rpm, stepped
 
-    def _put_ranges(self, ranges_mm: np.ndarray) -> None:
+    def _put_ranges(self, ranges_mm: np.ndarray, cast: float) -> None:
         n = len(ranges_mm)
         with self._shared.lock:
             self._floats[BEAMS:BEAMS + n] = ranges_mm
+            self._floats[RANGES_CAST] = cast
             self._ranges_seq += 1
             self._floats[RANGES_SEQ] = self._ranges_seq
 
@@ -195,11 +197,12 @@ class _Devices:
         self._frame_sent = 0
         self.rig.base.on_step = self.copy
 
-    def _laser_source(self, t: float) -> np.ndarray:
+    def _laser_source(self, t: float):
         with self.shared.lock:
             if self.floats[RANGES_SEQ] == 0:
                 return np.full(self.beams, np.nan)
-            return self.floats[BEAMS:BEAMS + self.beams].copy()
+            cast = float(self.floats[RANGES_CAST]) - self.rig.laser_device.boot
+            return self.floats[BEAMS:BEAMS + self.beams].copy(), cast
 
     def _frame(self):
         with self.shared.lock:

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import cola
+from .source import sample
 
 PASSWORDS = {2: "B21ACE26", 3: "F4724744"}
 WRITABLE = {"LMDscandatacfg", "LMPoutputRange", "FREchoFilter", "LFPparticle", "LFPmeanfilter",
@@ -88,7 +89,8 @@ class TimDevice:
     def scan(self, index: int, sent: float) -> cola.ScanData:
         m = self.model
         t = self.boot + index * m.scan_period
-        mm = np.asarray(self.source(t - self.boot), dtype=float)[:m.count]
+        mm, taken = sample(self.source, t - self.boot)
+        mm, t = mm[:m.count], self.boot + taken
         lo, hi = m.range_mm
         ok = np.isfinite(mm) & (mm >= lo) & (mm <= hi)
         values = np.where(ok, np.round(mm), 0).astype(int).tolist()

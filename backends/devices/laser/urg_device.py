@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import scip
+from .source import sample
 
 NO_ECHO = 1           # an error code (below DMIN) sent where nothing is measured
 
@@ -301,8 +302,12 @@ class UrgDevice:
     # -- data -----------------------------------------------------------------------
     def measure(self, t: float, start: int, end: int, cluster: int, size: int) -> list[int]:
         """The values sent for steps ``start..end`` at device time ``t``."""
+        return self._measure(t, start, end, cluster, size)[0]
+
+    def _measure(self, t: float, start: int, end: int, cluster: int, size: int) -> tuple[list[int], float]:
+        """(:meth:`measure`, the clock time the source measured them at: ``t`` unless it says otherwise)."""
         m = self.model
-        raw = np.asarray(self.source(t - self.boot), dtype=float)
+        raw, taken = sample(self.source, t - self.boot)
         steps = np.arange(start, end + 1)
         mm = np.full(len(steps), float(NO_ECHO))
         inside = (steps >= m.amin) & (steps <= m.amax) & (steps < len(raw))
@@ -317,10 +322,10 @@ class UrgDevice:
         groups = groups.reshape(-1, c)
         # a cluster sends its nearest echo; with none, its first step's error code
         echoes = np.where(groups >= m.dmin, groups, np.inf).min(axis=1)
-        return np.where(np.isfinite(echoes), echoes, groups[:, 0]).astype(int).tolist()
+        return np.where(np.isfinite(echoes), echoes, groups[:, 0]).astype(int).tolist(), self.boot + taken
 
     def _scan_payload(self, s: dict, t: float) -> bytes:
-        values = self.measure(t, s["start"], s["end"], s["cluster"], s["size"])
+        values, taken = self._measure(t, s["start"], s["end"], s["cluster"], s["size"])
         self._last_scan = t
-        return (scip.sum_line(scip.encode(self.stamp(t), 4))
+        return (scip.sum_line(scip.encode(self.stamp(taken), 4))
                 + scip.data_block(scip.encode_values(values, s["size"])) + b"\n")
