@@ -41,7 +41,7 @@ from pathlib import Path
 def play(opts, out: Path, connect_timeout: float) -> dict:
     import time as _time
 
-    from games import finish
+    from games import finish, sigterm_interrupts
     from games import play as play_game
     opts.out = out
     out.mkdir(parents=True, exist_ok=True)
@@ -49,11 +49,12 @@ def play(opts, out: Path, connect_timeout: float) -> dict:
         return play_game(opts)
     from games.hardware import HardwareGame  # as play() does, with a longer wait for the processes
     t0 = _time.monotonic()
-    game = HardwareGame(opts, connect_timeout=connect_timeout)
-    try:
-        result = game.run()
-    finally:
-        game.close()
+    with sigterm_interrupts():         # kill PID stops the game's processes too
+        game = HardwareGame(opts, connect_timeout=connect_timeout)
+        try:
+            result = game.run()
+        finally:
+            game.close()
     return finish(result, opts, _time.monotonic() - t0)
 
 

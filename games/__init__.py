@@ -36,25 +36,56 @@ entry points (groups ``rll_bt.simulators``, ``rll_bt.teamservers``,
 """
 from __future__ import annotations
 
+import signal
+import threading
+from contextlib import contextmanager
 from pathlib import Path
 
 from .lockstep import GameResult, LockstepGame
 from .options import GameOptions, max_exploration_points
 
-__all__ = ["GameResult", "LockstepGame", "GameOptions", "max_exploration_points", "play", "finish"]
+__all__ = ["GameResult", "LockstepGame", "GameOptions", "max_exploration_points", "play", "finish",
+           "sigterm_interrupts"]
 
 
 def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
     """Play one game as ``rll-bt sim`` does; returns the report summary with
     ``table`` (text) and ``files`` (names written to ``options.out``)."""
     from rll_bt.clock import WallClock
-
-    from .progress import ProgressBar
     clock = clock or WallClock()
     t0 = clock.now()
+    with sigterm_interrupts():
+        result = _play(options, bar=_bar(options, progress, clock), clock=clock)
+    return finish(result, options, clock.now() - t0)
+
+
+@contextmanager
+def sigterm_interrupts():
+    """SIGTERM raises KeyboardInterrupt in the main thread while a game runs, so
+    the game's ``close`` stops every process it started (a ``kill PID`` of
+    ``rll-bt sim`` or of a benchmark left the team server, agents and devices
+    running without a parent) and ``rll-bt sim`` exits 130 as on Ctrl-C."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+    old = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def _bar(options: GameOptions, progress: bool, clock):
+    from .progress import ProgressBar
     colors = tuple(options.lineup())
-    bar = (ProgressBar(options.expected_duration(), clock=clock, team=colors if len(colors) > 1 else colors[0])
-           if progress else None)
+    return (ProgressBar(options.expected_duration(), clock=clock, team=colors if len(colors) > 1 else colors[0])
+            if progress else None)
+
+
+def _play(options: GameOptions, *, bar, clock) -> GameResult:
     if options.refbox == "external":
         from .external import ExternalGame
         game = ExternalGame(options, progress=bar, clock=clock, connect_timeout=options.refbox_timeout)
@@ -78,7 +109,7 @@ def play(options: GameOptions, *, progress: bool = False, clock=None) -> dict:
             bar.done(result.sim_time, result.status)
     finally:
         game.close()
-    return finish(result, options, clock.now() - t0)
+    return result
 
 
 def finish(result: GameResult, options: GameOptions, wall_time: float | None = None) -> dict:
