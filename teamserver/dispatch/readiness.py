@@ -110,7 +110,7 @@ class Readiness:
 
     def ready(self, task: M.Task, game_time: float | None, but: str | None = None) -> bool:
         """May ``task`` go now (see the module doc)?  ``but``: as if product ``but``
-        had given up its station locks."""
+        had given up its station locks and taken its workpiece out of their outputs."""
         if task.state != M.PENDING or task.kind == M.EXPLORE_ZONE:
             return False
         if game_time is None:
@@ -125,7 +125,7 @@ class Readiness:
             return False
         if self.held_by(task) is not None or self.station_held_by(task) is not None:
             return False
-        if not self.feeds.accepts(task):
+        if not self.feeds.accepts(task, emptied=but is not None):
             return False
         if task.kind == M.DELIVER and game_time < self.deliver_from(task):
             return False

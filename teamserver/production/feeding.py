@@ -112,16 +112,17 @@ class FeedMonitor:
         return (self.instruction(machine) == task.prepare
                 and (owner is None or owner.id == task.id))
 
-    def accepts(self, task: M.Task) -> bool:
+    def accepts(self, task: M.Task, emptied: bool = False) -> bool:
         """Can ``task``'s station take its workpiece (see the module doc)?  True for
-        tasks that feed nothing."""
+        tasks that feed nothing.  ``emptied``: as if the workpiece in the station's
+        output were taken (READY-AT-OUTPUT: the station is IDLE a moment after)."""
         if not is_feed(task):
             return True
         machine = task.prepare["machine"]
         if any(t.prepare["machine"] == machine for t in self.late() if t.id != task.id):
             return False                # a workpiece waits in its input for a prepare
         st = self.kb.stations.get(machine)
-        if st is None or st.state in ACCEPTING:
+        if st is None or st.state in ACCEPTING or (emptied and st.state == "READY-AT-OUTPUT"):
             return True
         return st.state == "PREPARED" and self.adoptable(task)
 

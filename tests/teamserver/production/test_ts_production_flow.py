@@ -385,6 +385,7 @@ def test_a_pickup_clearing_the_output_a_stuck_robot_waits_for_goes_while_two_rob
     ls = Lockstep(config=ServerConfig(prefill_caps=False))
     production_setup(ls, [])
     kb, pm = ls.server.kb, ls.server.production
+    ls.station_states["C-RS1"] = "READY-AT-OUTPUT"
     ls.refbox.machines(ls.station_states, RS_2016, **{"C-RS1": {"loaded_with": 3}})
     ls.step(n=3)
     ring = {"machine": "C-RS1", "ring_color": "RING_BLUE", "cost": 2}
@@ -397,7 +398,8 @@ def test_a_pickup_clearing_the_output_a_stuck_robot_waits_for_goes_while_two_rob
         product.tasks += (t.id,)
         kb.save_product(product)
         return t
-    mount5 = task(p5, M.MOUNT_RING, ring, carry=True, holder=3, locks=("C-RS1",))
+    prep = {"machine": "C-RS1", "rs": {"ring_color": "RING_BLUE"}}
+    mount5 = task(p5, M.MOUNT_RING, ring, carry=True, holder=3, locks=("C-RS1",), prepare=prep)
     get2 = task(p2, M.GET_WORKPIECE, {"machine": "C-RS1", "side": M.OUTPUT, "role": "main"},
                 locks=("C-RS1",), releases=("C-RS1",))
     slide = {"machine": "C-RS1", "side": M.SLIDE}
@@ -405,7 +407,7 @@ def test_a_pickup_clearing_the_output_a_stuck_robot_waits_for_goes_while_two_rob
     put2, _ = (task(p, M.PUT_WORKPIECE, dict(slide, carry_from=e.id), carry=True, deps=(e.id,))
                for p, e in zip((p2, p6), extras))
     task(p2, M.MOUNT_RING, dict(ring, carry_from=get2.id), carry=True, deps=(get2.id, put2.id),
-         locks=("C-RS1",))
+         locks=("C-RS1",), prepare=prep)
     put6 = task(p6, M.PUT_WORKPIECE, slide, carry=True, holder=2)
     pm.locks.grant({"C-RS1": p2.id})
     for n, wp in ((3, "P5/wp"), (2, "P6/base")):
@@ -415,6 +417,8 @@ def test_a_pickup_clearing_the_output_a_stuck_robot_waits_for_goes_while_two_rob
     ls.step(n=3)
     assert kb.tasks[get2.id].state == M.ASSIGNED and kb.tasks[get2.id].robot == 1
     ls.agents[0].result(get2.id, holding=True)
+    ls.station_states["C-RS1"] = "IDLE"
+    ls.refbox.machines(ls.station_states, RS_2016, **{"C-RS1": {"loaded_with": 3}})
     ls.step(n=3)
     assert kb.tasks[mount5.id].state == M.ASSIGNED and kb.tasks[mount5.id].robot == 3
     assert kb.tasks[put6.id].state == M.PENDING
