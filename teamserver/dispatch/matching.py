@@ -7,7 +7,8 @@ assignment, ``scipy.optimize.linear_sum_assignment``), earlier products
 first on ties; tasks that free a stuck robot are preferred by ``unblock``
 metres.  Pickups that would leave one more robot stuck wait while
 ``robots - 1`` are (:mod:`.holding`), but a pickup that frees a stuck robot
-by clearing its station's output.  Locks are taken at assignment.
+by clearing its station's output; when all are stuck, a base held for a full
+slide goes to another slide.  Locks are taken at assignment.
 """
 from __future__ import annotations
 
@@ -41,6 +42,7 @@ class Matcher:
         self.slides = slides
         self.world = world
         self.config = config
+        self._all_stuck_since: float | None = None
 
     def assign(self, game_time: float | None) -> list[M.Task]:
         """Give ready tasks to idle robots; returns the tasks assigned now."""
@@ -50,6 +52,11 @@ class Matcher:
         self.caps.adopt_free_caps()
         self.slides.top_up_slides()
         self.slides.waive_full_slide_puts()
+        if self._all_stuck_for(game_time) >= self.config.divert_after:
+            for t in self.kb.open_tasks():  # a base for a full slide goes elsewhere
+                r = idle.get(t.holder) if t.carry and t.holder is not None else None
+                if r is not None and self.slides.divert(t, r, self._travel):
+                    break
         ready = [t for t in self.kb.open_tasks() if self.readiness.ready(t, game_time)]
         assigned: list[M.Task] = []
         # carry tasks: their holder, if idle
@@ -94,6 +101,16 @@ class Matcher:
             self.fleet.assign(t, r)
             assigned.append(t)
         return assigned
+
+    def _all_stuck_for(self, game_time: float | None) -> float:
+        """Seconds every robot has been stuck (:meth:`Holding.stuck`), 0 if not all are."""
+        now = self.fleet.clock.now()
+        if self.holding.stuck(game_time) < len(self.kb.active_robots()):
+            self._all_stuck_since = None
+            return 0.0
+        if self._all_stuck_since is None:
+            self._all_stuck_since = now
+        return now - self._all_stuck_since
 
     def _travel(self, robot: M.Robot, machine: str) -> float:
         return travel(robot, self.world.positions().get(machine))

@@ -126,6 +126,29 @@ class Slides:
         self.kb.save_task(task)
         log.info("task %d discards at %s's slide", task.id, best)
 
+    def divert(self, task: M.Task, near, distance) -> bool:
+        """A base waiting to go on a full slide goes to the nearest other slide of ours
+        with room instead (a discard there, :meth:`discard_to`); a mount left short
+        gets its bases fetched again (:meth:`top_up_slides`).  For when every robot
+        holds what it cannot use yet (rcll2025 seed 18: from 480 s one held a base
+        for C-RS1's full slide, two held products waiting for cap retrievals nobody
+        was free to make).  True if diverted."""
+        if (task.kind != M.PUT_WORKPIECE or task.params.get("side") != M.SLIDE
+                or task.state != M.PENDING or self.room(task.machine, task.id) > 0):
+            return False
+        full = task.machine
+        task.kind, task.params = M.DISCARD, {k: v for k, v in task.params.items()
+                                             if k not in ("machine", "side")}
+        self.discard_to(task, near, distance)
+        if task.params.get("machine") in (None, full):
+            task.kind, task.params = M.PUT_WORKPIECE, {**task.params, "machine": full,
+                                                       "side": M.SLIDE}
+            return False                # no other slide has room: it waits
+        self.kb.save_task(task)
+        log.info("task %d: %s's slide is full and every robot is stuck: its base goes to "
+                 "%s's", task.id, full, task.params["machine"])
+        return True
+
     def top_up_slides(self) -> list[M.Task]:
         """Fetch the bases missing on the slide of each ring mount waiting only for
         them; returns the new slide puts."""

@@ -422,3 +422,46 @@ def test_a_pickup_clearing_the_output_a_stuck_robot_waits_for_goes_while_two_rob
     ls.step(n=3)
     assert kb.tasks[mount5.id].state == M.ASSIGNED and kb.tasks[mount5.id].robot == 3
     assert kb.tasks[put6.id].state == M.PENDING
+
+
+def test_when_every_robot_is_stuck_a_base_for_a_full_slide_goes_to_another_slide():
+    """rcll2025 seed 18 (after the swap above): from 480 s robot 3 held a base for C-RS1's
+    full slide while robots 1 and 2 held products whose next steps waited for work
+    nobody was free to do; the base now goes to C-RS2's slide (room for 2) and robot 3
+    does that work."""
+    ls = Lockstep(config=ServerConfig(prefill_caps=False))
+    production_setup(ls, [])
+    kb, pm = ls.server.kb, ls.server.production
+    ls.refbox.machines(ls.station_states, RS_2016, **{"C-RS1": {"loaded_with": 3},
+                                                      "C-RS2": {"loaded_with": 1}})
+    ls.step(n=3)
+    pa, pb = pm.products.new("P", 2), pm.products.new("P", 3)
+    get = M.Task(kb.next_id("task"), M.GET_WORKPIECE, {"machine": "C-BS", "side": M.OUTPUT,
+                                                        "base": "BASE_RED", "role": "extra"},
+                 product=pa.id, locks=("C-BS",), releases=("C-BS",))
+    mounts = [M.Task(kb.next_id("task"), M.MOUNT_RING, {"machine": "C-RS2", "cost": 0,
+                                                        "ring_color": "RING_YELLOW"},
+                     product=pa.id, carry=True, holder=n, deps=(get.id,), locks=("C-RS2",))
+              for n in (1, 2)]
+    put = M.Task(kb.next_id("task"), M.PUT_WORKPIECE, {"machine": "C-RS1", "side": M.SLIDE},
+                 product=pb.id, carry=True, holder=3)
+    for t in [get, put, *mounts]:
+        kb.save_task(t)
+    pa.tasks, pb.tasks = (get.id, *(m.id for m in mounts)), (put.id,)
+    kb.save_product(pa)
+    kb.save_product(pb)
+    for n in (1, 2, 3):
+        r = kb.robots[n]
+        r.holding = f"wp{n}"
+        kb.save_robot(r)
+    ls.step(n=3)
+    assert kb.tasks[put.id].kind == M.PUT_WORKPIECE          # not at once: all may be stuck a moment
+    for _ in range(20):
+        for a in ls.agents:
+            a.status(holding=True)
+        ls.step(dt=0.5)
+    put = kb.tasks[put.id]
+    assert (put.kind, put.params["machine"], put.state, put.robot) == (M.DISCARD, "C-RS2", M.ASSIGNED, 3)
+    ls.agents[2].result(put.id)
+    ls.step(n=3)
+    assert kb.tasks[get.id].state == M.ASSIGNED and kb.tasks[get.id].robot == 3
