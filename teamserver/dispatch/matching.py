@@ -103,9 +103,12 @@ class Matcher:
         return assigned
 
     def _all_stuck_for(self, game_time: float | None) -> float:
-        """Seconds every robot has been stuck (:meth:`Holding.stuck`), 0 if not all are."""
+        """Seconds every robot has been stuck (:meth:`Holding.stuck`) without work (a
+        robot on its way to a pickup may be about to free another), 0 if not all are."""
         now = self.fleet.clock.now()
-        if self.holding.stuck(game_time) < len(self.kb.active_robots()):
+        robots, idle = self.kb.active_robots(), {r.number for r in self.fleet.available_robots()}
+        if (any(r.number not in idle for r in robots)
+                or self.holding.stuck(game_time) < len(robots)):
             self._all_stuck_since = None
             return 0.0
         if self._all_stuck_since is None:
