@@ -137,7 +137,13 @@ def test_scans_decode_to_the_ranges_the_world_computes(rigged):
         if len(match) == 1:
             offsets.append(stamp - match[0])
     assert len(offsets) >= 8, (len(stamps), len(offsets))
-    assert np.mean(np.abs(offsets)) < 0.02, offsets          # before: 0.05 (0..0.15)
+    # before: 0.05 on average, each scan anywhere from 0 to 0.15 s after its cast. Now every scan
+    # is the same time after its cast: 0.003-0.011 s on a quiet machine; under the suite's load a
+    # constant 0.03-0.046 s (the emulator sends a scan when due, a fixed phase after the world's
+    # cast, and the host's clock mapping cannot see a constant delay), so the spread is the test
+    off = np.asarray(offsets)
+    assert np.percentile(off, 90) - np.percentile(off, 10) < 0.01, offsets
+    assert np.median(np.abs(off)) < 0.1, offsets             # within one scan period
 
 
 def laser_model(rig):
