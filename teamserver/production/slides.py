@@ -116,12 +116,9 @@ class Slides:
         -10).  Left as it is (dropped where the robot stands) when no slide has room."""
         if task.kind != M.DISCARD or task.params.get("machine"):
             return
-        slides = [st.name for st in self.kb.stations.values()
-                  if st.name.startswith(f"{self.prefix}-RS")
-                  and st.state not in ("BROKEN", "DOWN") and self.room(st.name) > 0]
-        if not slides:
+        best = self._nearest_slide(near, distance)
+        if best is None:
             return
-        best = min(slides, key=lambda m: distance(near, m))
         task.params = {**task.params, "machine": best, "side": M.SLIDE}
         self.kb.save_task(task)
         log.info("task %d discards at %s's slide", task.id, best)
@@ -136,18 +133,22 @@ class Slides:
         if (task.kind != M.PUT_WORKPIECE or task.params.get("side") != M.SLIDE
                 or task.state != M.PENDING or self.room(task.machine, task.id) > 0):
             return False
-        full = task.machine
-        task.kind, task.params = M.DISCARD, {k: v for k, v in task.params.items()
-                                             if k not in ("machine", "side")}
-        self.discard_to(task, near, distance)
-        if task.params.get("machine") in (None, full):
-            task.kind, task.params = M.PUT_WORKPIECE, {**task.params, "machine": full,
-                                                       "side": M.SLIDE}
+        full, best = task.machine, self._nearest_slide(near, distance)   # (not the full one)
+        if best is None:
             return False                # no other slide has room: it waits
+        task.kind, task.params = M.DISCARD, {**task.params, "machine": best, "side": M.SLIDE}
         self.kb.save_task(task)
         log.info("task %d: %s's slide is full and every robot is stuck: its base goes to "
                  "%s's", task.id, full, task.params["machine"])
         return True
+
+    def _nearest_slide(self, near, distance) -> str | None:
+        """The nearest (``distance(near, machine)``) of our usable ring stations whose
+        slide has room, or None."""
+        slides = [st.name for st in self.kb.stations.values()
+                  if st.name.startswith(f"{self.prefix}-RS")
+                  and st.state not in ("BROKEN", "DOWN") and self.room(st.name) > 0]
+        return min(slides, key=lambda m: distance(near, m)) if slides else None
 
     def top_up_slides(self) -> list[M.Task]:
         """Fetch the bases missing on the slide of each ring mount waiting only for
