@@ -19,6 +19,13 @@ class ManipulationSettings:
     tag_min_distance: float = 0.57   # closer, the camera no longer sees the whole tag
     final_distance: float = 0.27      # 4.5 cm between the robot and the face
     slot_inset: float = 0.03          # a slot's centre lies this far inside the face
+    # the gripper's sideways axis (the sim's and the Carologistics gantry's: +-0.10 m) lets a
+    # robot that has no room squarely in front of a shelf slot stand up to this far beside it
+    # (toward the belt) and reach over; it keeps ``side_margin`` from the wall or station there
+    # (the motion guard stops a sideways move 3 cm short of what the laser sees, and the pose
+    # is a centimetre or two off: with 2 cm, 2016 seed 11's moves to C-CS1's slot 0 stopped short)
+    side_reach: float = 0.09
+    side_margin: float = 0.05
     align_tolerance: float = 0.008    # m, lateral and along the tag normal
     align_heading_tolerance: float = 0.015   # rad
     align_speed: float = 0.15         # m/s

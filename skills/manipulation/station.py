@@ -8,7 +8,11 @@
   lined up with at the coarse distance when the robot fits there; where a
   neighbouring station or a wall leaves no room for that, the robot lines
   up with the belt, docks, and then slides sideways along the face to the
-  spot (:func:`shift_docked`), and back again before it backs off.
+  spot (:func:`shift_docked`), and back again before it backs off.  Where
+  the robot does not fit squarely in front of the spot even then (a shelf
+  slot by a wall), it stops beside it, toward the belt, as far as its
+  gripper's sideways axis reaches over (:func:`spot_aside`); it fails with
+  ``ALIGN_FAILED`` "no room" only when it does not fit there either.
 - :class:`GrabFrom`: approach, open, reach in, close, pull back, check the
   gripper holds a workpiece (``GRAB_FAILED`` when it does not), back off.
 - :class:`PutOnto`: approach, reach in, open, pull back, check the gripper
@@ -35,17 +39,49 @@ from .gripper import GripperSequence
 from .places import Place, check_place, gripper_height, gripper_target, lateral_offset
 
 
-def spot_clearance(ctx, place: Place, distance: float) -> float:
+def spot_clearance(ctx, place: Place, distance: float, aside: float = 0.0) -> float:
     """Room (m) between the robot, squarely in front of the place's spot
-    ``distance`` metres from the face, and the nearest wall or other
-    station of the map (inf when the station's pose is unknown)."""
+    ``distance`` metres from the face (``aside`` metres from it toward the
+    belt line), and the nearest wall or other station of the map (inf when
+    the station's pose is unknown)."""
     machine = ctx.machines.get(place.machine)
     if machine is None:
         return float("inf")
     mps = ctx.profile.mps
-    pose = approach_pose(machine, place.side, distance, target_lateral(place.spot, mps), mps)
+    spot = target_lateral(place.spot, mps)
+    lateral = spot + float(np.sign(mps.belt_offset_y - spot)) * aside
+    pose = approach_pose(machine, place.side, distance, lateral, mps)
     clear = ctx.map.clearance(pose.x, pose.y, exclude=(place.machine,))
     return float(clear[0]) - ctx.robot.radius
+
+
+def spot_aside(ctx, place: Place) -> float | None:
+    """How far (m) beside the place's spot, toward the belt line, the docked robot
+    stands: 0 where it fits squarely in front of it; else the least distance, up
+    to the gripper's sideways reach (``side_reach``), that leaves it
+    ``side_margin`` from the wall or station beside it; None when none does (the
+    robot does not fit: "no room")."""
+    m = ctx.settings.manipulation
+    if abs(lateral_offset(place, ctx.profile)) < 1e-6 or \
+            spot_clearance(ctx, place, m.final_distance) >= 0.0:
+        return 0.0
+    for aside in np.arange(0.01, m.side_reach + 1e-9, 0.01):
+        if spot_clearance(ctx, place, m.final_distance, float(aside)) >= m.side_margin:
+            return float(aside)
+    return None
+
+
+def _toward_spot(ctx, place: Place, aside: float) -> float:
+    """Sideways move (robot frame, m) from the belt line to the docked pose ``aside``
+    metres short of the place's spot."""
+    off = lateral_offset(place, ctx.profile)
+    return -off + float(np.sign(off)) * aside
+
+
+def _gripper_side(ctx, place: Place, aside: float) -> float:
+    """The gripper's sideways axis (robot frame, m) that reaches the spot from ``aside``
+    metres beside it toward the belt line."""
+    return -float(np.sign(lateral_offset(place, ctx.profile))) * aside
 
 
 def shift_docked(ctx, place: Place, coarse: float | None = None) -> bool:
@@ -98,10 +134,11 @@ class ApproachStation(Sequence):
         def to_spot():
             if not self.docked_shift:
                 return None
-            if spot_clearance(ctx, place, m.final_distance) < 0.0:
+            aside = spot_aside(ctx, place)
+            if aside is None:
                 raise SkillFailure(SkillError.ALIGN_FAILED,
                                    f"no room for the robot in front of {place.describe()}")
-            return MoveRelative(ctx, 0.0, -lateral_offset(place, ctx.profile), speed=0.1)
+            return MoveRelative(ctx, 0.0, _toward_spot(ctx, place, aside), speed=0.1)
 
         def centre():
             # without the tag: the laser sees the whole face from this close, its two
@@ -163,18 +200,23 @@ def _handling(ctx, place: Place, steps_fn, approach: bool, use_tag, timeout, nam
     if approach:
         factories.append(lambda: ApproachStation(ctx, place, use_tag))
 
+    shifted = shift_docked(ctx, place)
+
+    def aside() -> float:
+        # docked beside the spot (a shelf slot by a wall): the gripper reaches over
+        return (spot_aside(ctx, place) or 0.0) if shifted else 0.0
+
     def gripper():
         check_place(place, ctx.profile)
-        x, y, z = gripper_target(ctx.profile, m.final_distance, m.slot_inset)
-        return GripperSequence(ctx, steps_fn(x, y, z), home_z=z, name=name)
+        x, _, z = gripper_target(ctx.profile, m.final_distance, m.slot_inset)
+        return GripperSequence(ctx, steps_fn(x, _gripper_side(ctx, place, aside()), z), home_z=z,
+                               name=name)
 
     factories.append(gripper)
 
-    shifted = shift_docked(ctx, place)
-
     def to_belt():
         # slid along the face to the spot: slide back to the belt line first
-        return MoveRelative(ctx, 0.0, lateral_offset(place, ctx.profile), speed=0.1, partial=True) \
+        return MoveRelative(ctx, 0.0, -_toward_spot(ctx, place, aside()), speed=0.1, partial=True) \
             if shifted else None
 
     def back_off():

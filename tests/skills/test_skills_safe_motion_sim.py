@@ -10,7 +10,7 @@ from rll_bt.backend import Pose2D, open_backend
 from skills.activity import Status
 from skills.context import SkillContext
 from skills.manipulation import ApproachStation, GrabFrom, Place, PutOnto, place_for
-from skills.manipulation.station import back_off_distance, shift_docked, spot_clearance
+from skills.manipulation.station import back_off_distance, shift_docked, spot_aside, spot_clearance
 from skills.navigation import Navigate, PoseGoal, StationSideGoal, ZoneGoal
 from skills.navigation.goals import approach_pose
 from skills.navigation.motions import MoveRelative
@@ -127,3 +127,26 @@ def test_a_back_off_into_a_robot_behind_stops_at_the_first_touch():
     assert status is Status.SUCCESS and "bumper" in move.message
     world.step(2.0)
     assert world.collision_count == 1             # one touch, not one per push
+
+
+def test_a_shelf_slot_by_the_wall_is_grabbed_from_beside_it_with_the_gripper_reaching_over():
+    # seed 11: C-CS1 stands by the far wall (y = 6); squarely in front of its shelf slot 0
+    # the robot would overlap the wall by 3 cm; 9 cm toward the belt it fits with room for the
+    # motion guard and the gripper's sideways axis reaches the carrier
+    world, ctx = scene(11, Pose2D(-5.45, 4.85, math.pi / 2))
+    slot0 = place_for("C-CS1", "SHELF", 0)
+    m = ctx.settings.manipulation
+    assert spot_clearance(ctx, slot0, m.final_distance) < 0.0
+    aside = spot_aside(ctx, slot0)
+    assert aside is not None and 0.0 < aside <= m.side_reach
+    if not world.workpieces_at("C-CS1", "shelf0"):
+        world.spawn_workpiece("C-CS1", "shelf0", "BASE_RED")
+    grab = GrabFrom(ctx, slot0)
+    status, closest = drive(world, grab)
+    assert status is Status.SUCCESS, grab.message
+    assert not world.workpieces_at("C-CS1", "shelf0")
+    assert world.collision_count == 0 and closest > 0.0
+    # closer to the wall the robot does not fit beside it either: it is not sent
+    st = world.stations["C-CS1"].pose
+    ctx.machines.set("C-CS1", Pose2D(st.x, st.y + 0.08, st.theta))
+    assert spot_aside(ctx, slot0) is None
