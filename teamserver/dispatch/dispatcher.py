@@ -64,7 +64,7 @@ class Dispatcher:
         self.discards = Discards(kb, clock, self.fleet, pm.cleanup, config)
         self.results = Results(kb, clock, feeds=feeds, outcomes=pm.outcomes,
                                products=pm.products, repairs=pm.repairs, health=pm.health,
-                               parking=self.parking, discards=self.discards, tasks=tasks,
+                               shelves=pm.cap_shelves, parking=self.parking, discards=self.discards, tasks=tasks,
                                config=config)
         self.dropouts = Dropouts(kb, clock, self.fleet, self.readiness, pm.products, tasks,
                                  config)

@@ -22,6 +22,7 @@ from ..production.health import StationHealth
 from ..production.outcomes import Outcomes
 from ..production.products import Products
 from ..production.repair import Repairs
+from ..production.shelves import CapShelves
 from .config import DispatchConfig
 from .discards import Discards
 from .parking import Parking
@@ -38,7 +39,7 @@ class Results:
 
     def __init__(self, kb: KnowledgeBase, clock, *, feeds: FeedMonitor, outcomes: Outcomes,
                  products: Products, repairs: Repairs, health: StationHealth,
-                 parking: Parking, discards: Discards, tasks: TaskLink, config: DispatchConfig):
+                 shelves: CapShelves, parking: Parking, discards: Discards, tasks: TaskLink, config: DispatchConfig):
         self.kb = kb
         self.clock = clock
         self.feeds = feeds
@@ -46,6 +47,7 @@ class Results:
         self.products = products
         self.repairs = repairs
         self.health = health
+        self.shelves = shelves
         self.parking = parking
         self.discards = discards
         self.tasks = tasks
@@ -86,6 +88,7 @@ class Results:
             self.discards.outcome(robot, status == "SUCCEEDED")
         if status != "CANCELLED":
             self.health.outcome(task, status == "SUCCEEDED", error, self.clock.now())
+            self.shelves.outcome(task, status == "SUCCEEDED", error, text, holding)
         if status == "SUCCEEDED":
             task.state = M.DONE
             self.kb.save_task(task)

@@ -30,6 +30,7 @@ from ..planning.htn import Seq
 from ..planning.planner import ProductionPlanner
 from .locks import StationLocks
 from .products import ABANDONED, CLEANUP_ORDER, Products
+from .shelves import CapShelves
 from .world import PlanningWorld
 
 log = logging.getLogger("teamserver.production")
@@ -65,8 +66,8 @@ class Caps:
     no order wants yet."""
 
     def __init__(self, kb: KnowledgeBase, buffers: CapBuffers, products: Products,
-                 planner: ProductionPlanner, world: PlanningWorld, locks: StationLocks, *,
-                 prefix: str, cs_caps: dict[str, str], prefill: bool = True,
+                 planner: ProductionPlanner, world: PlanningWorld, locks: StationLocks,
+                 shelves: CapShelves, *, prefix: str, cs_caps: dict[str, str], prefill: bool = True,
                  prefill_stop: float = 120.0, prefill_unknown: float = 600.0):
         self.kb = kb
         self.buffers = buffers
@@ -74,6 +75,7 @@ class Caps:
         self.planner = planner
         self.world = world
         self.locks = locks
+        self.shelves = shelves
         self.prefix = prefix
         self.cs_caps = cs_caps
         self.prefill_caps = prefill
@@ -246,10 +248,9 @@ class Caps:
         return out
 
     def choose_shelf_slot(self, task: M.Task) -> None:
-        """Set the shelf slot an assigned RETRIEVE_CAP takes its cap carrier from: the
-        cap station's three slots in turn."""
-        n = self.kb.next_id(f"shelf:{task.machine}")
-        task.params["shelf_slot"] = (n - 1) % 3
+        """Set the shelf slot an assigned RETRIEVE_CAP takes its cap carrier from: one
+        that holds a carrier and that the robots can reach (:mod:`.shelves`)."""
+        task.params["shelf_slot"] = self.shelves.choose(task.machine)
         self.kb.save_task(task)
 
     def spare_robots(self) -> int:

@@ -12,7 +12,8 @@ team and hands each the others it needs:
   built from the knowledge base;
 - :attr:`~ProductionManager.caps`, :attr:`~ProductionManager.buffers`
   (:mod:`.caps`): cap station buffers, caps retrieved ahead, when a cap is
-  due;
+  due; :attr:`~ProductionManager.cap_shelves` (:mod:`.shelves`): which
+  shelf slot holds a cap carrier and can be reached;
 - :attr:`~ProductionManager.slides` (:mod:`.slides`): bases on the ring
   stations' slides;
 - :attr:`~ProductionManager.shelf`, :attr:`~ProductionManager.handover`
@@ -47,6 +48,7 @@ from .locks import StationLocks
 from .outcomes import Outcomes
 from .products import Products
 from .repair import Repairs
+from .shelves import CapShelves
 from .slides import Slides
 from .storage import Shelf
 from .tracker import Tracker
@@ -80,7 +82,9 @@ class ProductionManager:
                                    self.health, prefix=prefix, cs_caps=self.cs_caps, clock=clock,
                                    max_products=max_products, confirm_time=confirm_time)
         self.buffers = CapBuffers(kb)
+        self.cap_shelves = CapShelves(kb)
         self.caps = Caps(kb, self.buffers, self.products, planner, self.world, self.locks,
+                         self.cap_shelves,
                          prefix=prefix, cs_caps=self.cs_caps, prefill=prefill)
         self.slides = Slides(kb, self.products, prefix=prefix, clock=clock)
         self.cleanup = Cleanup(kb, self.products, planner, self.shelf, prefix=prefix,

@@ -170,15 +170,18 @@ class FakeAgent:
         return [SimpleNamespace(task_id=from_wire(m.task_id)[0], wire_id=int(m.task_id))
                 for m in self.inbox if m.DESCRIPTOR.name == "AgentTask" and m.cancel_task]
 
-    def result(self, task_id, status="SUCCEEDED", error="NONE", holding=None):
+    def result(self, task_id, status="SUCCEEDED", error="NONE", holding=None, text=""):
         """The robot's result (of the last assignment of the team server's task
-        ``task_id`` it got): rll-bt's TaskOutcome, then the echoed AgentTask."""
+        ``task_id`` it got): rll-bt's TaskOutcome (with the skill's ``text``), then
+        the echoed AgentTask."""
         from rll_bt.agenttask import league_value, to_league
         task_id = next((v.wire_id for v in reversed(self._views) if v.task_id == task_id), task_id)
         code = error if status != "CANCELLED" else "CANCELLED"
         out = self.ms.TaskOutcome(task_id=task_id, robot_id=self.number, error=self.ms.enum("ErrorCode").Value(code))
         if holding:
             out.holding = True
+        if text:
+            out.text = text
         at = self.lm.AgentTask(team_color=0, task_id=task_id, robot_id=self.number,
                                successful=status == "SUCCEEDED", canceled=status == "CANCELLED")
         if status == "FAILED":

@@ -1,0 +1,109 @@
+"""The cap stations' shelves: which slot still holds a cap carrier, which one the robots cannot reach.
+
+A cap station's shelf has three slots, each with a cap carrier at the start.  The
+refbox rule (refbox-rules.md, both profiles): a shelf is refilled only once all
+three of its slots are empty.  So the team server books every slot:
+
+- *empty*: a robot grabbed its carrier (the RETRIEVE_CAP succeeded, or failed with
+  the carrier in the gripper), or found nothing there (GRAB_FAILED after the
+  grab's own recoveries); once all three are empty the shelf is full again;
+- *out of reach*: the robot could not stand in front of it (ALIGN_FAILED "no
+  room", or its docked sideways move there blocked: a wall or another station
+  beside the shelf).  Not tried again at that
+  station while a reachable slot holds a carrier.
+
+:meth:`CapShelves.choose` gives a RETRIEVE_CAP the first slot that holds a carrier
+and can be reached; when none can, a slot out of reach that still holds one (the
+only cap source left there; the shelf is not refilled while it holds a carrier),
+with a warning in the log.  The books live in the knowledge base (``cap_shelves``:
+CS -> {"empty": [slots], "unreachable": [slots]}).
+"""
+from __future__ import annotations
+
+import logging
+
+from ..knowledge import model as M
+from ..knowledge.kb import KnowledgeBase
+
+log = logging.getLogger("teamserver.production")
+
+SLOTS = (0, 1, 2)
+
+
+def unreachable(error: str, text: str) -> bool:
+    """Whether a RETRIEVE_CAP's failure says the robot could not get in front of its slot:
+    no room there (ALIGN_FAILED), or the docked sideways move to it blocked
+    (NAVIGATION_FAILED "move relative blocked": a wall or station beside the slot)."""
+    text = text or ""
+    return (error == "ALIGN_FAILED" and "no room" in text) or \
+        (error == "NAVIGATION_FAILED" and "move relative blocked" in text)
+
+
+class CapShelves:
+    """Books of the cap stations' shelf slots (see the module doc)."""
+
+    def __init__(self, kb: KnowledgeBase):
+        self.kb = kb
+
+    def _books(self) -> dict[str, dict[str, list[int]]]:
+        return {cs: {k: list(v) for k, v in b.items()}
+                for cs, b in self.kb.get("cap_shelves", {}).items()}
+
+    def _slots(self, cs: str, what: str) -> set[int]:
+        return set(self.kb.get("cap_shelves", {}).get(cs, {}).get(what, ()))
+
+    def empty(self, cs: str) -> set[int]:
+        """The slots of ``cs``'s shelf without a cap carrier."""
+        return self._slots(cs, "empty")
+
+    def unreachable(self, cs: str) -> set[int]:
+        """The slots of ``cs``'s shelf the robots could not stand in front of."""
+        return self._slots(cs, "unreachable")
+
+    def emptied(self, cs: str, slot: int) -> None:
+        """``slot`` of ``cs`` holds no carrier now; the shelf is full again once all are empty."""
+        books = self._books()
+        b = books.setdefault(cs, {})
+        empty = set(b.get("empty", ())) | {int(slot)}
+        if empty >= set(SLOTS):
+            empty = set()
+            log.info("%s's shelf is empty: refilled", cs)
+        b["empty"] = sorted(empty)
+        self.kb.set("cap_shelves", books)
+
+    def out_of_reach(self, cs: str, slot: int) -> None:
+        """The robots cannot stand in front of ``slot`` of ``cs``."""
+        books = self._books()
+        b = books.setdefault(cs, {})
+        b["unreachable"] = sorted(set(b.get("unreachable", ())) | {int(slot)})
+        self.kb.set("cap_shelves", books)
+        log.warning("%s shelf slot %d cannot be reached: not tried again while another slot "
+                    "there holds a cap", cs, slot)
+
+    def outcome(self, task: M.Task, succeeded: bool, error: str, text: str,
+                holding: bool | None) -> None:
+        """Book a RETRIEVE_CAP's result on its shelf slot."""
+        if task.kind != M.RETRIEVE_CAP or task.params.get("shelf_slot") is None or not task.machine:
+            return
+        cs, slot = task.machine, int(task.params["shelf_slot"])
+        if succeeded or holding:
+            self.emptied(cs, slot)
+        elif error == "GRAB_FAILED":
+            log.info("%s shelf slot %d: nothing to grab, empty", cs, slot)
+            self.emptied(cs, slot)
+        elif unreachable(error, text):
+            self.out_of_reach(cs, slot)
+
+    def choose(self, cs: str) -> int:
+        """The slot a RETRIEVE_CAP at ``cs`` takes its carrier from (see the module doc)."""
+        full = [s for s in SLOTS if s not in self.empty(cs)]
+        reach = [s for s in full if s not in self.unreachable(cs)]
+        if reach:
+            return reach[0]
+        if not full:                        # (all empty is booked as refilled)
+            return SLOTS[0]
+        log.warning("%s: no shelf slot the robots can reach holds a cap (slots %s out of reach, "
+                    "%s empty; the shelf is refilled only once all are empty): trying slot %d, "
+                    "the only cap source left there", cs, sorted(self.unreachable(cs)),
+                    sorted(self.empty(cs)), full[0])
+        return full[0]
