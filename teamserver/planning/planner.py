@@ -50,9 +50,7 @@ class World:
     game time now and at its end; ``owned``: station locks held now;
     ``in_progress``: order id -> units being made or delivered but not yet
     counted by the refbox; ``making``: products being made (what
-    ``max_products`` limits; a delivered product no longer takes a slot);
-    ``unstarted``: how many of those may wait for their first step without taking
-    a slot (:class:`~teamserver.production.world.PlanningWorld`: one in 2016).
+    ``max_products`` limits; a delivered product no longer takes a slot).
     """
 
     orders: list[M.Order]
@@ -70,7 +68,6 @@ class World:
     unusable: frozenset[str] = frozenset()
     max_products: int = 3
     making: int | None = None       # products being made (None: the sum of in_progress)
-    unstarted: int = 0              # of ``making``: not started and not taking a slot
     # 2025: C0 products the storage station held at the start and still holds unclaimed:
     # (shelf, slot) -> (base, cap)
     stock: dict[tuple[int, int], tuple[str, str]] = field(default_factory=dict)
@@ -79,7 +76,7 @@ class World:
     def slots(self) -> int:
         """How many more products may be started now."""
         making = sum(self.in_progress.values()) if self.making is None else self.making
-        return max(self.max_products - making + self.unstarted, 0)
+        return max(self.max_products - making, 0)
 
 
 @dataclass(frozen=True)

@@ -43,13 +43,6 @@ class PlanningWorld:
         self.clock = clock
         self.max_products = max_products
         self.confirm_time = confirm_time
-        # 2016: one product that no robot has begun yet takes no slot.  With a slot
-        # per robot, the C3 (known from the start) and the C2/C1 (started on their
-        # announcement, 400-600 s before their windows) held every slot, so the
-        # short C0 windows announced meanwhile were never started; the planner's
-        # simulation of all products under way decides whether a fourth one pays.
-        # (2025, unmeasured with it: a slot per product.)
-        self.spare_unstarted = 1 if self.profile.year < 2017 else 0
         self._positions: tuple | None = None     # (what they were computed from, positions)
 
     def unusable(self) -> frozenset[str]:
@@ -108,17 +101,15 @@ class PlanningWorld:
         one being planned again)."""
         orders = [o for o in self.kb.orders.values() if o.open > 0]
         in_progress = self.unconfirmed(game_time)
-        making = waiting = 0
+        making = 0
         active, done = [], set()
         for p in self.products.active():
             in_progress[p.order_id] = in_progress.get(p.order_id, 0) + 1
             making += p.order_id != CLEANUP_ORDER
-            steps = self.kb.tasks_of(p.tasks)
-            waiting += p.order_id != CLEANUP_ORDER and all(t.state == M.PENDING for t in steps)
             if p.id == exclude:
                 continue
             order = self.kb.orders.get(p.order_id)
-            for t in steps:
+            for t in self.kb.tasks_of(p.tasks):
                 if t.state == M.CANCELLED or t.state == M.FAILED:
                     continue
                 if t.state == M.DONE:
@@ -142,7 +133,6 @@ class PlanningWorld:
                      dict(self.kb.get("ring_costs") or {}), self.cs_caps, game_time, horizon,
                      active=active, done=done, owned=self.locks.owners, in_progress=in_progress,
                      unusable=unusable, max_products=n, making=making,
-                     unstarted=min(waiting, self.spare_unstarted),
                      stock=self.stock() if self.planner.ss not in unusable else {})
 
     def stock(self) -> dict[tuple[int, int], tuple[str, str]]:

@@ -26,40 +26,12 @@ def test_a_delivery_the_refbox_never_counted_opens_its_order_again():
     abandon_all_products(ls.server)
     kb.save_product(M.Product("D1", 1, state="DELIVERED", delivered_at=100.0))
     kb.save_product(M.Product("D2", 3, state="DELIVERED", delivered_at=100.0))
-    kb.save_task(M.Task(9001, M.GET_WORKPIECE, {"machine": "C-BS"}, state=M.DONE, product="A1"))
-    kb.save_product(M.Product("A1", 3, tasks=(9001,)))
+    kb.save_product(M.Product("A1", 3))
     w = pm.world.build(110.0, 900.0)
     assert w.in_progress == {1: 1, 3: 2} and w.making == 1 and w.slots == 2
     w = pm.world.build(130.0, 900.0)            # 30 s on, the refbox counted neither
     assert w.in_progress == {3: 1} and w.slots == 2
     assert {c.order.id for c in pm.planner.candidates(w)} == {1, 3}
-
-
-def test_one_product_no_robot_has_begun_takes_no_slot_in_2016():
-    """A slot per robot; a product whose steps are all still PENDING does not hold one
-    (so a short C0 window announced while three products are under way can start)."""
-    ls = Lockstep()
-    production_setup(ls, [{"id": 1}, {"id": 3, "quantity_requested": 2}])
-    pm, kb = ls.server.production, ls.server.kb
-    abandon_all_products(ls.server)
-
-    def product(pid, state):
-        tid = kb.next_id("task")
-        kb.save_task(M.Task(tid, M.GET_WORKPIECE, {"machine": "C-BS"}, state=state, product=pid))
-        kb.save_product(M.Product(pid, 3, tasks=(tid,)))
-        return kb.tasks[tid]
-
-    product("A1", M.DONE)
-    product("A2", M.ASSIGNED)
-    third = product("A3", M.PENDING)
-    w = pm.world.build(110.0, 900.0)
-    assert (w.max_products, w.making, w.slots) == (3, 3, 1)
-    assert len(pm.planner.choose(w).start) <= 1
-    product("A4", M.PENDING)                     # a second one not begun takes its slot
-    assert pm.world.build(111.0, 900.0).slots == 0
-    third.state = M.ASSIGNED
-    kb.save_task(third)
-    assert pm.world.build(112.0, 900.0).slots == 0
 
 
 def test_caps_are_retrieved_ahead_and_mounted_by_the_next_product():
