@@ -477,3 +477,23 @@ def abandon_all_products(server) -> None:
         server.production.products.cancel_open(p)
         p.state = "ABANDONED"
         kb.save_product(p)
+
+
+def run_tasks(ls, until, fail=None, steps=400):
+    """Complete every task the agents get; ``fail(agent, task)`` may return a failure."""
+    answered = {a.number: 0 for a in ls.agents}     # a re-sent task is answered again
+    for _ in range(steps):
+        for a in ls.agents:
+            a.beat()
+            tasks = a.tasks()
+            new, answered[a.number] = tasks[answered[a.number]:], len(tasks)
+            for t in new:
+                outcome = fail(a, t) if fail else None
+                if outcome:
+                    a.result(t.task_id, "FAILED", **outcome)
+                else:
+                    a.result(t.task_id, holding=t.WhichOneof("kind") == "get_workpiece")
+        ls.step(dt=0.5)
+        if until():
+            return True
+    return False

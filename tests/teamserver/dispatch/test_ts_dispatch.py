@@ -5,7 +5,7 @@ import pytest
 from teamserver.knowledge import model as M
 from teamserver.links.agents import from_wire, wire_id
 from teamserver.server import ServerConfig
-from tests.support.teamserver import RS_2016, Lockstep, production_setup, task_kinds
+from tests.support.teamserver import RS_2016, Lockstep, production_setup, run_tasks, task_kinds
 
 #: these tests look at the dispatch of one product's steps: no caps retrieved ahead
 ALONE = ServerConfig(prefill_caps=False)
@@ -79,26 +79,6 @@ def test_one_robot_at_a_station_at_a_time():
     ls.step(n=5)
     bs = [(a, k) for a in ls.agents for k in task_kinds(a) if k[2] == "C-BS"]
     assert len(bs) == 2                                      # the next one once it is free
-
-
-def run_tasks(ls, until, fail=None, steps=400):
-    """Complete every task the agents get; ``fail(agent, task)`` may return a failure."""
-    answered = {a.number: 0 for a in ls.agents}     # a re-sent task is answered again
-    for _ in range(steps):
-        for a in ls.agents:
-            a.beat()
-            tasks = a.tasks()
-            new, answered[a.number] = tasks[answered[a.number]:], len(tasks)
-            for t in new:
-                outcome = fail(a, t) if fail else None
-                if outcome:
-                    a.result(t.task_id, "FAILED", **outcome)
-                else:
-                    a.result(t.task_id, holding=t.WhichOneof("kind") == "get_workpiece")
-        ls.step(dt=0.5)
-        if until():
-            return True
-    return False
 
 
 def test_a_lost_workpiece_is_repaired_and_the_product_still_delivered():

@@ -6,7 +6,7 @@ from teamserver.knowledge import model as M
 from teamserver.knowledge.kb import KnowledgeBase
 from teamserver.production.shelves import CapShelves
 from teamserver.server import ServerConfig
-from tests.support.teamserver import Lockstep, production_setup
+from tests.support.teamserver import Lockstep, production_setup, run_tasks
 
 #: no caps retrieved ahead: every retrieval is for an order
 ALONE = ServerConfig(prefill_caps=False)
@@ -40,23 +40,11 @@ class Shelf:
 def play(ls, shelf: Shelf, attempts: int, steps: int = 600) -> None:
     """Answer every task: a retrieval at C-CS2 as ``shelf`` says, everything else done;
     until ``attempts`` retrievals were tried."""
-    answered = {a.number: 0 for a in ls.agents}
-    for _ in range(steps):
-        for a in ls.agents:
-            a.beat()
-            tasks = a.tasks()
-            new, answered[a.number] = tasks[answered[a.number]:], len(tasks)
-            for t in new:
-                kind = t.WhichOneof("kind")
-                outcome = shelf.retrieve(t.retrieve_cap.machine, t.retrieve_cap.shelf_slot) \
-                    if kind == "retrieve_cap" and t.retrieve_cap.machine == "C-CS2" else None
-                if outcome:
-                    a.result(t.task_id, "FAILED", **outcome)
-                else:
-                    a.result(t.task_id, holding=kind == "get_workpiece")
-        ls.step(dt=0.5)
-        if len(shelf.tried) >= attempts:
-            return
+    def fail(agent, t):
+        if t.WhichOneof("kind") == "retrieve_cap" and t.retrieve_cap.machine == "C-CS2":
+            return shelf.retrieve(t.retrieve_cap.machine, t.retrieve_cap.shelf_slot)
+        return None
+    run_tasks(ls, lambda: len(shelf.tried) >= attempts, fail, steps)
 
 
 def test_a_shelf_slot_out_of_reach_is_not_tried_while_a_reachable_one_holds_a_cap():
