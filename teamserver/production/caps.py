@@ -250,7 +250,7 @@ class Caps:
     def choose_shelf_slot(self, task: M.Task) -> None:
         """Set the shelf slot an assigned RETRIEVE_CAP takes its cap carrier from: one
         that holds a carrier and that the robots can reach (:mod:`.shelves`)."""
-        task.params["shelf_slot"] = self.shelves.choose(task.machine)
+        task.params["shelf_slot"] = self.shelves.choose(task.machine, task.id)
         self.kb.save_task(task)
 
     def spare_robots(self) -> int:

@@ -12,10 +12,11 @@ three of its slots are empty.  So the team server books every slot:
   beside the shelf).  Not tried again at that
   station while a reachable slot holds a carrier.
 
-:meth:`CapShelves.choose` gives a RETRIEVE_CAP the first slot that holds a carrier
-and can be reached; when none can, a slot out of reach that still holds one (the
-only cap source left there; the shelf is not refilled while it holds a carrier),
-with a warning in the log.  The books live in the knowledge base (``cap_shelves``:
+:meth:`CapShelves.choose` gives a RETRIEVE_CAP the first slot that holds a carrier,
+that no other robot's RETRIEVE_CAP under way is to empty, and that can be reached;
+when none can, a slot out of reach that still holds one (the only cap source left
+there; the shelf is not refilled while it holds a carrier), with a warning in the
+log.  The books live in the knowledge base (``cap_shelves``:
 CS -> {"empty": [slots], "unreachable": [slots]}).
 """
 from __future__ import annotations
@@ -94,16 +95,28 @@ class CapShelves:
         elif unreachable(error, text):
             self.out_of_reach(cs, slot)
 
-    def choose(self, cs: str) -> int:
-        """The slot a RETRIEVE_CAP at ``cs`` takes its carrier from (see the module doc)."""
-        full = [s for s in SLOTS if s not in self.empty(cs)]
-        reach = [s for s in full if s not in self.unreachable(cs)]
+    def taken(self, cs: str, but: int | None = None) -> set[int]:
+        """The slots of ``cs`` that a RETRIEVE_CAP sent to a robot and not yet ended (other
+        than task ``but``) is on its way to empty."""
+        return {int(t.params["shelf_slot"]) for t in self.kb.open_tasks()
+                if t.kind == M.RETRIEVE_CAP and t.machine == cs and t.state == M.ASSIGNED
+                and t.id != but and t.params.get("shelf_slot") is not None}
+
+    def choose(self, cs: str, task: int | None = None) -> int:
+        """The slot RETRIEVE_CAP ``task`` at ``cs`` takes its carrier from (see the module
+        doc).  A slot another robot is on its way to empty is left to it while another
+        slot holds a carrier; when none does, two robots may go to one slot (the second
+        finds it empty, and the shelf is refilled once it is)."""
+        empty, taken = self.empty(cs), self.taken(cs, task)
+        full = [s for s in SLOTS if s not in empty]
+        free = [s for s in full if s not in taken] or full
+        reach = [s for s in free if s not in self.unreachable(cs)]
         if reach:
             return reach[0]
-        if not full:                        # (all empty is booked as refilled)
+        if not free:                        # (all empty is booked as refilled)
             return SLOTS[0]
         log.warning("%s: no shelf slot the robots can reach holds a cap (slots %s out of reach, "
                     "%s empty; the shelf is refilled only once all are empty): trying slot %d, "
                     "the only cap source left there", cs, sorted(self.unreachable(cs)),
-                    sorted(self.empty(cs)), full[0])
-        return full[0]
+                    sorted(empty), free[0])
+        return free[0]

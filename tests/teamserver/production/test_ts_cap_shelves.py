@@ -93,3 +93,33 @@ def test_a_shelf_slot_a_robot_grabbed_from_is_empty_and_the_shelf_refills_when_a
     shelves.outcome(task, False, "NAVIGATION_FAILED",
                     "move relative blocked 0.04 m short: something is in the way", False)
     assert shelves.unreachable("C-CS1") == {0} and shelves.choose("C-CS1") == 1
+
+
+def test_two_retrievals_under_way_at_one_station_go_to_different_slots():
+    kb = KnowledgeBase(rules.profile("rcll2016"))
+    shelves = CapShelves(kb)
+
+    def assign(tid: int) -> M.Task:
+        t = M.Task(tid, M.RETRIEVE_CAP, {"machine": "C-CS1"}, state=M.ASSIGNED, robot=tid)
+        t.params["shelf_slot"] = shelves.choose("C-CS1", t.id)
+        kb.save_task(t)
+        return t
+
+    first, second = assign(1), assign(2)
+    assert (first.params["shelf_slot"], second.params["shelf_slot"]) == (0, 1)
+    # the first one's robot dropped out and its task is sent again: it keeps its own slot
+    assert shelves.choose("C-CS1", first.id) == 0
+    # slot 2 is found empty; the two under way hold the last carriers: a third robot is
+    # sent to one of them rather than to an empty slot
+    shelves.outcome(M.Task(9, M.RETRIEVE_CAP, {"machine": "C-CS1", "shelf_slot": 2}),
+                    False, "GRAB_FAILED", "nothing in the gripper after the grab", False)
+    assert assign(3).params["shelf_slot"] in (0, 1)
+    # a retrieval at another station is not counted here
+    other = M.Task(4, M.RETRIEVE_CAP, {"machine": "C-CS2", "shelf_slot": 0}, state=M.ASSIGNED)
+    kb.save_task(other)
+    assert shelves.choose("C-CS2", None) == 1 and shelves.choose("C-CS2", other.id) == 0
+    # once a retrieval ended its slot is booked by its result, not by it being under way
+    first.state = M.DONE
+    kb.save_task(first)
+    shelves.outcome(first, True, "NONE", "", False)
+    assert shelves.empty("C-CS1") == {0, 2} and shelves.choose("C-CS1", 5) == 1
