@@ -47,6 +47,8 @@ log = logging.getLogger(__name__)
 GOAL_WAIT = 1.0
 #: room (m) beyond the robot's radius a goal needs free of other robots
 GOAL_ROOM = 0.1
+#: s a poll may come later than ``control_period`` before the berth kept from other robots widens
+LATE = 0.02
 
 
 def tight_speed(gap, settings) -> np.ndarray:
@@ -178,6 +180,7 @@ class Navigate(Activity):
             here = np.array([pose.x, pose.y])
             static = ~unexplained(ctx, points + here)
             fixed, moving = points[static], points[~static]
+            seen = moving                 # other robots in this scan
             now_t = ctx.clock.now()
             ctx.laser_memory.add(moving + here, now_t, (pose.x, pose.y), laser_view(ctx, pose, 3.0))
             remembered = ctx.laser_memory.relative(pose, now_t)
@@ -194,6 +197,10 @@ class Navigate(Activity):
                                                          ctx.robot.radius + GOAL_ROOM)
             self.waiting = goal_taken
             decel = self.limits.max_decel * 0.8
+            # a loop polled late sees another robot late: meanwhile it may come
+            # into the way from the side, not only along it (up to closing_speed)
+            late = self.lag - s.control_period
+            side = 0.08 + s.closing_speed * late if late > LATE else None
 
             def cap(ux: float, uy: float) -> float:
                 if goal_taken:
@@ -206,6 +213,9 @@ class Navigate(Activity):
                                             self.lag),
                                 speed_limit(moving, ux, uy, ctx.robot.radius, s.safety_margin + 0.07, 0.08,
                                             decel, self.lag + 0.1, s.closing_speed))
+                    if side is not None:
+                        limit = min(limit, speed_limit(seen, ux, uy, ctx.robot.radius, s.safety_margin + 0.07,
+                                                       side, decel, self.lag + 0.1, s.closing_speed))
                 # the laser does not see behind: creep where it is blind, and
                 # stop for what it saw there a moment ago
                 if abs(wrap_angle(math.atan2(uy, ux) - pose.theta)) > half_fov - 0.4:
