@@ -8,7 +8,9 @@ slave under the symlink ``link`` (what the host opens, like
 ``/dev/ttyACM1``), feeds the model what the host writes and writes back what
 it produces, in a thread that sleeps until the host writes or the model is
 due (at most ``idle`` seconds: the host's opening and a pulled cable's
-return are looked at that often).
+return are looked at that often), or ``wake`` (anything with ``fileno()``
+and ``drain()``, :class:`~backends.devices.laser.source.CastSignal`) says
+the model has something new to send.
 Faults: :meth:`unplug` removes the device for a while (the link and the pty
 go away, as when the cable is pulled; a fresh pty comes back behind the same
 link), :meth:`set_silent` keeps the port but sends nothing (a hung device).
@@ -28,7 +30,7 @@ log = logging.getLogger(__name__)
 
 class PtyRunner:
     def __init__(self, model, link: str, *, clock: Clock | None = None, period: float = 0.002,
-                 on_connect=None, idle: float = 0.05):
+                 on_connect=None, idle: float = 0.05, wake=None):
         from backends.robotino.emulator import PtyDevice
         self.model = model
         self.clock = clock or WallClock()
@@ -36,6 +38,7 @@ class PtyRunner:
         self.period = period            # the shortest sleep (a model due now is served this late at most)
         self.idle = idle                # the longest sleep
         self.on_connect = on_connect
+        self.wake = wake
         self.lock = threading.RLock()
         self.silent = False
         self.connects = 0
@@ -125,13 +128,16 @@ class PtyRunner:
         if not self.pty.connected:
             self._stop.wait(self.idle)
             return
-        ready, _, _ = select.select([fd], [fd] if self.pty.pending else [], [], self._wait(now))
+        watch = [fd] if self.wake is None else [fd, self.wake]
+        ready, _, _ = select.select(watch, [fd] if self.pty.pending else [], [], self._wait(now))
         now = self.clock.now()
+        if self.wake is not None and self.wake in ready:
+            self.wake.drain()
         with self.lock:
             if not self.pty.is_open:
                 return
             self.pty.flush()
-            if ready:
+            if fd in ready:
                 data = self.pty.read()
                 if data:
                     self.bytes_in += len(data)

@@ -11,9 +11,13 @@ protocol, and the robot configuration file that points at them.
 ``laser_source(t)`` gives the distances (mm) the laser measures at device
 time ``t`` for its own beam angles (``rig.laser_angles()``, radians in the
 laser frame), or ``(distances, taken)`` measured at device time ``taken``,
-the scan's stamp (:mod:`backends.devices.laser.source`); ``frame_source()`` the BGR image the camera sees; by default a
-round room of ``room`` metres radius and a grey test image.  A simulator
-passes its own (``backends.sim.hardware``).
+the scan's stamp (:mod:`backends.devices.laser.source`); ``frame_source()``
+the BGR image the camera sees; by default a round room of ``room`` metres
+radius and a grey test image.  A simulator passes its own
+(``backends.sim.hardware``), and with ``laser_wake`` (a
+:class:`~backends.devices.laser.source.CastSignal` it notifies when it cast
+new ranges) the laser sends each scan right after its ranges were cast,
+not when its own clock says a scan is due.
 """
 from __future__ import annotations
 
@@ -36,7 +40,7 @@ class EmulatedRobot:
                  frame_source: Callable[[], np.ndarray] | None = None, camera_fps: float = 10.0,
                  laser_mount: dict | None = None, camera_mount: dict | None = None, camera_hfov: float = 60.0,
                  holding_sensor: str | None = None, link_dir: str | None = None, clock: Clock | None = None,
-                 emulator=None, room: float = 3.0, name: str = "emulated"):
+                 emulator=None, room: float = 3.0, name: str = "emulated", laser_wake=None):
         if laser is not None and laser not in LASERS:
             raise ValueError(f"laser must be one of {', '.join(LASERS)} or None, not {laser!r}")
         self.clock = clock or WallClock()
@@ -65,13 +69,15 @@ class EmulatedRobot:
             from backends.devices.laser.urg_device import MODELS, UrgDevice
             from backends.devices.ptyrunner import PtyRunner
             model = MODELS[laser_model or "URG-04LX"]
-            self.laser_device = UrgDevice(model, self._urg_source, start=boot)
-            self.laser_runner = PtyRunner(self.laser_device, os.path.join(self.link_dir, "urg"), clock=self.clock)
+            self.laser_device = UrgDevice(model, self._urg_source, start=boot, on_cast=laser_wake is not None)
+            self.laser_runner = PtyRunner(self.laser_device, os.path.join(self.link_dir, "urg"), clock=self.clock,
+                                          wake=laser_wake)
         elif laser == "tim":
             from backends.devices.laser.tim_device import MODELS, TimDevice
             from backends.devices.laser.tim_emulator import TimEmulator
-            self.laser_device = TimDevice(MODELS[laser_model or "TiM571"], self._tim_source, start=boot)
-            self.laser_runner = TimEmulator(self.laser_device, clock=self.clock)
+            self.laser_device = TimDevice(MODELS[laser_model or "TiM571"], self._tim_source, start=boot,
+                                          on_cast=laser_wake is not None)
+            self.laser_runner = TimEmulator(self.laser_device, clock=self.clock, wake=laser_wake)
         if camera:
             from backends.devices.camera.mjpeg import MjpegServer
             self.camera_server = MjpegServer(self._frame, fps=camera_fps, clock=self.clock)

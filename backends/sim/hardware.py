@@ -16,8 +16,9 @@ Per robot (:class:`WorldRig`, on an :class:`~backends.robotino.rig.EmulatedRobot
 * the laser (URG on a pty, TiM on a TCP port): the ranges are the world's
   ray casts (:func:`backends.sim.sensors.laser_ranges`, the robot's laser
   noise included) for the device's own beam angles from the robot's laser
-  mount, taken every scan period; the scan the device sends next is
-  stamped with the moment they were cast, not when it is sent;
+  mount, taken every scan period; the device sends them at once
+  (:class:`~backends.devices.laser.source.CastSignal`), stamped with the
+  moment they were cast;
 * the camera (MJPEG over HTTP): the frames the world renders from the
   robot's camera (:meth:`World.camera_image`), at ``camera_fps``;
 * the gripper Arduino on a pty: its commanded axis targets and finger state
@@ -37,6 +38,7 @@ import threading
 
 import numpy as np
 
+from backends.devices.laser.source import CastSignal
 from rll_bt.clock import Clock, WallClock
 
 from .hardware_parts import CoupledRig, build_devices, device_spec, device_stats, rig_config
@@ -50,8 +52,10 @@ class WorldRig(CoupledRig):
                  camera_fps: float = 5.0, clock: Clock | None = None, link_dir: str | None = None):
         self.clock = clock or WallClock()
         spec = device_spec(world.robots[key], key, laser=laser, laser_model=laser_model, camera_fps=camera_fps)
+        self._cast_signal = CastSignal()
         self.rig, self.gripper_fw = build_devices(spec, clock=self.clock, laser_source=self._laser_source,
-                                                  frame_source=self._frame, link_dir=link_dir)
+                                                  frame_source=self._frame, link_dir=link_dir,
+                                                  laser_wake=self._cast_signal)
         dev = self.rig.laser_device
         super().__init__(world, key, self.rig.laser_angles(), dev.model.scan_period if dev else math.inf, camera_fps)
         self._lock = threading.Lock()
@@ -67,6 +71,7 @@ class WorldRig(CoupledRig):
 
     def stop(self) -> None:
         self.rig.stop()
+        self._cast_signal.close()
 
     def stats(self) -> dict:
         return {**device_stats(self.rig), "scans_computed": self.scans, "frames_rendered": self.frames,
@@ -75,8 +80,8 @@ class WorldRig(CoupledRig):
     # -- what the device threads read ---------------------------------------------------
     def _laser_source(self, t: float):
         with self._lock:
-            if self._ranges_mm is None:
-                return np.full(len(self.angles), np.nan)
+            if self._ranges_mm is None:                 # nothing cast yet
+                return np.full(len(self.angles), np.nan), -math.inf
             # the ranges and the device time they were cast at (the scan's stamp)
             return self._ranges_mm, self._cast - self.rig.laser_device.boot
 
@@ -110,6 +115,7 @@ class WorldRig(CoupledRig):
     def _put_ranges(self, ranges_mm: np.ndarray, cast: float) -> None:
         with self._lock:
             self._ranges_mm, self._cast = ranges_mm, cast
+        self._cast_signal.notify()
 
     def _camera_wanted(self) -> bool:
         return self.rig.camera_server is not None and self.rig.camera_server.clients > 0

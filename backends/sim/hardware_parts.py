@@ -117,15 +117,18 @@ def device_spec(robot, key: tuple[str, int], *, laser: str = "urg", laser_model:
             "camera_hfov": math.degrees(cfg.camera_hfov), "holding_sensor": HOLDING_SENSOR, "name": f"R{key[1]}"}
 
 
-def build_devices(spec: dict, *, clock: Clock, laser_source, frame_source, link_dir: str | None = None):
-    """(:class:`~backends.robotino.rig.EmulatedRobot`, its :class:`WorldGripperFirmware`), not started."""
+def build_devices(spec: dict, *, clock: Clock, laser_source, frame_source, link_dir: str | None = None,
+                  laser_wake=None):
+    """(:class:`~backends.robotino.rig.EmulatedRobot`, its :class:`WorldGripperFirmware`), not started;
+    the laser sends a scan when ``laser_wake`` (a :class:`~backends.devices.laser.source.CastSignal`)
+    says the world cast its ranges."""
     from backends.robotino.emulator import RobotinoEmulator
     from backends.robotino.rig import EmulatedRobot
     fw = WorldGripperFirmware()
     emu = RobotinoEmulator(gripper=True, link_dir=link_dir, clock=clock, gripper_firmware=fw,
                            stall_stop=SILENT_STOP)
     rig = EmulatedRobot(**spec, emulator=emu, link_dir=emu.link_dir, clock=clock, laser_source=laser_source,
-                        frame_source=frame_source)
+                        frame_source=frame_source, laser_wake=laser_wake)
     return rig, fw
 
 
@@ -196,7 +199,7 @@ class CoupledRig:
         r.drive(vx, vy, w, world_time)
         if world_time >= self._next_scan:
             self._next_scan = max(self._next_scan + self.scan_period, world_time)
-            # cast now (the devices' clock): the scan sent later says so in its stamp (devices/laser/source.py)
+            # cast now (the devices' clock): the scan says so in its stamp and goes out at once (laser/source.py)
             self._put_ranges(sensors.laser_ranges(self.world.cid, r, self.angles, noisy=True) * 1000.0, self.wall())
             self.scans += 1
         if world_time >= self._next_frame and self._camera_wanted():
@@ -213,7 +216,7 @@ class CoupledRig:
         raise NotImplementedError
 
     def _put_ranges(self, ranges_mm: np.ndarray, cast: float) -> None:
-        """The laser's newest ranges (mm), cast at ``cast`` (:meth:`wall`)."""
+        """The laser's newest ranges (mm), cast at ``cast`` (:meth:`wall`); the laser is told at once."""
         raise NotImplementedError
 
     def _camera_wanted(self) -> bool:

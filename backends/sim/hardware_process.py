@@ -14,7 +14,9 @@ sees.  Here the base firmware, the gripper sketch, the laser and the camera
 server of one robot run in a child process; the world's process and it
 share one block of memory (:class:`_Shared`):
 
-* world -> devices: the laser's ranges (mm) and their sequence number, the
+* world -> devices: the laser's ranges (mm), when they were cast and their
+  sequence number (and a :class:`~backends.devices.laser.source.CastSignal`
+  that wakes the laser's thread to send them at once), the
   camera's last frame and its number, the holding sensor's volts, the world
   gripper's axes (in the sketch's steps), whether it is busy, and the last
   sketch command it has taken;
@@ -39,6 +41,8 @@ import math
 import multiprocessing as mp
 
 import numpy as np
+
+from backends.devices.laser.source import CastSignal
 
 from .hardware_parts import CoupledRig, device_spec
 
@@ -81,7 +85,8 @@ class ProcessRig(CoupledRig):
         self._shared = _Shared(ctx, h * w * 3)
         self._floats, self._image = self._shared.view()
         self._conn, child = ctx.Pipe()
-        self._proc = ctx.Process(target=serve, args=(spec, self._shared, child), daemon=True,
+        self._cast_signal = CastSignal()          # the world's casts wake the child's laser
+        self._proc = ctx.Process(target=serve, args=(spec, self._shared, child, self._cast_signal), daemon=True,
                                  name=f"devices-{key[0].lower()}-{key[1]}")
         self._proc.start()
         child.close()
@@ -138,6 +143,7 @@ class ProcessRig(CoupledRig):
                 self._proc.kill()
                 self._proc.join(2.0)
         self._conn.close()
+        self._cast_signal.close()
 
     # -- the world's side -----------------------------------------------------------------------
     def _exchange(self, world_time: float) -> tuple[list[float], float | None]:
@@ -163,6 +169,7 @@ class ProcessRig(CoupledRig):
             self._floats[RANGES_CAST] = cast
             self._ranges_seq += 1
             self._floats[RANGES_SEQ] = self._ranges_seq
+        self._cast_signal.notify()
 
     def _camera_wanted(self) -> bool:
         return self._floats[CLIENTS] > 0
@@ -183,14 +190,14 @@ class _Devices:
     """The child's side: the devices, their sources on the shared block, and
     the copy between the block and the firmware objects."""
 
-    def __init__(self, spec: dict, shared: _Shared):
+    def __init__(self, spec: dict, shared: _Shared, cast_signal=None):
         from rll_bt.clock import WallClock
 
         from .hardware_parts import build_devices
         self.shared = shared
         self.floats, self.image = shared.view()
         self.rig, self.gripper_fw = build_devices(spec, clock=WallClock(), laser_source=self._laser_source,
-                                                  frame_source=self._frame)
+                                                  frame_source=self._frame, laser_wake=cast_signal)
         self.beams = len(self.rig.laser_angles()) if self.rig.laser_device is not None else 0
         if self.beams > MAX_BEAMS:
             raise ValueError(f"{self.beams} beams: at most {MAX_BEAMS} are shared")
@@ -199,8 +206,8 @@ class _Devices:
 
     def _laser_source(self, t: float):
         with self.shared.lock:
-            if self.floats[RANGES_SEQ] == 0:
-                return np.full(self.beams, np.nan)
+            if self.floats[RANGES_SEQ] == 0:              # nothing cast yet
+                return np.full(self.beams, np.nan), -math.inf
             cast = float(self.floats[RANGES_CAST]) - self.rig.laser_device.boot
             return self.floats[BEAMS:BEAMS + self.beams].copy(), cast
 
@@ -269,12 +276,12 @@ class _Devices:
             self.rig.stop()
 
 
-def serve(spec: dict, shared: _Shared, conn) -> None:
+def serve(spec: dict, shared: _Shared, conn, cast_signal=None) -> None:
     """The child process: start the devices, say where they are, serve."""
     from .hardware_parts import rig_config
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     try:
-        devices = _Devices(spec, shared)
+        devices = _Devices(spec, shared, cast_signal)
         devices.rig.start()
     except Exception as exc:
         conn.send({"error": f"{type(exc).__name__}: {exc}"})

@@ -11,7 +11,11 @@ Scans are measured at the scan frequency from power-up; distances come
 from ``source(t)``: millimetres of the model's ``count`` beams (from
 ``start_angle`` in ``step`` increments, the scanner's angles, 90 degrees
 ahead) at device time ``t`` seconds; ``0``/``nan`` or outside the range
-becomes 0 (no echo).  Requests answered (others: ``sFA``):
+becomes 0 (no echo).  With ``on_cast`` (a source fed by a world,
+:mod:`.source`) a streaming session sends a scan as soon as the source has
+ranges it has not sent (stamped when they were measured), and on its own
+clock only when none came for two scan periods (the newest again, with its
+old stamp).  Requests answered (others: ``sFA``):
 
 * ``sRN LMDscandata``, ``sEN LMDscandata 0|1``;
 * ``sMN SetAccessMode <level> <password>`` (``03 F4724744`` authorised
@@ -72,8 +76,9 @@ MODELS = {"TiM571": TIM571, "TiM551": TIM551}
 
 class TimDevice:
     def __init__(self, model: TimModel = TIM571, source: Callable[[float], np.ndarray] | None = None,
-                 start: float = 0.0):
+                 start: float = 0.0, on_cast: bool = False):
         self.model = model
+        self.on_cast = on_cast
         self.source = source or (lambda t: np.zeros(model.count))
         self.boot = start
         self.telegram_counter = 0
@@ -87,10 +92,18 @@ class TimDevice:
         return round((t - self.boot) * 1e6) & 0xFFFFFFFF
 
     def scan(self, index: int, sent: float) -> cola.ScanData:
+        """Scan ``index`` (measured on the device's clock), sent at ``sent``."""
+        t = index * self.model.scan_period
+        return self.scan_of(*sample(self.source, t), index, sent, t)
+
+    def measured(self, now: float) -> tuple[np.ndarray, float]:
+        """The source's newest ranges (mm) and the device time they were measured at (``-inf``: none yet)."""
+        return sample(self.source, now - self.boot)
+
+    def scan_of(self, mm: np.ndarray, taken: float, index: int, sent: float, when: float) -> cola.ScanData:
+        """The scan of ranges ``mm`` measured at device time ``taken`` (``when`` if that is not finite)."""
         m = self.model
-        t = self.boot + index * m.scan_period
-        mm, taken = sample(self.source, t - self.boot)
-        mm, t = mm[:m.count], self.boot + taken
+        mm, t = mm[:m.count], self.boot + (taken if math.isfinite(taken) else when)
         lo, hi = m.range_mm
         ok = np.isfinite(mm) & (mm >= lo) & (mm <= hi)
         values = np.where(ok, np.round(mm), 0).astype(int).tolist()
@@ -116,6 +129,7 @@ class TimSession:
         self.access = 0
         self.requests = 0
         self._next_scan = 0
+        self._taken = self._sent_at = 0.0      # on a cast: the device time of the last ranges sent, when sent
         self._out = bytearray()
 
     def take_output(self) -> bytes:
@@ -139,6 +153,8 @@ class TimSession:
         if not self.streaming:
             return
         dev = self.device
+        if dev.on_cast:
+            return self._advance_on_cast(now)
         last = dev.scan_index(now)
         if self._next_scan > last:
             return
@@ -147,8 +163,27 @@ class TimSession:
             self._send_scan("sSN", self._next_scan, now)
             self._next_scan += 1
 
-    def _send_scan(self, kind: str, index: int, now: float) -> None:
-        s = self.device.scan(index, now)
+    def next_due(self) -> float | None:
+        """On a cast: the latest the next scan goes out (None: not streaming, or on the device's clock)."""
+        if not (self.streaming and self.device.on_cast):
+            return None
+        return self._sent_at + 2 * self.device.model.scan_period
+
+    def _advance_on_cast(self, now: float) -> None:
+        """A scan of ranges measured since the last one, or of the newest ones when none came for two periods."""
+        dev = self.device
+        mm, taken = dev.measured(now)
+        if not taken > self._taken and now < self.next_due():
+            return
+        self._taken = max(self._taken, taken)
+        self._sent_at = now
+        self._send_scan("sSN", self._next_scan, now, (mm, taken))
+        self._next_scan += 1
+
+    def _send_scan(self, kind: str, index: int, now: float, measured=None) -> None:
+        dev = self.device
+        s = (dev.scan(index, now) if measured is None
+             else dev.scan_of(*measured, index, now, now - dev.boot))
         self._send(cola.encode_scan_b(kind, s) if self.binary else cola.encode_scan_a(kind, s))
 
     # -- requests -------------------------------------------------------------------
@@ -174,6 +209,8 @@ class TimSession:
                 return self._error(5)
             self.streaming = on
             self._next_scan = self.device.scan_index(now) + 1
+            # on a cast: the first scan is of ranges measured after the request
+            self._taken, self._sent_at = now - self.device.boot, now
             return self._send(b"sEA LMDscandata " + ((b"\x01" if on else b"\x00") if self.binary
                                                      else (b"1" if on else b"0")))
         if kind == b"sMN":

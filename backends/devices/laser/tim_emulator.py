@@ -6,7 +6,9 @@ number of CoLa clients by one thread (``select``).
 
 Faults: :meth:`unplug` drops every connection and stops listening for a
 while (connects are refused, as with the cable out), :meth:`set_silent`
-keeps the connections but sends nothing.
+keeps the connections but sends nothing.  ``wake`` (a
+:class:`~.source.CastSignal`) wakes the thread when the source has cast new
+ranges, so that a device ``on_cast`` sends them at once.
 """
 from __future__ import annotations
 
@@ -24,12 +26,13 @@ log = logging.getLogger(__name__)
 
 class TimEmulator:
     def __init__(self, device: TimDevice, *, host: str = "127.0.0.1", port: int = 0,
-                 clock: Clock | None = None, period: float = 0.005):
+                 clock: Clock | None = None, period: float = 0.005, wake=None):
         self.device = device
         self.host = host
         self.port = port
         self.clock = clock or WallClock()
         self.period = period
+        self.wake = wake
         self.lock = threading.RLock()
         self.silent = False
         self.connects = 0
@@ -124,11 +127,14 @@ class TimEmulator:
         if self._listener is None:
             self._stop.wait(self.period)
             return
-        socks = [self._listener, *self._clients]
+        socks = [self._listener, *self._clients] + ([] if self.wake is None else [self.wake])
         ready, _, _ = select.select(socks, [], [], self.period)
         now = self.clock.now()
         with self.lock:
             for s in ready:
+                if s is self.wake:
+                    self.wake.drain()
+                    continue
                 if s is self._listener:
                     try:
                         c, _ = s.accept()

@@ -7,6 +7,10 @@ ranges in millimetres of steps 0..``model.max_step`` at device time ``t``
 (seconds since power-up), ``0`` or ``nan`` where nothing reflects.  A step
 outside AMIN..AMAX, a distance outside DMIN..DMAX and no reflection are
 sent as error code ``1`` (a value below DMIN, as the sensor does).
+With ``on_cast`` (a source fed by a world, :mod:`.source`) a stream sends a
+scan as soon as the source has ranges it has not sent (stamped when they
+were measured), and on its own clock only when none came for two scan
+periods (the newest again, with its old stamp).
 
 What it does (spec C-42-03320B): the URG-04LX starts in SCIP 1.1 and
 answers anything but ``SCIP2.0`` with the status ``E``; ``VV``/``PP``/``II``;
@@ -68,8 +72,9 @@ _ECHO_ONLY = {"BM", "QT", "RS", "VV", "PP", "II"}
 
 class UrgDevice:
     def __init__(self, model: UrgModel = URG_04LX, source: Callable[[float], np.ndarray] | None = None,
-                 start: float = 0.0):
+                 start: float = 0.0, on_cast: bool = False):
         self.model = model
+        self.on_cast = on_cast
         self.source = source or (lambda t: np.zeros(model.max_step + 1))
         self.boot = start
         self._out = bytearray()
@@ -112,27 +117,55 @@ class UrgDevice:
         return out
 
     def next_due(self) -> float | None:
-        """When the stream's next scan is due (None: no stream runs)."""
+        """When the stream's next scan is due (None: no stream runs; on a cast: the latest it goes out)."""
         s = self.stream
-        return None if s is None else s["next"] * self.model.scan_period + self.boot
+        if s is None:
+            return None
+        if self.on_cast:
+            return s["sent_at"] + 2 * (1 + s["interval"]) * self.model.scan_period
+        return s["next"] * self.model.scan_period + self.boot
 
     def advance(self, now: float) -> None:
         """Send the stream's scans that are due by ``now``."""
+        if self.on_cast:
+            return self._advance_on_cast(now)
         s = self.stream
         while s is not None and s["next"] * self.model.scan_period + self.boot <= now:
             k = s["next"]
             s["next"] += 1 + s["interval"]
-            t = self.boot + k * self.model.scan_period
-            if s["count"]:
-                s["left"] -= 1
-            echo = (f"{s['symbol']}{s['start']:04d}{s['end']:04d}{s['cluster']:02d}{s['interval']:01d}"
-                    f"{max(s['left'], 0):02d}").encode() + s["tag"]
-            self._out += echo + b"\n" + scip.status_line("99") + self._scan_payload(s, t)
-            self.scans_sent += 1
-            if s["count"] and s["left"] <= 0:
-                self.stream = None
-                self.laser_on = False
+            t = k * self.model.scan_period
+            raw, taken = sample(self.source, t)
+            self._stream_scan(s, raw, taken if math.isfinite(taken) else t)
             s = self.stream
+
+    def _advance_on_cast(self, now: float) -> None:
+        """The stream's scan of ranges measured since the last one (the ``interval``
+        after it skipped), or of the newest ones when none came for two scan periods."""
+        s = self.stream
+        if s is None:
+            return
+        raw, taken = sample(self.source, now - self.boot)
+        if taken > s["taken"]:                     # measured since the last scan (or the stream's start)
+            s["taken"] = taken
+            if s["skip"] > 0:
+                s["skip"] -= 1
+                return
+        elif now < self.next_due():
+            return
+        s["skip"] = s["interval"]
+        s["sent_at"] = now
+        self._stream_scan(s, raw, taken if math.isfinite(taken) else now - self.boot)   # -inf: nothing cast yet
+
+    def _stream_scan(self, s: dict, raw: np.ndarray, taken: float) -> None:
+        if s["count"]:
+            s["left"] -= 1
+        echo = (f"{s['symbol']}{s['start']:04d}{s['end']:04d}{s['cluster']:02d}{s['interval']:01d}"
+                f"{max(s['left'], 0):02d}").encode() + s["tag"]
+        self._out += echo + b"\n" + scip.status_line("99") + self._payload(s, raw, taken)
+        self.scans_sent += 1
+        if s["count"] and s["left"] <= 0:
+            self.stream = None
+            self.laser_on = False
 
     # -- commands -----------------------------------------------------------------
     def _reply(self, echo: bytes, status: str, body: bytes = b"") -> None:
@@ -254,7 +287,9 @@ class UrgDevice:
         self._reply(echo, "00")
         self.stream = {"symbol": symbol, "start": start, "end": end, "cluster": cluster, "interval": interval,
                        "count": count, "left": count, "size": size, "tag": tag,
-                       "next": self._scan_index(now) + 1}
+                       "next": self._scan_index(now) + 1,
+                       # on a cast: the first scan is of ranges measured after the command
+                       "taken": now - self.boot, "skip": 0, "sent_at": now}
 
     def _cmd_MD(self, echo, params, tag, now):
         self._md(echo, params, tag, now, "MD", 3)
@@ -306,8 +341,13 @@ class UrgDevice:
 
     def _measure(self, t: float, start: int, end: int, cluster: int, size: int) -> tuple[list[int], float]:
         """(:meth:`measure`, the clock time the source measured them at: ``t`` unless it says otherwise)."""
-        m = self.model
         raw, taken = sample(self.source, t - self.boot)
+        taken = taken if math.isfinite(taken) else t - self.boot
+        return self._values(raw, start, end, cluster, size), self.boot + taken
+
+    def _values(self, raw: np.ndarray, start: int, end: int, cluster: int, size: int) -> list[int]:
+        """The values sent for steps ``start..end`` of the source's ranges ``raw`` (mm)."""
+        m = self.model
         steps = np.arange(start, end + 1)
         mm = np.full(len(steps), float(NO_ECHO))
         inside = (steps >= m.amin) & (steps <= m.amax) & (steps < len(raw))
@@ -322,10 +362,15 @@ class UrgDevice:
         groups = groups.reshape(-1, c)
         # a cluster sends its nearest echo; with none, its first step's error code
         echoes = np.where(groups >= m.dmin, groups, np.inf).min(axis=1)
-        return np.where(np.isfinite(echoes), echoes, groups[:, 0]).astype(int).tolist(), self.boot + taken
+        return np.where(np.isfinite(echoes), echoes, groups[:, 0]).astype(int).tolist()
 
     def _scan_payload(self, s: dict, t: float) -> bytes:
-        values, taken = self._measure(t, s["start"], s["end"], s["cluster"], s["size"])
-        self._last_scan = t
-        return (scip.sum_line(scip.encode(self.stamp(taken), 4))
+        raw, taken = sample(self.source, t - self.boot)
+        return self._payload(s, raw, taken if math.isfinite(taken) else t - self.boot)
+
+    def _payload(self, s: dict, raw: np.ndarray, taken: float) -> bytes:
+        """A scan's time stamp and data of ranges ``raw`` measured at device time ``taken``."""
+        values = self._values(raw, s["start"], s["end"], s["cluster"], s["size"])
+        self._last_scan = self.boot + taken
+        return (scip.sum_line(scip.encode(self.stamp(self.boot + taken), 4))
                 + scip.data_block(scip.encode_values(values, s["size"])) + b"\n")

@@ -119,3 +119,24 @@ def test_answers_parse_as_the_ros_sick_tim_driver_reads_them():
     n = int(fields[25], 16)
     assert fields[15] == "0" and fields[20] == "DIST1" and n == 811 and len(fields) >= 26 + n + 1 + 5
     assert state == "sRA SCdevicestate 1"
+
+
+def test_a_scan_fed_by_a_world_goes_out_at_its_cast_stamped_with_the_cast_time():
+    cast = {"mm": np.zeros(811), "t": -np.inf}
+    dev = TimDevice(TIM571, lambda t: (cast["mm"], cast["t"]), start=0.0, on_cast=True)
+    s = dev.session()
+    s.receive(cola.frame_a(b"sEN LMDscandata 1"), 0.001)
+    s.take_output()
+
+    def scans(now):
+        s.advance(now)
+        return [cola.decode_scan_a(t.payload) for t in cola.TelegramReader().feed(s.take_output())]
+
+    cast.update(mm=np.full(811, 1000.0), t=0.0305)
+    (scan,) = scans(0.031)                             # right after the cast, not at the next scan period
+    assert scan.time_since_startup == 30500            # stamped when cast (µs), not when sent
+    assert set(scan.channel("DIST1").data) == {1000}
+    assert scans(0.04) == []                           # that cast is sent once
+    cast.update(mm=np.full(811, 2000.0), t=0.05)
+    (scan,) = scans(0.09)                              # a late sender keeps the cast's stamp
+    assert scan.time_since_startup == 50000 and set(scan.channel("DIST1").data) == {2000}

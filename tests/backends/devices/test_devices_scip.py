@@ -152,3 +152,42 @@ def test_replies_have_the_line_counts_the_vendors_library_checks():
         block.info()                      # every line's checksum right
     (ss,) = _blocks(dev, b"SS115200\n")
     assert ss.status == "03"              # already at that bit rate: one of the statuses the library accepts
+
+
+class _World:
+    """A world that casts a laser's ranges at moments of its own: ``source(t)`` gives
+    the newest cast and the device time it was cast at (``-inf``: none yet)."""
+
+    def __init__(self, size):
+        self.size, self.ranges, self.taken = size, np.zeros(size), -np.inf
+
+    def cast(self, value, t):
+        self.ranges, self.taken = np.full(self.size, float(value)), t
+
+    def source(self, t):
+        return self.ranges, self.taken
+
+
+def test_a_scan_fed_by_a_world_goes_out_at_its_cast_stamped_with_the_cast_time():
+    world = _World(769)
+    dev = UrgDevice(URG_04LX, world.source, start=0.0, on_cast=True)
+    dev.receive(b"SCIP2.0\nMD0044072501000\n", 0.001)
+    dev.take_output()
+    dev.advance(0.05)
+    assert dev.take_output() == b""                   # nothing cast yet, none due
+    world.cast(1000, 0.130)
+    dev.advance(0.131)                                 # right after the cast, not at the next scan period (0.2)
+    (scan,) = scip.BlockReader().feed(dev.take_output())
+    stamp, values = scan.scan(3)
+    assert stamp == 130 and set(values) == {1000}      # stamped when cast, not when sent
+    dev.advance(0.14)
+    assert dev.take_output() == b""                   # that cast is sent once
+    world.cast(1500, 0.150)
+    dev.advance(0.190)                                 # a late sender keeps the cast's stamp
+    (scan,) = scip.BlockReader().feed(dev.take_output())
+    assert scan.scan(3)[0] == 150 and set(scan.scan(3)[1]) == {1500}
+    dev.advance(0.3)
+    assert dev.take_output() == b""
+    dev.advance(0.4)                                   # no cast for two scan periods: the newest again, its own stamp
+    (scan,) = scip.BlockReader().feed(dev.take_output())
+    assert scan.scan(3)[0] == 150

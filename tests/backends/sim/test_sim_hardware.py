@@ -62,7 +62,7 @@ class Running:
         return until() if until is not None else True
 
 
-def fresh(running, read, seconds=30.0):
+def fresh(running, read, seconds=60.0):
     """``read()`` once its device has a fresh reading: a loaded machine can leave
     the world's laser or camera stale for a moment (SensorLost), retried up to
     ``seconds``."""
@@ -115,35 +115,44 @@ def test_scans_decode_to_the_ranges_the_world_computes(rigged):
     expected = rig.angles[m.amin:m.amax + 1] if kind == "urg" else rig.angles
     assert np.allclose(angles, expected, atol=1e-4)
     assert scan.mount.x == pytest.approx(robot.config.geometry.laser_mount[0])
-    # turning, each scan is stamped when the world cast its ranges (not when the device sent them, up to
-    # a scan period later: 0.16 rad off the odometry at 1.6 rad/s, the localiser lost the robot)
+    # turning, each scan is stamped with the time the world cast the ranges it carries (no two casts alike:
+    # the laser has no noise).  The host maps the device's stamps onto its own clock by the smallest delay it
+    # has seen (stamps.DeviceClock), an offset that only shrinks: so in the order of their casts, every
+    # scan's stamp minus its cast's time is its predecessor's or smaller (within the device's millisecond).
+    # A scan stamped when it was due or sent instead (before 6270936: anywhere up to a scan period after
+    # its cast) breaks that order.  How long after its cast a scan arrives is the machine's load, not
+    # asserted here (test_devices_scip/cola: the device sends a scan right after the cast)
     cast = []
-    backend.drive(0.0, 0.0, 0.8)
-    running.run(0.4)                # turning: no two casts alike (the laser has no noise)
+    turn(backend, running, 1.0)
     put = rig._put_ranges
-    rig._put_ranges = lambda mm, *at: (cast.append((time.monotonic(), np.round(mm))), put(mm, *at))
+    rig._put_ranges = lambda mm, *at: (cast.append((at[0], np.round(mm))), put(mm, *at))
     stamps = {}
-    end = time.monotonic() + 3.0
+    end = time.monotonic() + 120.0                  # bounds a hang only
     while time.monotonic() < end and len(stamps) < 20:
-        backend.drive(0.0, 0.0, 0.8)
+        turn(backend, running, 0.03)
         scan = fresh(running, backend.laser_scan)
         stamps[scan.stamp] = np.where(np.isfinite(scan.ranges), np.round(scan.ranges * 1000.0), 0.0)
-        running.run(0.03)
     backend.stop()
     beams = slice(m.amin, m.amax + 1) if kind == "urg" else slice(0, len(rig.angles))
-    offsets = []
+    matched = []                                     # (cast time, stamp) of scans that carry one cast's ranges
     for stamp, mm in stamps.items():
         match = [at for at, c in list(cast) if np.array_equal(np.where(mm > 0, c[beams], 0.0), mm)]
         if len(match) == 1:
-            offsets.append(stamp - match[0])
-    assert len(offsets) >= 8, (len(stamps), len(offsets))
-    # before: 0.05 on average, each scan anywhere from 0 to 0.15 s after its cast. Now every scan
-    # is the same time after its cast: 0.003-0.011 s on a quiet machine; under the suite's load a
-    # constant 0.03-0.046 s (the emulator sends a scan when due, a fixed phase after the world's
-    # cast, and the host's clock mapping cannot see a constant delay), so the spread is the test
-    off = np.asarray(offsets)
-    assert np.percentile(off, 90) - np.percentile(off, 10) < 0.01, offsets
-    assert np.median(np.abs(off)) < 0.1, offsets             # within one scan period
+            matched.append((match[0], stamp))
+    assert len(matched) >= 8, (len(stamps), len(matched))
+    offsets = [stamp - at for at, stamp in sorted(matched)]
+    assert all(b <= a + 0.0015 for a, b in zip(offsets, offsets[1:])), offsets
+    assert -0.002 <= offsets[-1] < 1.0, offsets      # mapped onto the host's clock, after the cast
+
+
+def turn(backend, running, seconds):
+    """Turn the robot for ``seconds`` (a loaded machine may leave a sensor stale a moment: the backend
+    refuses to drive then, and the robot turns on at the last command or stops: either will do)."""
+    try:
+        backend.drive(0.0, 0.0, 0.8)
+    except SensorLost:
+        pass
+    running.run(seconds)
 
 
 def laser_model(rig):
@@ -179,8 +188,8 @@ def drive_episode(world, rig, backend, running, seconds=1.5):
         with emu.lock:                              # the emulator's thread appends to the log
             heard = [t for t, _ in emu.firmware.rx_log if t >= t0]
         silence = max(np.diff(heard), default=math.inf) if len(heard) > 1 else math.inf
-    else:
-        silence = 0.0
+    else:                                           # the base's log is in the devices' process: a watchdog stop
+        silence = math.inf if rig.stats()["watchdog_motion_stops"] > stops0 else 0.0      # is taken for starving
     return SimpleNamespace(moved=robot.pose.relative_to(start), odo=backend.odometry().pose.relative_to(odo0),
                            stops=rig.stats()["watchdog_motion_stops"] - stops0,
                            starved=math.inf if lost else max(silence, running.longest_gap))
@@ -189,21 +198,25 @@ def drive_episode(world, rig, backend, running, seconds=1.5):
 def test_the_base_drives_the_worlds_robot_and_the_camera_shows_the_worlds_view(rigged):
     world, hw, rig, backend, running = rigged
     robot = world.robots[("CYAN", 1)]
+    opened = time.monotonic()
     # a real-time property: an episode in which the machine left the base without the host's polls, or the
     # world without steps, for 250 ms or more (near the watchdog's 300 ms), or the world's laser stale, tests
-    # the machine, not the code, and is driven again (at most five times; the last one is asserted whatever
-    # it was)
-    for _ in range(5):
+    # the machine, not the code, and is driven again (a loaded machine starves many in a row: until one was
+    # not, for up to three minutes, a bound on a hang only; the last one is asserted whatever it was)
+    end, start = time.monotonic() + 180.0, robot.pose
+    while True:
         ep = drive_episode(world, rig, backend, running)
-        if ep.starved < 0.25:
+        if ep.starved < 0.25 or time.monotonic() > end:
             break
+        with running.lock:                          # back where it started, far from any wall
+            world.teleport("CYAN", 1, start)
     moved, odo = ep.moved, ep.odo
     assert 0.15 < moved.x < 0.4 and abs(moved.y) < 0.03, ep
     # the host's odometry, integrated from the wheel speeds it polls, follows the world's motion
     assert odo.x == pytest.approx(moved.x, abs=0.08), (ep, rig.stats())
     assert ep.stops == 0, ep
-    frame = fresh(running, backend.camera_image)
-    assert frame.image.shape == (240, 320, 3) and abs(frame.stamp - time.monotonic()) < 1.5
+    frame = fresh(running, backend.camera_image, seconds=120.0)
+    assert frame.image.shape == (240, 320, 3) and opened < frame.stamp <= time.monotonic()     # the host's clock
     assert frame.intrinsics.fx == pytest.approx(160 / math.tan(robot.config.camera_hfov / 2), rel=1e-3)
     assert frame.image.std() > 5                                     # a rendered view, not a blank
 
@@ -211,15 +224,15 @@ def test_the_base_drives_the_worlds_robot_and_the_camera_shows_the_worlds_view(r
 def test_the_gripper_moves_the_worlds_gripper_and_holding_comes_from_the_world(rigged):
     world, hw, rig, backend, running = rigged
     robot = world.robots[("CYAN", 1)]
-    assert running.run(30.0, until=lambda: backend.gripper_status().state.value == "idle")
+    assert running.run(120.0, until=lambda: backend.gripper_status().state.value == "idle")      # bounds a hang
     backend.gripper_move(0.05, 0.02, 0.4)
-    assert running.run(30.0, until=lambda: np.allclose(robot.gripper.position, (0.05, 0.02, 0.4), atol=0.002)
+    assert running.run(120.0, until=lambda: np.allclose(robot.gripper.position, (0.05, 0.02, 0.4), atol=0.002)
                        and backend.gripper_status().state.value == "idle")
     assert np.allclose(backend.gripper_status().position, (0.05, 0.02, 0.4), atol=0.002)
     assert backend.holding() is False
     running.stop()                          # what the world says is in the jaws reaches the host
     robot.holding = 1                       # (no such workpiece: the world is not stepped any more)
-    end = time.monotonic() + 30.0
+    end = time.monotonic() + 120.0
     while backend.holding() is not True and time.monotonic() < end:
         hw.sync()
         time.sleep(0.02)
