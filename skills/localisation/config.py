@@ -61,6 +61,10 @@ class AmclConfig:
     lost_updates: int = 5
     fit_tolerance: float = 0.15          # metres, a beam agrees with the map within this
     station_slack: float = 0.5           # metres a beam may reach past a mapped station face (its pose may be off)
+    # a scan that pins the position in one direction only (a long wall and nothing else mapped in
+    # range): along the other the pose follows the odometry (observability.py); below this many
+    # beams' worth of evidence along the weakest direction (0: never)
+    hold_below: float = 1.0
     cluster_xy: float = 0.3              # metres, particles within this of the best bin
     cluster_theta: float = math.radians(20.0)
 

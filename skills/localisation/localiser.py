@@ -20,6 +20,13 @@ Relocalising (:class:`~skills.localisation.relocalise.Relocalise`) may
 :meth:`Localiser.boost` the particle and beam counts for a while, and starts
 a global search with a prior around the last estimate, so that in a
 mirror-symmetric field the hypothesis on the robot's own side wins.
+
+A scan that pins the position in one direction only (beside a long wall,
+nothing else mapped within the laser's range: :mod:`.observability`) says
+nothing along the other; there the pose follows the odometry from the last
+estimate (the whole cloud is moved along that direction onto it), instead
+of drifting with the cloud, and the cloud's spread along it, which grows with
+the motion noise, lowers the confidence as the odometry's error grows.
 A global search with no prior at all (a restarted robot) leaves the localiser
 ``side_unsure``: the laser cannot tell a place from its mirror image in the
 other half, so :attr:`Localiser.confidence` stays below the trees' ``localised``
@@ -39,6 +46,7 @@ from rll_bt.clock import Clock
 from ..maps import FieldMap, cast_rays
 from .config import AmclConfig
 from .motion import odometry_step
+from .observability import beam_normals, weakest_direction
 from .particles import ParticleFilter
 
 
@@ -101,6 +109,7 @@ class Localiser:
         self._estimate: PoseEstimate | None = None
         self.filter_updates = 0
         self.last_contradiction = 0.0      # share of beams through mapped walls at the estimate
+        self.held = 0                      # filter updates whose pose along one direction followed odometry
         self._odom_history: deque[tuple[float, Pose2D]] = deque(maxlen=32)
         # a global search with nothing known (a restarted robot): the laser cannot tell a place from its
         # mirror image in the other team's half, so the pose is not trusted before a tag confirmed it
@@ -190,6 +199,10 @@ class Localiser:
         self._last_scan_stamp = scan.stamp
         odom = self._odometry_at(scan.stamp, odom)        # where the robot was when the scan was taken
         du, dv, dw = odometry_step(self._odom_at_update, odom)
+        # where odometry alone puts the robot (from a trusted estimate): kept along a direction the scan misses
+        tracked = (self._estimate is not None and not self._estimate.lost and not self.side_unsure
+                   and self._pose_at_update is not None and self.config.hold_below > 0)
+        predicted = self.pose_with(odom) if tracked else None
         self.filter.predict((du, dv, dw))
         if not moved:
             self.filter.jitter(*self.config.still_jitter)
@@ -204,8 +217,23 @@ class Localiser:
         self._last_filter_time = now
         self.filter_updates += 1
         self._estimate = self._make_estimate(now, ranges, angles, scan.mount)
+        if predicted is not None:
+            self._estimate = self._hold_unseen(self._estimate, predicted, ranges, angles, scan.mount)
         self._pose_at_update = self._estimate.pose
         return True
+
+    def _hold_unseen(self, est: PoseEstimate, predicted: Pose2D, ranges, angles, mount: Pose2D) -> PoseEstimate:
+        """``est`` with its position along a direction the scan does not pin (seen from
+        ``predicted``) moved onto ``predicted``, and every particle with it."""
+        normals = beam_normals(predicted, ranges, angles, mount, self.map.segments(), self.config.fit_tolerance)
+        evidence, u = weakest_direction(normals)
+        if evidence >= self.config.hold_below:
+            return est
+        shift = (predicted.x - est.pose.x) * u[0] + (predicted.y - est.pose.y) * u[1]
+        self.filter.particles[:, :2] += shift * u
+        self.held += 1
+        pose = Pose2D(est.pose.x + shift * u[0], est.pose.y + shift * u[1], est.pose.theta)
+        return replace(est, pose=pose)
 
     def _odometry_at(self, stamp: float, now_pose: Pose2D) -> Pose2D:
         """The odometry pose at ``stamp``: interpolated in the history (the
