@@ -27,6 +27,8 @@ from .safety import scan_points, speed_limit, to_field
 #: more room (m) kept from what the map does not explain (other robots): ahead and beside
 OTHER_MARGIN = 0.07
 OTHER_LATERAL = 0.04
+#: s a poll may come later than the control period before it counts as a longer reaction time
+LATE = 0.02
 
 
 class MotionGuard:
@@ -94,9 +96,12 @@ class MotionGuard:
             self._no_bumper = True
             return False
 
-    def limit(self, vx: float, vy: float) -> float:
+    def limit(self, vx: float, vy: float, lag: float | None = None) -> float:
         """Highest speed (m/s) allowed along the robot-frame direction
-        (vx, vy); 0 means blocked (``reason`` says by what)."""
+        (vx, vy); 0 means blocked (``reason`` says by what).  ``lag``: the
+        seconds between the caller's polls lately (a loaded machine polls
+        late); more than ``LATE`` over the control period counts as the
+        reaction time, and another robot may come that much closer."""
         speed = math.hypot(vx, vy)
         if speed < 1e-9:
             return math.inf
@@ -106,21 +111,25 @@ class MotionGuard:
         ux, uy = vx / speed, vy / speed
         r = self.ctx.robot
         decel = self.ctx.settings.max_decel * 0.8
-        period = self.ctx.settings.control_period
+        s = self.ctx.settings
+        period = s.control_period
+        side = self.lateral + OTHER_LATERAL
+        if lag is not None and lag - period > LATE:
+            side += s.closing_speed * (lag - period)
+            period = lag
         blind = abs(math.atan2(uy, ux)) > r.laser_fov / 2.0 - 0.4
         fixed, other = (np.zeros((0, 2)), self._remembered()) if blind else self._points()
         # stations and walls at a few centimetres; other robots with the navigation's wider berth
         cap = min(speed_limit(fixed, ux, uy, r.radius, self.margin, self.lateral, decel, period),
-                  speed_limit(other, ux, uy, r.radius, self.margin + OTHER_MARGIN, self.lateral + OTHER_LATERAL,
-                              decel, period))
+                  speed_limit(other, ux, uy, r.radius, self.margin + OTHER_MARGIN, side, decel, period))
         if cap <= 0.0:
             self.reason = "something is in the way" + (" (seen earlier, behind the robot)" if blind else "")
         return cap
 
-    def clamp(self, vx: float, vy: float) -> tuple[float, float]:
+    def clamp(self, vx: float, vy: float, lag: float | None = None) -> tuple[float, float]:
         """(vx, vy) slowed to :meth:`limit` along its direction."""
         speed = math.hypot(vx, vy)
-        cap = self.limit(vx, vy)
+        cap = self.limit(vx, vy, lag)
         if speed <= cap:
             return vx, vy
         k = max(cap, 0.0) / speed

@@ -51,6 +51,7 @@ class MoveRelative(Activity):
         self.limiter = VelocityLimiter(Limits.from_settings(self.ctx.settings, self.speed))
         self._last = None
         self._blocked_since: float | None = None
+        self.lag = self.ctx.settings.control_period     # s between polls, the worst lately
 
     def _step(self, now: float) -> Status:
         odom = self.ctx.backend.odometry().pose
@@ -60,6 +61,7 @@ class MoveRelative(Activity):
             return Status.SUCCESS
         dt = self.ctx.settings.control_period if self._last is None else max(now - self._last, 1e-3)
         self._last = now
+        self.lag = max(min(dt, 0.5), self.lag * 0.97, self.ctx.settings.control_period)
         lim = self.limiter.limits
         speed = min(self.speed, 1.5 * d, math.sqrt(2.0 * lim.max_decel * 0.8 * d))
         v = np.array([err.x, err.y]) / d * speed if d > 1e-9 else np.zeros(2)
@@ -71,7 +73,7 @@ class MoveRelative(Activity):
             self.message = f"stopped {d:.2f} m short: the bumper is pressed"
             return Status.SUCCESS
         if self.guard is not None and d > self.tolerance:
-            vx, vy = self.guard.clamp(float(v[0]), float(v[1]))
+            vx, vy = self.guard.clamp(float(v[0]), float(v[1]), self.lag)
             capped = math.hypot(vx, vy) < speed - 1e-9
             v = np.array([vx, vy])
             if math.hypot(vx, vy) < 0.01:

@@ -14,6 +14,7 @@ from skills.context import SkillContext
 from skills.errors import SkillError
 from skills.maps import FieldMap
 from skills.navigation import Navigate, PoseGoal, StationSideGoal, approach_pose
+from skills.navigation.guard import MotionGuard
 from skills.navigation.others import BACK_OFF, station_zones, unexplained
 from skills.testing import FlatWorld
 from tests.support.skills_scene import STATIONS, Scene
@@ -209,3 +210,17 @@ def test_robots_crossing_each_others_way_with_late_polls_do_not_touch():
     for nav in navs:
         assert nav.status is Status.SUCCESS, nav.message
     assert world.collisions == 0
+
+
+def test_a_short_guarded_motion_polled_late_keeps_a_wider_berth_from_a_robot_beside_its_way():
+    """The guard of the short motions near stations: a robot 0.34 m beside the way (edge to
+    edge; the guard's band is 0.06 m) does not slow a motion polled on time; polled 0.4 s
+    apart it may come 0.15 m into the way meanwhile, so the motion slows for it."""
+    start = Pose2D(0.0, 2.5, 0.0)
+    scene = Scene(seed=3, start=start)
+    scene.world.add_robot(Pose2D(0.5, 2.5 + 0.56, 0.0))
+    guard = MotionGuard(scene.ctx)
+    on_time = guard.limit(0.15, 0.0, scene.ctx.settings.control_period)
+    late = guard.limit(0.15, 0.0, 0.4)
+    assert on_time == math.inf and guard.limit(0.15, 0.0) == math.inf
+    assert 0.0 <= late < 0.15                                   # slower than the motion asks
