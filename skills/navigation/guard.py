@@ -22,13 +22,11 @@ from rll_bt.backend import CapabilityError
 from ..errors import NotLocalised
 from .laserview import laser_view, points_now
 from .others import unexplained
-from .safety import scan_points, speed_limit, to_field
+from .safety import LATE, scan_points, speed_limit, to_field
 
 #: more room (m) kept from what the map does not explain (other robots): ahead and beside
 OTHER_MARGIN = 0.07
 OTHER_LATERAL = 0.04
-#: s a poll may come later than the control period before it counts as a longer reaction time
-LATE = 0.02
 
 
 class MotionGuard:

@@ -24,6 +24,7 @@ from ..activity import Activity, Status
 from ..errors import SkillError, SkillFailure
 from .controller import Limits, VelocityLimiter, heading_command
 from .guard import MotionGuard
+from .safety import poll_lag
 
 
 class MoveRelative(Activity):
@@ -61,7 +62,7 @@ class MoveRelative(Activity):
             return Status.SUCCESS
         dt = self.ctx.settings.control_period if self._last is None else max(now - self._last, 1e-3)
         self._last = now
-        self.lag = max(min(dt, 0.5), self.lag * 0.97, self.ctx.settings.control_period)
+        self.lag = poll_lag(self.lag, dt, self.ctx.settings.control_period)
         lim = self.limiter.limits
         speed = min(self.speed, 1.5 * d, math.sqrt(2.0 * lim.max_decel * 0.8 * d))
         v = np.array([err.x, err.y]) / d * speed if d > 1e-9 else np.zeros(2)

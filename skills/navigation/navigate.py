@@ -38,7 +38,7 @@ from .goals import standing_clearance
 from .laserview import laser_view, points_now
 from .others import occupied, station_zones, unexplained
 from .planner import GridPlanner, NoPath
-from .safety import clear_distance, scan_points, speed_limit, to_field
+from .safety import LATE, clear_distance, poll_lag, scan_points, speed_limit, to_field
 from .yielding import PATIENT, blocker, yield_delay, yield_spot
 
 log = logging.getLogger(__name__)
@@ -47,8 +47,6 @@ log = logging.getLogger(__name__)
 GOAL_WAIT = 1.0
 #: room (m) beyond the robot's radius a goal needs free of other robots
 GOAL_ROOM = 0.1
-#: s a poll may come later than ``control_period`` before the berth kept from other robots widens
-LATE = 0.02
 
 
 def tight_speed(gap, settings) -> np.ndarray:
@@ -170,7 +168,7 @@ class Navigate(Activity):
         # the command holds until the next poll: late polls (a loaded machine,
         # a slow link) are a longer reaction time; the worst of the last few
         # seconds counts, up to the base's deadman time
-        self.lag = max(min(dt, 0.5), self.lag * 0.97, ctx.settings.control_period)
+        self.lag = poll_lag(self.lag, dt, ctx.settings.control_period)
         points = self._points(pose) if self.use_laser else None
         cap = None
         if points is not None:

@@ -104,3 +104,14 @@ def speed_limit(points: np.ndarray, vx: float, vy: float, radius: float, margin:
     if c >= 0.0:
         return 0.0
     return decel * (-b + math.sqrt(b * b - 2.0 * c / decel))
+
+
+#: s a poll may come later than the control period before it counts as a longer reaction time
+LATE = 0.02
+
+
+def poll_lag(lag: float, dt: float, period: float) -> float:
+    """The seconds between a motion's polls, the worst lately: ``lag`` after a poll
+    ``dt`` after the one before (a gap over 0.5 s counts as 0.5 s, the base's deadman;
+    never under the control ``period``)."""
+    return max(min(dt, 0.5), lag * 0.97, period)
