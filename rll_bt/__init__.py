@@ -11,4 +11,8 @@ Whole games are an application above it (the ``games`` package); see
 ``docs/architecture.md``.
 """
 
+from . import blas as _blas
+
+_blas.pin_kernel()  # before numpy loads: the same game for a seed on every machine
+
 __version__ = "0.1.0"
