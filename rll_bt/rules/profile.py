@@ -221,17 +221,30 @@ class Profile:
         """
         if machine_team(machine) != CYAN:
             raise ValueError(f"mirror_placement takes a cyan machine, not {machine!r}")
-        twin_zone = self.zones.mirror(zone)
-        kind = machine_type(machine)
-        if self.year >= 2017 and kind in ("RS", "CS"):
-            x, y = self.zones.digits(zone)
-            if y == 8:
-                return twin_zone, 180
-            if y == 1 or (y == 2 and 5 <= x <= 7):
-                return twin_zone, 0
-            if x == 7:
-                return twin_zone, 270
-        return twin_zone, self.mirror_rotation(rotation)
+        wall = self._wall_rotation(machine, zone)
+        return self.zones.mirror(zone), self.mirror_rotation(rotation) if wall is None else wall
+
+    def _wall_rotation(self, machine: str, cyan_zone: int) -> int | None:
+        """The fixed rotation a magenta RS or CS gets from 2017 on when its cyan twin
+        stands in ``cyan_zone`` by a wall (see :meth:`mirror_placement`); None when the
+        twin's rotation mirrors."""
+        if self.year < 2017 or machine_type(machine) not in ("RS", "CS"):
+            return None
+        x, y = self.zones.digits(cyan_zone)
+        if y == 8:
+            return 180
+        if y == 1 or (y == 2 and 5 <= x <= 7):
+            return 0
+        if x == 7:
+            return 270
+        return None
+
+    def twin_mirrors(self, machine: str, zone: int) -> bool:
+        """Whether ``machine`` (standing in ``zone``) and its twin stand as mirror images,
+        rotation included; False for a 2017+ RS or CS pair by a wall, whose magenta
+        machine gets a fixed rotation instead."""
+        cyan_zone = zone if machine_team(machine) == CYAN else self.zones.mirror(zone)
+        return self._wall_rotation(machine, cyan_zone) is None
 
     # -- lights -----------------------------------------------------------
     def light_code(self, code: int) -> tuple[str, ...]:

@@ -25,7 +25,7 @@ import math
 
 from rll_bt import msgs
 from rll_bt.agenttask import from_league, holding_after, render_cancel, render_task
-from rll_bt.rules import Profile, machine_team, machine_type
+from rll_bt.rules import Profile, machine_team, machine_type, mirror_machine_name
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
@@ -297,6 +297,23 @@ class AgentLink:
             m.team_color = TEAM_VALUE[color]
         return m
 
+    def _twin_pose(self, name: str, zone: int) -> tuple[float, float, float] | None:
+        """Where machine ``name`` (in ``zone``, its pose never seen) stands by its twin's
+        seen pose: the field mirrors every machine's twin, within its zone and off its
+        centre alike (a machine by a wall stands off its zone's centre); None when the
+        twin's pose is unknown, mirrors into another zone, or the pair does not stand
+        as mirror images (a 2017+ RS or CS by a wall)."""
+        if not self.profile.twin_mirrors(name, zone):
+            return None
+        seen = self.kb.estimate(mirror_machine_name(name), M.POSE)
+        if seen is None:
+            return None
+        x, y, theta = seen.value
+        mx, my = self.profile.mirror_point(x, y)
+        if self.profile.zone_at(mx, my) != zone:
+            return None
+        return mx, my, math.atan2(math.sin(math.pi - theta), math.cos(math.pi - theta))
+
     def machine_map_msg(self, consistent) -> object:
         """MachineMap of every machine whose place is known (consistent set first)."""
         mm = self.ms.MachineMap(profile=self.profile.name, stamp=self.clock.now())
@@ -316,7 +333,10 @@ class AgentLink:
             if pose is not None:
                 km.pose.x, km.pose.y, km.pose.theta = pose.value
             rot = g.orientation if g is not None and g.orientation is not None else None
-            if pose is None and zone is not None:
+            twin = self._twin_pose(name, zone) if pose is None and zone is not None else None
+            if twin is not None:
+                km.pose.x, km.pose.y, km.pose.theta = twin
+            elif pose is None and zone is not None:
                 km.pose.x, km.pose.y = self.profile.zone_centre(zone)
                 km.pose.theta = math.radians(rot or 0)
             if zone is not None:
