@@ -24,10 +24,51 @@ def expected_setpoints(vx, vy, w):
 
 
 def drive_for(backend, seconds, v, period=0.05):
+    """Command ``v`` for about ``seconds`` (a loaded machine may stretch it; nothing asserts how long)."""
     end = time.monotonic() + seconds
     while time.monotonic() < end:
         backend.drive(*v)
         time.sleep(period)
+
+
+def drive_until(backend, v, until, liveness=120.0, period=0.05):
+    """Command ``v`` until ``until()`` holds (``liveness`` bounds a hang only); whether it held."""
+    end = time.monotonic() + liveness
+    while time.monotonic() < end:
+        backend.drive(*v)
+        if until():
+            return True
+        time.sleep(period)
+    return until()
+
+
+def settle(emu, robot, liveness=120.0):
+    """Stop, and wait until the wheels stand and the host has polled them standing."""
+    robot.stop()
+    end = time.monotonic() + liveness
+    while time.monotonic() < end:
+        odo = robot.odometry()
+        if not any(emu.wheel_speeds()[:3]) and odo.vx == odo.vy == odo.omega == 0.0:
+            return True
+        time.sleep(0.02)
+    return False
+
+
+def late_motion(periods, speed):
+    """How far a robot at ``speed`` can go unseen by the host's odometry in cycles longer than the 20 ms an
+    idle machine takes (the host integrates the speeds it reads, Fawkes' way): 0 when every cycle was on time."""
+    return speed * sum(max(0.0, p - 0.02) for p in periods)
+
+
+def trips_follow_silences(emu):
+    """Every watchdog trip of the base came after a silence of the host of at least the watchdog's
+    three 100 ms ticks (the frames as the base received them): the base never stops a host that polls."""
+    with emu.lock:
+        heard = [t for t, _ in emu.firmware.rx_log]
+        trips = list(emu.firmware.watchdog_trip_times)
+    for trip in trips:
+        before = [t for t in heard if t <= trip]
+        assert not before or trip - before[-1] >= 0.3 - 1e-9, (trip, before[-3:])
 
 
 @pytest.fixture
@@ -58,13 +99,22 @@ def test_handshake_as_fawkes_does_it(emu, robot, wait_for):
 
 def test_velocity_gives_kinematic_setpoints_odometry_and_no_watchdog_stop(emu, robot):
     v = (0.2, -0.1, 0.4)
-    drive_for(robot, 1.5, v)
-    assert emu.setpoints()[:3] == expected_setpoints(*v)
+    sp = expected_setpoints(*v)
+    reached = []
+
+    def done():
+        odo = robot.odometry()
+        if odo.vx == pytest.approx(0.2, abs=0.02) and odo.omega == pytest.approx(0.4, abs=0.05):
+            reached.append(odo)
+        with emu.lock:
+            polls = len(emu.firmware.rx_log)
+        return reached and polls > 30 and emu.ground_truth()[0] > 0.2 and emu.setpoints()[:3] == sp
+    assert drive_until(robot, v, done)
     received = [rpm for _, motor, rpm in emu.received_setpoints() if motor == 0]
     nonzero = [r for r in received if r]
     # ramped, not a jump: the host's ramp (0.8 m/s^2, at most 0.1 s a cycle however late the cycle) needs at
     # least three cycles to 0.2 m/s, so the set-points pass through values below the final one
-    assert abs(nonzero[0]) < abs(expected_setpoints(*v)[0]) and len(set(nonzero)) >= 3
+    assert abs(nonzero[0]) < abs(sp[0]) and len(set(nonzero)) >= 3
     # sent in every poll from the first on (the robot is still moving): however few polls a loaded machine ran
     with emu.lock:                                  # the emulator's thread appends to the log
         log = list(emu.firmware.rx_log)
@@ -73,29 +123,35 @@ def test_velocity_gives_kinematic_setpoints_odometry_and_no_watchdog_stop(emu, r
     driving = frames[first:]
     assert len(driving) > 20
     assert all(sum(isinstance(t, T.SetMotorSpeed) for t in tags) == 3 for tags in driving)
-    assert emu.watchdog_trips == 0, (emu.stats(), max(robot._base.cycle_periods()), emu.firmware.watchdog_trip_times)
+    # the base stops only a host that went silent (on an idle machine: never; a loaded one can starve the
+    # host's thread past the watchdog, which a real base must answer by stopping)
+    trips_follow_silences(emu)
+    # the host's odometry, integrated from the wheel speeds it polls, ends where the wheels took the robot,
+    # up to what cycles a loaded machine made late could hide
+    assert settle(emu, robot)
     odo, truth = robot.odometry(), emu.ground_truth()
-    assert odo.pose.x == pytest.approx(truth[0], abs=0.01)
-    assert odo.pose.y == pytest.approx(truth[1], abs=0.01)
-    assert odo.pose.theta == pytest.approx(truth[2], abs=0.02)
-    assert odo.vx == pytest.approx(0.2, abs=0.02) and odo.omega == pytest.approx(0.4, abs=0.05)
-    assert truth[0] > 0.2
+    slack = late_motion(robot._base.cycle_periods(), math.hypot(0.2, 0.1) + RB * 0.4)
+    assert odo.pose.x == pytest.approx(truth[0], abs=0.01 + slack)
+    assert odo.pose.y == pytest.approx(truth[1], abs=0.01 + slack)
+    assert odo.pose.theta == pytest.approx(truth[2], abs=0.02 + slack / RB)
     stats = robot.link_stats()
     assert stats.frames > 20 and stats.checksum_errors == 0 and stats.link_losses == 0
 
 
 def test_deadman_stops_the_robot_when_commands_stop(emu, robot, wait_for):
-    drive_for(robot, 0.6, (0.3, 0.0, 0.0))
-    last_command = time.monotonic()
-    time.sleep(0.3)
-    assert any(emu.wheel_speeds()[:3])                  # still moving before the deadman
-    assert wait_for(lambda: not any(emu.wheel_speeds()[:3]), 1.5)
-    stopped_after = time.monotonic() - last_command
-    # deadman 0.5 s + host ramp (0.3 m/s at 1.5 m/s^2) + wheel ramp (12 rpm/ms) + polling
-    assert 0.5 <= stopped_after < 0.5 + 0.2 + 0.13 + 0.45     # generous for loaded CI machines
+    assert drive_until(robot, (0.3, 0.0, 0.0), lambda: emu.setpoints()[:3] == expected_setpoints(0.3, 0.0, 0.0))
+    before_last = time.monotonic()                      # the last command is stamped after this
+    robot.drive(0.3, 0.0, 0.0)
+    assert wait_for(lambda: emu.setpoints()[:3] == (0, 0, 0) and not any(emu.wheel_speeds()[:3]), 1.5)
+    # not before the deadman's 0.5 s (a loaded machine only makes it later; how much later is not asserted)
+    assert time.monotonic() - before_last >= 0.5
+    # ramped down by the host, not cut: the set-points after the last full one fall to zero step by step
+    received = [rpm for _, motor, rpm in emu.received_setpoints() if motor == 0]
+    full = max(i for i, rpm in enumerate(received) if rpm == expected_setpoints(0.3, 0.0, 0.0)[0])
+    down = received[full:]
+    assert down[-1] == 0 and all(abs(b) <= abs(a) for a, b in zip(down, down[1:])) and len(set(down)) >= 3
     assert robot.link_stats().deadman_stops == 1
-    assert emu.firmware.watchdog_motion_stops == 0      # the host stopped it, not the watchdog
-    assert emu.setpoints()[:3] == (0, 0, 0)
+    trips_follow_silences(emu)                          # the host stopped it (zero set-points), the watchdog no more
 
 
 def test_stop_is_immediate(emu, robot, wait_for):
@@ -110,33 +166,36 @@ def test_stop_is_immediate(emu, robot, wait_for):
 def test_corrupted_and_dropped_bytes_are_survived():
     with RobotinoEmulator(faults=Faults(corrupt=0.001, drop=0.001, seed=7)) as emu:
         robot = RobotinoBackend(emu.device, handshake_timeout=2.0)
+        v = (0.25, 0.0, 0.3)
         try:
-            drive_for(robot, 2.0, (0.25, 0.0, 0.3))
+            def hit():                  # the faults struck both ways, and the robot drives as commanded
+                e, st = emu.stats(), robot.link_stats()
+                return (e["corrupted"] > 0 and e["dropped"] > 0 and e["checksum_errors"] > 0
+                        and st.checksum_errors + st.framing_errors > 0
+                        and emu.setpoints()[:3] == expected_setpoints(*v))
+            assert drive_until(robot, v, hit)
+            assert settle(emu, robot)
             stats, truth, odo = robot.link_stats(), emu.ground_truth(), robot.odometry()
-            assert emu.setpoints()[:3] == expected_setpoints(0.25, 0.0, 0.3)
+            slack = late_motion(robot._base.cycle_periods(), 0.25 + RB * 0.3)
         finally:
             robot.close()
-        emu_stats = emu.stats()
-    assert emu_stats["corrupted"] > 0 and emu_stats["dropped"] > 0
-    assert stats.checksum_errors + stats.framing_errors > 0          # seen and counted
-    assert emu_stats["checksum_errors"] > 0                           # the base saw bad frames too
-    assert stats.link_losses == 0 and emu_stats["watchdog_motion_stops"] == 0
-    assert odo.pose.x == pytest.approx(truth[0], abs=0.03)
-    assert odo.pose.theta == pytest.approx(truth[2], abs=0.05)
+    assert stats.link_losses == 0
+    trips_follow_silences(emu)
+    assert odo.pose.x == pytest.approx(truth[0], abs=0.03 + slack)
+    assert odo.pose.theta == pytest.approx(truth[2], abs=0.05 + slack / RB)
 
 
 def test_closed_port_is_reopened_and_driving_resumes(emu, wait_for):
     robot = RobotinoBackend(emu.device, reopen_interval=0.05)
+    v = (0.2, 0.0, 0.0)
     try:
-        drive_for(robot, 0.4, (0.2, 0.0, 0.0))
+        assert drive_until(robot, v, lambda: emu.setpoints()[:3] == expected_setpoints(*v))
         emu.close_port(0.6)
-        drive_for(robot, 0.6, (0.2, 0.0, 0.0))
-        assert robot.link_stats().link_losses >= 1
-        assert wait_for(lambda: robot.link_stats().reopens >= 1, 1.0)
-        drive_for(robot, 0.5, (0.2, 0.0, 0.0))
-        assert emu.setpoints()[:3] == expected_setpoints(0.2, 0.0, 0.0)
-        assert any(emu.wheel_speeds()[:3])
-        assert emu.watchdog_trips >= 1                  # the base stopped while unplugged
+        assert drive_until(robot, v, lambda: robot.link_stats().link_losses >= 1)
+        assert drive_until(robot, v, lambda: robot.link_stats().reopens >= 1)
+        assert drive_until(robot, v, lambda: emu.setpoints()[:3] == expected_setpoints(*v)
+                           and any(emu.wheel_speeds()[:3]) and emu.watchdog_trips >= 1)
+        # the base stopped while unplugged (its watchdog), and drives again on the reopened port
     finally:
         robot.close()
 
@@ -219,9 +278,9 @@ def test_periodic_unplugging_and_delayed_replies(wait_for):
         robot = RobotinoBackend(emu.device, handshake_timeout=2.0, reopen_interval=0.05)
         try:
             assert time.monotonic() - t0 >= 0.03            # the version reply came 30 ms late
-            drive_for(robot, 2.0, (0.0, 0.2, 0.0))
-            assert robot.link_stats().reopens >= 2 and emu.stats()["connects"] >= 3
-            assert wait_for(lambda: emu.setpoints()[:3] == expected_setpoints(0.0, 0.2, 0.0), 1.0)
+            assert drive_until(robot, (0.0, 0.2, 0.0),
+                               lambda: robot.link_stats().reopens >= 2 and emu.stats()["connects"] >= 3)
+            assert drive_until(robot, (0.0, 0.2, 0.0), lambda: emu.setpoints()[:3] == expected_setpoints(0.0, 0.2, 0.0))
         finally:
             robot.close()
 
@@ -251,7 +310,7 @@ def test_startup_wait_of_the_robot_config_is_how_long_the_base_may_take_to_answe
     with pytest.raises(BackendUnavailable, match="within 1 s"):
         RobotinoBackend(robot_config=cfg)               # the handshake's own 1 s
     threading.Timer(3.0, emu.set_silent, (False,)).start()        # ... answers after 3 s
-    backend = RobotinoBackend(robot_config=dict(cfg, faults={"startup_wait": 20.0}))
+    backend = RobotinoBackend(robot_config=dict(cfg, faults={"startup_wait": 120.0}))   # at once when it does
     try:
         assert backend.versions == ("3.0.0", "1.2.3")
     finally:
