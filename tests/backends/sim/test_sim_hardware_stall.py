@@ -11,7 +11,7 @@ import pytest
 from backends.sim.hardware import WorldHardware
 from backends.sim.hardware_parts import SILENT_STOP
 from rll_bt.backend import Pose2D, SensorLost, open_backend
-from tests.backends.sim.test_sim_hardware import Running, fresh
+from tests.backends.sim.test_sim_hardware import Running, fresh, late_motion
 
 
 def drive_for(running, backend, seconds, vx=0.2, until=None):
@@ -36,8 +36,8 @@ def stalled_episode(running, rig, backend, robot):
     fresh(running, lambda: backend.drive(0.0, 0.0, 0.0))
     with running.lock:
         start, odo0 = robot.pose, backend.odometry().pose
-    assert drive_for(running, backend, 20.0, until=lambda: robot.pose.relative_to(start).x > 0.1)
-    running.longest_gap = 0.0
+    assert drive_for(running, backend, 180.0, until=lambda: robot.pose.relative_to(start).x > 0.1)   # liveness
+    running.longest_gap, dropped0, cycles0 = 0.0, running.dropped, len(backend.base.cycle_periods())
     os.kill(rig.pid, signal.SIGSTOP)
     try:
         drive_for(running, backend, SILENT_STOP + 0.4)                  # the host keeps commanding
@@ -54,7 +54,11 @@ def stalled_episode(running, rig, backend, robot):
     running.run(0.5)
     with running.lock:
         moved, odo = robot.pose.relative_to(start), backend.odometry().pose.relative_to(odo0)
-    return during, moved, odo, running.longest_gap
+    # what a loaded machine could hide from the odometry besides the stall: host cycles that came late, world
+    # time dropped (tests/backends/sim/test_sim_hardware.py: 0 on an idle machine)
+    periods = backend.base.cycle_periods()
+    hidden = late_motion(periods[min(cycles0, len(periods)):], 0.2) + 0.2 * (running.dropped - dropped0)
+    return during, moved, odo, hidden
 
 
 def test_a_stalled_devices_process_stops_the_wheels_in_the_world_and_the_firmware_alike(make_world):
@@ -67,19 +71,14 @@ def test_a_stalled_devices_process_stops_the_wheels_in_the_world_and_the_firmwar
     robot = world.robots[("CYAN", 1)]
     try:
         losses0 = backend.base.stats().link_losses
-        # an episode in which this process's world went 250 ms without a step (a loaded machine) tests
-        # the machine: driven again, at most three times (the last one is asserted whatever it was)
-        for _ in range(3):
-            during, moved, odo, starved = stalled_episode(running, rig, backend, robot)
-            if starved < 0.25:
-                break
+        during, moved, odo, hidden = stalled_episode(running, rig, backend, robot)
         # the world stopped the wheels when the base emulator fell silent, not seconds later
         assert abs(during.x) < 0.01 and abs(during.y) < 0.01, during
         # the firmware stopped its motors at the same moment, so the odometry the host integrated from
         # the speeds it polled counts no motion the world did not make, and misses little (the wheels
         # ran on for SILENT_STOP after the last poll the host got an answer to)
-        assert odo.x <= moved.x + 0.02, (odo, moved, starved)
-        assert odo.x == pytest.approx(moved.x, abs=0.2 * SILENT_STOP + 0.03), (odo, moved, starved)
+        assert odo.x <= moved.x + 0.02 + hidden, (odo, moved, hidden)
+        assert odo.x == pytest.approx(moved.x, abs=0.2 * SILENT_STOP + 0.03 + hidden), (odo, moved, hidden)
         stats = rig.stats()
         assert stats["silent_stops"] >= 1 and stats["stall_stops"] >= 1, stats
         # the host's base link lost the silent device (a write timeout or no data) and reopened it ...
@@ -87,7 +86,7 @@ def test_a_stalled_devices_process_stops_the_wheels_in_the_world_and_the_firmwar
         # ... and goes on: the robot drives again
         with running.lock:
             before = robot.pose
-        assert drive_for(running, backend, 20.0, until=lambda: robot.pose.relative_to(before).x > 0.05)
+        assert drive_for(running, backend, 180.0, until=lambda: robot.pose.relative_to(before).x > 0.05)
     finally:
         backend.close()
         running.stop()
