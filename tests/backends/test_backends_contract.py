@@ -160,7 +160,7 @@ def test_every_registered_backend_has_a_case():
 @pytest.mark.parametrize("case", [c for cases in CASES.values() for c in cases], ids=lambda c: c.__name__)
 def test_the_backend_keeps_the_contract(case):
     with case() as (backend, advance):
-        report = check_backend(backend, advance=advance)
+        report = check_backend(backend, advance=advance, wait=120.0)     # waits bound a hang only
     assert report.ok and report.capabilities & Capability.DRIVE
     assert "leaving the context" in report.checked
 
