@@ -11,7 +11,10 @@ PyBullet ``rll-bt refbox sim --world remote:...``): it talks UDP (broadcast to `
 local ports, split send/receive) and sees the stations only through the link. The team server runs as
 ``python -m games.child`` (TCP for the agents, UDP to the refbox) and each robot as a real ``rll-bt agent
 --backend remote`` process.  Everything runs on the wall clock: the world advances by the wall time that
-passed (at most 0.1 s a step, so it may fall behind), so a game takes its real length.  The refbox's view
+passed (at most 0.1 s a step, so it may fall behind), so a game takes its real length.  The refbox's game
+clock is the world's time, pushed over the station link after each step: a world fallen behind the wall
+clock holds the game's time with it (before, the refbox kept the wall clock and such a game lost the seconds
+the world did not play).  The refbox's view
 (status, points, awards, deliveries, station states) reaches this process through the snapshot file it
 rewrites (``refbox.json``, 4 times a second), the team server's through ``teamserver.json`` (every second).
 

@@ -243,6 +243,7 @@ class RefboxOverLink(_ViewOfWorld, RefboxProcess):
         self.link.command("start")
 
     def step(self) -> None:
+        self.link.clock(self.world.pybullet.time)    # the refbox process's clock follows the world's
         self.link.poll(0.0)          # the refbox process's calls
 
     def station_down(self, machine: str, seconds: float) -> None:

@@ -87,6 +87,7 @@ class RobotAgent:
         now = clock.now()
         self._next_tick = now
         self._next_hb = now
+        self._read_at = now                     # when the link to the team server was last read
         self._next_status = now
         self._next_beacon = now
         self._attached: set[int] = set()
@@ -125,6 +126,7 @@ class RobotAgent:
                 self._on_server_message(rec.msg)
             except Exception:       # a message the agent chokes on must not stop the robot's loop
                 log.exception("robot %d: handling %s failed", self.config.robot_id, rec.type_name)
+        self._read_at = self.clock.now()        # the link read up to here (see _periodic)
         self._poll_refbox()
         self._apply_gate()
         now = self.clock.now()
@@ -414,7 +416,9 @@ class RobotAgent:
             self._next_hb = now + c.heartbeat_period
             if self.server.connected:
                 self._beacon_to_server()
-            self.server.check_silence(now)
+            # silent since the last read of the link, not since before a long tick: a robot held up
+            # (a loaded machine, a slow backend call) finds what came meanwhile at its next read
+            self.server.check_silence(min(now, self._read_at))
         if now >= self._next_status:
             self._send_status(force=True)
             self._next_status = max(self._next_status, now + c.status_period)

@@ -17,7 +17,9 @@ drives the stations of a world served over the station link
 (:mod:`.link`), as ``rll-bt sim --processes`` runs it, and takes the
 world's operator commands (start, a station DOWN) from that link.  If the
 world closes the link (its process ended) or stops answering, the refbox
-says so in one line and exits 3.  ``--snapshot FILE`` rewrites FILE with
+says so in one line and exits 3.  Its clock is the world's: it stands
+while the world's time, pushed over the link, stands (a world fallen
+behind the wall clock), so a game's seconds are the world's.  ``--snapshot FILE`` rewrites FILE with
 the game as plain JSON (:mod:`.view`) every ``--snapshot-period`` s and at
 exit; ``--message-log FILE`` writes every message sent and received as
 JSON lines on the monotonic clock (the schema of ``rll-bt sim``'s
@@ -294,10 +296,13 @@ def cmd_sim(args) -> int:
     lay = _layout(args)
     if not args.snapshot_period > 0:
         raise UserError(f"must be a positive number, not {args.snapshot_period}", where="--snapshot-period")
-    clock = SyncedClock(WallClock()) if args.time_sync else WallClock()
+    remote = args.world.startswith("remote:")
+    # a remote world's time (pushed over the station link) runs the game's clock, as SimTimeSync does
+    clock = SyncedClock(WallClock()) if args.time_sync or remote else WallClock()
     stored = _stored(args, prof)
     world = _open_world(args, prof, stored)
-    remote = args.world.startswith("remote:")
+    if remote and not args.time_sync:
+        world.on_time(lambda t: clock.sync(t, rate=0.0))
     machines = args.world.startswith("mqtt:")
     try:
         config = StationConfig()

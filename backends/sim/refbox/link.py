@@ -42,6 +42,12 @@ big-endian length and a UTF-8 JSON object.
   operator's commands of the simulated game, whose host the world's process
   is: ``{"ev": "command", "op": "start"}`` and ``{"ev": "command", "op":
   "down", "machine", "seconds"}``.
+- The world's time, ``{"ev": "time", "t": world seconds}``, each time the world
+  stepped (:meth:`StationServer.clock`; not kept for a refbox yet to connect).
+  The refbox's process runs its clock on it (:attr:`RemoteWorld.time`,
+  :meth:`RemoteWorld.on_time`): a world that falls behind the wall clock (a
+  loaded machine, a long physics step) holds the game's time with it, so
+  the game's seconds are the world's, as in a lockstep game.
 
 Neither side blocks on the other: the server never waits for a slow refbox
 (what it has not read waits in its buffer); a call waits for a slow world
@@ -84,6 +90,7 @@ class StationServer(FramedServer):
         super().__init__(host, port)
         self.world = world
         self._waiting: list[dict] = []         # slot events before any refbox connected
+        self._told: float | None = None        # the world time last pushed
         world.add_slot_listener(self._on_slot)
 
     def _on_slot(self, ev) -> None:
@@ -99,6 +106,12 @@ class StationServer(FramedServer):
         for obj in self._waiting:
             self.send(conn, obj)
         self._waiting.clear()
+
+    def clock(self, t: float) -> None:
+        """Tell the refbox the world's time ``t`` (after each step); dropped while none is connected."""
+        if t != self._told:
+            self._told = t
+            self.push({"ev": "time", "t": float(t)})
 
     def command(self, op: str, **data) -> None:
         """An operator command to the refbox (``start``; ``down`` with ``machine``
@@ -157,10 +170,13 @@ class RemoteWorld:
             raise WorldLost(f"cannot reach the world at {address}: {exc}") from None
         self._listeners: list[Callable] = []
         self._commands: list[Callable[[dict], None]] = []
+        self._clocks: list[Callable[[float], None]] = []
         hello = self._call("hello")
         from ..layout import FieldLayout
         self.layout = FieldLayout.from_dict(hello["layout"])
         self.robots = [tuple(r) for r in hello["robots"]]
+        #: the world's time as it last said (None: it never did)
+        self.time: float | None = hello.get("time")
 
     def _call(self, method: str, *args, **kwargs):
         try:
@@ -206,15 +222,24 @@ class RemoteWorld:
         ``{"op": "down", "machine", "seconds"}``) :meth:`pump` delivers."""
         self._commands.append(fn)
 
+    def on_time(self, fn: Callable[[float], None]) -> None:
+        """Call ``fn(world seconds)`` for each time the world pushed, as :meth:`pump` delivers it."""
+        self._clocks.append(fn)
+
     def pump(self) -> int:
         """Deliver what the world pushed since, in order: slot events to the slot
-        listeners, commands to :meth:`on_command`'s.  Returns how many; never waits."""
+        listeners, commands to :meth:`on_command`'s, the world's time to
+        :meth:`on_time`'s.  Returns how many; never waits."""
         try:
             pushed = self._link.pushed()
         except LinkClosed:
             raise WorldLost(f"the world at {self.address} closed the station link") from None
         for msg in pushed:
-            if msg.get("ev") == "command":
+            if msg.get("ev") == "time":
+                self.time = float(msg["t"])
+                for fn in list(self._clocks):
+                    fn(self.time)
+            elif msg.get("ev") == "command":
                 cmd = {k: v for k, v in msg.items() if k != "ev"}
                 for fn in list(self._commands):
                     fn(cmd)

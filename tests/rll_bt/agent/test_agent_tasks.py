@@ -202,6 +202,30 @@ def test_a_silent_team_server_link_is_dropped_and_reconnected(rig):
     assert not rig.agent.server_silent
 
 
+def test_a_robot_held_up_reads_its_link_before_it_calls_the_team_server_silent(rig):
+    """The robot's own loop held up longer than server_timeout (a process game on a loaded
+    machine: 5-7 s stalls of all agents, each then reconnecting) is no silent server: the
+    heartbeats that came meanwhile wait in the link, and the robot reads them first."""
+    srv = rig.server
+    rig.run(1.0)
+    assert len(srv.of("RobotHello")) == 1
+    held, tick = [], rig.agent.tick
+
+    def held_up_tick():
+        if not held:
+            held.append(True)
+            srv.heartbeat_every = 1
+            for _ in range(14):            # 7 s in this tick; the server talks all along
+                rig.clock.advance(0.5)
+                srv.pump()
+            srv.heartbeat_every = 20
+        return tick()
+    rig.agent.tick = held_up_tick
+    rig.run(3.0)
+    assert held and len(srv.of("RobotHello")) == 1 and not rig.agent.server_silent
+    assert rig.agent.link.connections == 1
+
+
 def test_a_lost_sensor_fails_the_task_with_its_own_code_and_the_agent_goes_on(rig):
     res = run_task(rig, 40, "go_to", zone=5)
     assert res.code == "SENSOR_LOST" and "laser lost" in res.text and league(res.league_code) == "INTERNAL_ERROR"

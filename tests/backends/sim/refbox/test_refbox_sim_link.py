@@ -277,3 +277,57 @@ def test_refbox_sim_on_a_remote_world_as_its_own_process(tmp_path):
             proc.kill()
         server.close()
     assert proc.returncode == 0 and "Traceback" not in err and "stopped by signal" in out
+
+
+def test_the_refbox_process_keeps_the_worlds_time(tmp_path):
+    """A process game's world may fall behind the wall clock (a loaded machine, a long
+    physics step); the refbox's process runs its game on the world's time, pushed over
+    the link, so a world at a quarter of real time plays a quarter of the game's
+    seconds, as the world's robots live them."""
+    world = TableWorld.generated("rcll2016", 3)
+    snap = tmp_path / "refbox.json"
+    p = free_ports(6)
+    server = StationServer(world)
+    proc = subprocess.Popen(
+        [RLL_BT, "refbox", "sim", "--team-cyan", "Caro", "--key", "k", "--seed", "3", "--ports",
+         f"public={p[0]}/{p[1]},cyan={p[2]}/{p[3]},magenta={p[4]}/{p[5]}", "--no-stream", "--start", "command",
+         "--world", f"remote:127.0.0.1:{server.port}", "--phase-lengths", "setup=0.5,exploration=600,production=60",
+         "--snapshot", str(snap), "--snapshot-period", "0.05"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True)
+
+    def read():
+        try:
+            return json.loads(snap.read_text())
+        except (OSError, ValueError):
+            return {}
+    w0, t0 = time.monotonic(), 100.0
+
+    def world_time():                   # a world running at a quarter of the wall clock's pace
+        t = t0 + 0.25 * (time.monotonic() - w0)
+        server.clock(t)
+        return t
+
+    def run(until, seconds=30.0):
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            world_time()
+            server.poll(0.01)
+            if until():
+                return True
+        return False
+    try:
+        assert run(lambda: read().get("status", {}).get("phase") == "PRE_GAME"), proc.stderr.read()
+        server.command("start")
+        assert run(lambda: read()["status"]["phase"] == "EXPLORATION")
+        first = read()["now"], world_time()
+        run(lambda: world_time() - first[1] >= 1.0)                   # one world second: four on the wall
+        held = world_time()
+        end = time.monotonic() + 1.5
+        while time.monotonic() < end:                                 # then the world stalls for 1.5 s
+            server.poll(0.01)
+        game = read()["now"] - first[0]
+        assert held - first[1] - 0.3 <= game <= held - first[1] + 0.15, (game, held - first[1])
+    finally:
+        proc.kill()
+        proc.communicate()
+        server.close()
