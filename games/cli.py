@@ -134,7 +134,8 @@ def register(cli) -> None:
     g.add_argument("--refbox-host", default="127.0.0.1", metavar="HOST",
                    help="the external refbox's host (default %(default)s)")
     g.add_argument("--refbox-port-offset", type=int, default=0, metavar="N",
-                   help="its ports: the refbox's sim layout (TCP 4444, UDP 4444/4445, cyan 4441/4446) plus N")
+                   help="its ports: the refbox's sim layout (TCP 4444, UDP 4444/4445, cyan 4441/4446) plus N; "
+                        "with --external-team, where the simulator's refbox sends and listens")
     g.add_argument("--refbox-timeout", type=float, default=180.0, metavar="S",
                    help="seconds to wait for the refbox's stream and then for its field (default %(default)g)")
     g.add_argument("--refbox-control", default="auto", choices=("auto", "manual"),

@@ -29,7 +29,7 @@ a refbox following it stops its clock.
 """
 from __future__ import annotations
 
-from rll_bt.comm import SIM, Layout, PeerPorts
+from rll_bt.comm import SIM, Layout
 from rll_bt.contracts import load_simulator
 
 from .processes import ProcessGame
@@ -53,11 +53,7 @@ class ExternalGame(ProcessGame):
             refbox="external", external=o.external())
 
     def _refbox_layout(self) -> Layout:
-        off = self.options.refbox_port_offset
-
-        def shift(pp: PeerPorts) -> PeerPorts:
-            return PeerPorts(pp.send + off, pp.recv + off)
-        return Layout(f"sim+{off}", shift(SIM.public), shift(SIM.cyan), shift(SIM.magenta), SIM.stream + off)
+        return SIM.moved(int(self.options.refbox_port_offset))
 
     def _start_refbox(self) -> None:
         self._refbox_log = None            # its messages are not ours to log; the team server's are

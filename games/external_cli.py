@@ -57,6 +57,7 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from rll_bt.agent import check_team_key
+    from rll_bt.comm import layout as get_layout
 
     from .league_sim import ExternalGame, ExternalTeam
     from .progress import ProgressBar
@@ -76,6 +77,9 @@ def run(args) -> int:
         except ValueError as exc:
             raise UserError(str(exc), where=f"--key-{color.lower()}") from None
         teams.append(ExternalTeam(color, server, name, key, robots=args.robots))
+    offset = int(args.refbox_port_offset)
+    if not 0 <= offset <= 60000:
+        raise UserError(f"must be 0..60000, not {offset}", where="--refbox-port-offset")
     speed = 1.0 if args.speed is None else float(args.speed)
     if not speed > 0:
         raise UserError("the league's simulator runs on the wall clock: give --speed X > 0 (game seconds per wall "
@@ -83,10 +87,12 @@ def run(args) -> int:
     phases = {k: float(v) for k in ("setup", "exploration", "production") if (v := getattr(args, k)) is not None}
     try:
         game = ExternalGame(teams, profile=args.profile, seed=args.seed, host=args.refbox_broadcast,
-                            layout=args.refbox_ports, phases=phases, perception=args.perception, hz=args.hz,
-                            localisation=args.localisation, world_step=0.05, speed=speed)
+                            layout=get_layout(args.refbox_ports).moved(offset), phases=phases,
+                            perception=args.perception, hz=args.hz, localisation=args.localisation, world_step=0.05,
+                            speed=speed)
     except OSError as exc:
-        raise Unavailable(f"cannot open the refbox's UDP ports: {exc}", where=f"--refbox-ports {args.refbox_ports}",
+        raise Unavailable(f"cannot open the refbox's UDP ports: {exc}", where=f"--refbox-ports {args.refbox_ports}"
+                          + (f" --refbox-port-offset {offset}" if offset else ""),
                           hint="is another refbox running on this machine?") from None
     say = (lambda text: None) if args.quiet else (lambda text: print(f"rll-bt sim: {text}", file=sys.stderr,
                                                                       flush=True))
@@ -104,7 +110,7 @@ def run(args) -> int:
             raise Unavailable(f"robots {', '.join(f'{c.lower()} {n}' for c, n in missing)} could not connect "
                               f"within {args.connect_timeout:g} s", where="--teamserver",
                               hint="is the team server listening there?")
-        say("game started (refbox on UDP, broadcast to " f"{args.refbox_broadcast}, ports {args.refbox_ports})")
+        say("game started (refbox on UDP, broadcast to " f"{args.refbox_broadcast}, ports {game.layout.name})")
         bar = None if args.quiet else ProgressBar(sum(_lengths(game, phases)), team=teams[0].color)
         finished = game.run(progress=bar)
         status = game.status()

@@ -36,6 +36,8 @@ from .stations import StationStates
 from .taskbook import Entry, TaskBook
 
 log = logging.getLogger("rll_bt.agent")
+#: the task kinds that take a workpiece into the gripper (a league robot refuses them with one held)
+TAKES = ("get_workpiece", "retrieve_cap")
 
 
 class RobotAgent:
@@ -239,6 +241,16 @@ class RobotAgent:
     def _start(self, entry: Entry) -> None:
         """Load and start the tree of ``entry`` (the book's current task)."""
         me, tid, kind, params = self.config.robot_id, entry.task_id, entry.kind, entry.params
+        if entry.detail is None and kind in TAKES and self._holding():
+            # a league team server's retrieve or buffer: the trees would count the held workpiece as
+            # the one to take (as after a pause of rll-bt's own task), so it is refused as the league does
+            log.warning("robot %d: task %d %s refused: the gripper holds a workpiece", me, tid, kind)
+            self._record(make_result(entry.task, robot_id=me, status="FAILED", code="INVALID_TASK",
+                                     text="the gripper already holds a workpiece",
+                                     league_code="WORKPIECE_ALREADY_IN_GRIPPER", holding=True,
+                                     stamp=self.clock.now()))
+            self._start_next()
+            return
         try:
             if self.trees_dir is None:
                 raise InvalidTask("no trees directory (give --trees)")

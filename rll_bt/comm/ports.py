@@ -65,6 +65,16 @@ class Layout:
         """A robot's ports for ``channel``: it listens where the refbox sends."""
         return self.refbox(channel).swapped()
 
+    def moved(self, offset: int) -> Layout:
+        """This layout with every port (and the stream) ``offset`` higher, named ``NAME+offset``."""
+        if not offset:
+            return self
+
+        def shift(pp: PeerPorts) -> PeerPorts:
+            return PeerPorts(pp.send + offset, pp.recv + offset)
+        return Layout(f"{self.name}+{offset}", shift(self.public), shift(self.cyan), shift(self.magenta),
+                      self.stream + offset)
+
 
 COMPETITION = Layout("competition", public=PeerPorts(4444, 4444), cyan=PeerPorts(4441, 4441),
                      magenta=PeerPorts(4442, 4442))

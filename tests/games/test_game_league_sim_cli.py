@@ -13,6 +13,7 @@ from rll_bt.cli import main
     (["--external-team", "cyan", "--teamserver", "127.0.0.1:1", "--teamserver", "127.0.0.1:2"], "--teamserver"),
     (["--external-team", "cyan", "--key-cyan", ""], "--key-cyan"),                       # no key
     (["--external-team", "cyan", "--speed", "0"], "--speed"),                            # not on the wall clock
+    (["--external-team", "cyan", "--refbox-port-offset", "61000"], "--refbox-port-offset"),   # past port 65535
 ])
 def test_bad_usage_is_exit_2_naming_the_option(argv, where, capsys):
     assert main(["sim", *argv]) == 2
@@ -30,7 +31,8 @@ def test_help_names_the_external_team_options(capsys):
         main(["sim", "--help"])
     out = capsys.readouterr().out
     assert exc.value.code == 0
-    for opt in ("--external-team", "--teamserver", "--team-cyan", "--key-magenta", "--connect-timeout"):
+    for opt in ("--external-team", "--teamserver", "--team-cyan", "--key-magenta", "--connect-timeout",
+                "--refbox-port-offset"):
         assert opt in out
 
 

@@ -20,14 +20,19 @@ P25 = rules.profile("rcll2025")
 
 @pytest.fixture
 def league_rig():
-    clock = SimClock()
+    return make_league_rig()
+
+
+def make_league_rig(backend=None, clock=None):
+    clock = clock or SimClock()
     bus = Bus(clock)
     ms = msgs.message_set("rcll2025")
     reg = MessageRegistry.from_message_set(ms)
     public = bus.peer("public", registry=reg, name="refbox")
     cyan = bus.peer("cyan", registry=reg, key=KEY, name="refbox")
     srv = ScriptedServer(bus.stream_server("ts", registry=TEAM_REG), league=True, profile="rcll2025")
-    rig = Rig(bus.stream_client("ts", registry=TEAM_REG), srv, clock, profile="rcll2025", league_only=True,
+    rig = Rig(bus.stream_client("ts", registry=TEAM_REG), srv, clock, backend=backend, profile="rcll2025",
+              league_only=True,
               public=bus.peer("public", registry=reg, name="R1"),
               team=lambda color: bus.peer(color.lower(), registry=reg, key=KEY, name="R1"))
 
@@ -52,6 +57,30 @@ def test_a_league_team_server_hears_only_the_leagues_messages(league_rig):
     assert names == {"llsf_msgs.BeaconSignal", "llsf_msgs.AgentTask"}
     assert srv.of("BeaconSignal")[0].number == 1                       # it said who it is at once
     assert len(srv.results(1)) == 1                                    # no LinkAck asked for, no result repeated
+
+
+def test_a_league_retrieve_or_buffer_with_a_workpiece_in_the_gripper_fails_with_the_leagues_code():
+    """A league team server's retrieve (or buffer) while the robot holds a workpiece is
+    not done "at once" (as after a pause of rll-bt's own task): nothing would be taken,
+    and a buffer would put the held workpiece on the cap station as its cap carrier."""
+    from backends.scripted import ScriptedBackend
+    from rll_bt.agenttask import league_value
+    clock = SimClock()
+    holding = ScriptedBackend({"readings": {"holding": [{"t": 0, "value": True}]}}, clock=clock)
+    rig = make_league_rig(holding, clock)
+    srv = rig.server
+    srv.task(2, "get_workpiece", machine="C-BS", side="OUTPUT")
+    srv.task(3, "retrieve_cap", machine="C-CS1", shelf_slot=0)
+    rig.until(lambda: srv.final(3) is not None, what="both answered")
+    for tid in (2, 3):
+        res = srv.final(tid)
+        assert res.status == "FAILED" and res.league_code == league_value("WORKPIECE_ALREADY_IN_GRIPPER"), res
+    assert rig.agent.run is None and not [c for c in holding.commands if c[1].startswith("gripper")]
+    # an empty gripper: the same retrieve runs (and succeeds on the scripted robot)
+    empty = make_league_rig()
+    empty.server.task(4, "get_workpiece", machine="C-BS", side="OUTPUT")
+    empty.until(lambda: empty.server.final(4) is not None, what="answered")
+    assert empty.server.final(4).status == "SUCCEEDED"
 
 
 def test_a_silent_league_team_server_is_not_a_lost_one(league_rig):
