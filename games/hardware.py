@@ -54,10 +54,16 @@ class HardwareGame(ProcessGame):
     def _agent_backend_args(self, n: int, team: str = TEAM) -> list[str]:
         return ["--backend", "robotino", "--robot-config", str(self._configs[n])]
 
+    #: the devices run on the wall clock (the base firmware turns its motors, the host integrates them):
+    #: a world that dropped wall time moved the robots less than their odometry said (the world fell 262 s
+    #: behind in a 1164 s game at load 10-16, and the robots were lost most of the game); it catches up,
+    #: in steps of at most 0.1 s each followed by the devices' sync, up to 2 s behind
+    catch_up = 2.0
+
     def _tick(self, last: float) -> float:
         last = super()._tick(last)
         if self.hw is not None:
-            self.hw.sync()
+            self.hw.sync(at=last)      # the world stands at wall time ``last``: its casts are of then
         return last
 
     def start_agent(self, number: int, known_pose: bool = False) -> None:

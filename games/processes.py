@@ -63,6 +63,20 @@ class ChildExited(RuntimeError):
     """A process of the game ended on its own (or never came up)."""
 
 
+def world_advance(last: float, now: float, longest: float, catch_up: float | None) -> tuple[float, float]:
+    """How far to step a world that stands at wall time ``last`` at wall time ``now``: (seconds to step,
+    the wall time it then stands at).  A step covers at most ``longest``.  Without ``catch_up`` the rest of
+    the wall time passed is dropped (the world falls behind for good: right when everything that moves
+    lives in the world).  With it, the world stands at ``last + step`` and the next steps catch up, as
+    long as it is less than ``catch_up`` behind (what is more is dropped): devices that run on the wall
+    clock (an emulated base's motors) moved all that time, and the world must move with them."""
+    if catch_up is None:
+        return min(now - last, longest), now
+    last = max(last, now - catch_up)
+    step = min(now - last, longest)
+    return step, last + step
+
+
 class ProcessGame:
     """See the module doc.  ``clock`` must be the machine's monotonic wall
     clock (:class:`~rll_bt.clock.WallClock`): the team server's log is
@@ -343,11 +357,16 @@ class ProcessGame:
         return [name for name, p in self.procs.items() if p.poll() is None]
 
     # -- running ---------------------------------------------------------------------------------
+    #: how far behind the wall clock the world may fall and still step all of it (None: a step covers at
+    #: most 0.1 s and the rest of the wall time passed is dropped; :func:`world_advance`)
+    catch_up: float | None = None
+
     def _tick(self, last: float) -> float:
-        """Serve backend and station calls for a moment, then advance the world by the wall time passed."""
+        """Serve backend and station calls for a moment, then advance the world by the wall time passed;
+        the wall time the world stands at."""
         self._serve(0.005)
         now = self.wall.now()
-        dt = min(now - last, 0.1)
+        dt, stepped_to = world_advance(last, now, 0.1, self.catch_up)
         if dt >= self.options.world_step * 0.5:
             self.world.step(dt)
             self.time_map.add(now, self.clock.now())
@@ -362,7 +381,7 @@ class ProcessGame:
                     self.progress(self.clock.now() - self._t0, self.refbox.status())
             elif self.progress is not None:       # the processes are coming up (the bar throttles itself)
                 self.progress(0.0, self.refbox.status())
-            return now
+            return stepped_to
         return last
 
     def _wait_for_robots(self) -> bool:

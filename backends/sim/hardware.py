@@ -163,10 +163,12 @@ class WorldHardware:
         self.rigs[key] = rig
         return rig
 
-    def sync(self) -> None:
+    def sync(self, at: float | None = None) -> None:
+        """After a world step; ``at``: the wall time the world stands at, when it is behind the wall
+        clock (a laser cast is stamped with it), else now."""
         t = self.world.time
         for rig in self.rigs.values():
-            rig.sync(t)
+            rig.sync(t, at)
 
     def stats(self) -> dict:
         return {f"{team}/{n}": rig.stats() for (team, n), rig in self.rigs.items()}

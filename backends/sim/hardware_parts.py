@@ -183,7 +183,8 @@ class CoupledRig:
         """The devices' clock (the machine's monotonic clock)."""
         return time.monotonic()
 
-    def sync(self, world_time: float) -> None:
+    def sync(self, world_time: float, at: float | None = None) -> None:
+        """After a world step to ``world_time``, which stands for wall time ``at`` (default: now)."""
         r = self.robot
         rpm, stepped = self._exchange(world_time)
         if stepped is not None and self.wall() - stepped > SILENT_STOP:
@@ -199,8 +200,10 @@ class CoupledRig:
         r.drive(vx, vy, w, world_time)
         if world_time >= self._next_scan:
             self._next_scan = max(self._next_scan + self.scan_period, world_time)
-            # cast now (the devices' clock): the scan says so in its stamp and goes out at once (laser/source.py)
-            self._put_ranges(sensors.laser_ranges(self.world.cid, r, self.angles, noisy=True) * 1000.0, self.wall())
+            # cast of the world as it stands (the devices' clock: now, or the wall time a world behind it stands
+            # at): the scan says so in its stamp and goes out at once (laser/source.py)
+            cast = self.wall() if at is None else min(at, self.wall())
+            self._put_ranges(sensors.laser_ranges(self.world.cid, r, self.angles, noisy=True) * 1000.0, cast)
             self.scans += 1
         if world_time >= self._next_frame and self._camera_wanted():
             self._next_frame = max(self._next_frame + self.camera_period, world_time)
