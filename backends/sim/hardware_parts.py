@@ -32,6 +32,12 @@ HOLDING_VOLTS, EMPTY_VOLTS = 2.5, 0.3
 #: while the firmware reports them turning (the host would count motion the world did not make)
 SILENT_STOP = 0.3
 
+#: a world further behind the wall clock than this (s) casts and renders nothing until it caught up
+#: (a scan stamped with the time the world stands at is right however old, but it is of no use to a
+#: robot that has moved on, and the world's process needs the time to catch up); nearer, the
+#: devices' own lateness (a tick that rendered three cameras) never stops a laser
+STALE_CAST = 0.5
+
 
 class WorldGripperFirmware(GripperFirmware):
     """The gripper sketch whose axes are the world gripper's: positions and
@@ -198,6 +204,8 @@ class CoupledRig:
             self._silent = False
         vx, vy, w = self.kinematics.inverse(*rpm)
         r.drive(vx, vy, w, world_time)
+        if at is not None and self.wall() - at > STALE_CAST:
+            return      # catching up: a cast or a render of a world this far behind is stale before it is sent
         if world_time >= self._next_scan:
             self._next_scan = max(self._next_scan + self.scan_period, world_time)
             # cast of the world as it stands (the devices' clock: now, or the wall time a world behind it stands
