@@ -11,7 +11,10 @@ camera frames cross real file descriptors; the agents see no simulator.
 Perception is the camera's (tags and lights detected on the frames).
 
 This process steps the world and, after each step, lets the devices take
-what it computed (:meth:`_tick`).  A restarted agent (:meth:`start_agent`)
+what it computed (:meth:`_tick`).  Unlike a sim-backend process game it
+catches up the wall time it fell behind (:attr:`catch_up`): the devices'
+motors run on the wall clock, and a world that dropped time moved the
+robots less than their odometry said.  A restarted agent (:meth:`start_agent`)
 is not handed its pose: it localises globally.  :attr:`hardware_stats`
 holds each robot's serial, laser and camera counts at the end.
 """
