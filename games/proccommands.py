@@ -20,6 +20,10 @@ CLI_MAIN = "import sys; from rll_bt.cli import main; sys.exit(main())"
 CHANNELS = ("public", "cyan", "magenta")
 
 
+class ChildExited(RuntimeError):
+    """A process of the game ended on its own (or never came up)."""
+
+
 def teamserver_config(o: GameOptions, t: Team, name: str, *, folder: Path, refbox_host: str, layout: Layout,
                       listen: int, truth: dict, legacy: bool) -> dict:
     """Team ``t``'s server process ``name`` (its files in ``folder``), the agents'

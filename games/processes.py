@@ -10,11 +10,8 @@ to the refbox over the simulator's station link (TCP too).  The simulated refbox
 PyBullet ``rll-bt refbox sim --world remote:...``): it talks UDP (broadcast to ``127.255.255.255`` on free
 local ports, split send/receive) and sees the stations only through the link. The team server runs as
 ``python -m games.child`` (TCP for the agents, UDP to the refbox) and each robot as a real ``rll-bt agent
---backend remote`` process.  Everything runs on the wall clock: the world advances by the wall time that
-passed (at most 0.1 s a step, so it may fall behind), so a game takes its real length.  The refbox's game
-clock is the world's time, pushed over the station link after each step: a world fallen behind the wall
-clock holds the game's time with it (before, the refbox kept the wall clock and such a game lost the seconds
-the world did not play).  The refbox's view
+--backend remote`` process.  Everything runs on the wall clock, at the world's pace (:mod:`.world_pace`).
+The refbox's view
 (status, points, awards, deliveries, station states) reaches this process through the snapshot file it
 rewrites (``refbox.json``, 4 times a second), the team server's through ``teamserver.json`` (every second).
 
@@ -50,31 +47,14 @@ from rll_bt.contracts import load_simulator
 
 from .lockstep import TEAM, GameResult, legacy_single
 from .options import GameOptions
-from .proccommands import CLI_MAIN, agent_command, teamserver_config
+from .proccommands import CLI_MAIN, ChildExited, agent_command, teamserver_config
 from .processlog import game_logs
 from .recorder import Recorder
 from .teamlog import WallToSim
 from .teams import Team, joining
+from .world_pace import world_advance
 
 BROADCAST = "127.255.255.255"
-
-
-class ChildExited(RuntimeError):
-    """A process of the game ended on its own (or never came up)."""
-
-
-def world_advance(last: float, now: float, longest: float, catch_up: float | None) -> tuple[float, float]:
-    """How far to step a world that stands at wall time ``last`` at wall time ``now``: (seconds to step,
-    the wall time it then stands at).  A step covers at most ``longest``.  Without ``catch_up`` the rest of
-    the wall time passed is dropped (the world falls behind for good: right when everything that moves
-    lives in the world).  With it, the world stands at ``last + step`` and the next steps catch up, as
-    long as it is less than ``catch_up`` behind (what is more is dropped): devices that run on the wall
-    clock (an emulated base's motors) moved all that time, and the world must move with them."""
-    if catch_up is None:
-        return min(now - last, longest), now
-    last = max(last, now - catch_up)
-    step = min(now - last, longest)
-    return step, last + step
 
 
 class ProcessGame:
@@ -357,9 +337,7 @@ class ProcessGame:
         return [name for name, p in self.procs.items() if p.poll() is None]
 
     # -- running ---------------------------------------------------------------------------------
-    #: how far behind the wall clock the world may fall and still step all of it (None: a step covers at
-    #: most 0.1 s and the rest of the wall time passed is dropped; :func:`world_advance`)
-    catch_up: float | None = None
+    catch_up: float | None = None     #: how far behind the world may fall and still step it all (world_pace)
 
     def _tick(self, last: float) -> float:
         """Serve backend and station calls for a moment, then advance the world by the wall time passed;
@@ -455,8 +433,7 @@ class ProcessGame:
         return self.result(self.finished())
 
     def result(self, finished: bool) -> GameResult:
-        """The game as lockstep reports it: times in simulated seconds since the
-        game started (the world ran while the processes came up)."""
+        """The game as lockstep reports it (simulated seconds since the game started)."""
         if self._result_made:
             raise RuntimeError("the result of this game was already made")
         self._result_made = True

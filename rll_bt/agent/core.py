@@ -29,15 +29,13 @@ from .machinemap import KnownMachines, changed_names, distribute
 from .observations import ObservationFeed
 from .pose import PoseReader
 from .refbox import RefboxLink
-from .results import make_result
+from .results import full_gripper_refusal, make_result
 from .runner import InvalidTask, Outcome, TaskRun, default_trees_dir, load_task_tree
 from .serverlink import ServerLink
 from .stations import StationStates
 from .taskbook import Entry, TaskBook
 
 log = logging.getLogger("rll_bt.agent")
-#: the task kinds that take a workpiece into the gripper (a league robot refuses them with one held)
-TAKES = ("get_workpiece", "retrieve_cap")
 
 
 class RobotAgent:
@@ -241,14 +239,10 @@ class RobotAgent:
     def _start(self, entry: Entry) -> None:
         """Load and start the tree of ``entry`` (the book's current task)."""
         me, tid, kind, params = self.config.robot_id, entry.task_id, entry.kind, entry.params
-        if entry.detail is None and kind in TAKES and self._holding():
-            # a league team server's retrieve or buffer: the trees would count the held workpiece as
-            # the one to take (as after a pause of rll-bt's own task), so it is refused as the league does
+        refusal = full_gripper_refusal(entry, self._holding(), robot_id=me, stamp=self.clock.now())
+        if refusal is not None:
             log.warning("robot %d: task %d %s refused: the gripper holds a workpiece", me, tid, kind)
-            self._record(make_result(entry.task, robot_id=me, status="FAILED", code="INVALID_TASK",
-                                     text="the gripper already holds a workpiece",
-                                     league_code="WORKPIECE_ALREADY_IN_GRIPPER", holding=True,
-                                     stamp=self.clock.now()))
+            self._record(refusal)
             self._start_next()
             return
         try:
@@ -439,19 +433,11 @@ class RobotAgent:
         if now >= self._next_beacon:
             self._next_beacon = now + c.beacon_period
             pose, _conf = self.pose.read()
-            self.refbox.beacon(pose, self._current_task(), self._finished_list())
-
-    def _current_task(self):
-        cur = self.book.current
-        return cur.task if cur is not None else None
-
-    def _finished_list(self) -> list[tuple[int, bool]]:
-        n = self.config.beacon_finished
-        return [(tid, r.successful) for tid, r in list(self.book.finished.items())[-n:]] if n else []
+            self.refbox.beacon(pose, *self.book.beacon_tasks(self.config.beacon_finished))
 
     def _beacon_to_server(self) -> None:
         pose, _conf = self.pose.read()
-        self.server.send(self.server.beacon(pose, self._current_task(), self._finished_list()))
+        self.server.send(self.server.beacon(pose, *self.book.beacon_tasks(self.config.beacon_finished)))
 
     def _flush(self) -> None:
         if not len(self.feed) or not (self.server.connected or self.local is not None):

@@ -54,3 +54,18 @@ def make_result(task, *, robot_id: int, status: str, code: str = "NONE", text: s
     if holding is not None:
         out.holding = bool(holding)
     return Result(at, out)
+
+
+#: the task kinds that take a workpiece into the gripper (a league robot refuses them with one held)
+TAKES = ("get_workpiece", "retrieve_cap")
+
+
+def full_gripper_refusal(entry, holding: bool | None, *, robot_id: int, stamp: float) -> Result | None:
+    """The refusal of a league team server's retrieve or buffer (``entry`` without rll-bt's detail)
+    while the gripper holds a workpiece: the trees would count the held workpiece as the one to take
+    (as after a pause of rll-bt's own task), so it fails as the league's robots do; None otherwise."""
+    if entry.detail is not None or entry.kind not in TAKES or not holding:
+        return None
+    return make_result(entry.task, robot_id=robot_id, status="FAILED", code="INVALID_TASK",
+                       text="the gripper already holds a workpiece",
+                       league_code="WORKPIECE_ALREADY_IN_GRIPPER", holding=True, stamp=stamp)

@@ -127,3 +127,9 @@ class TaskBook:
         """Forget the result of ``task_id`` (it is given out again)."""
         self.finished.pop(int(task_id), None)
         self.issued.pop(int(task_id), None)
+
+    def beacon_tasks(self, n: int) -> tuple:
+        """What a beacon carries: the AgentTask the robot runs now (field 9, or None) and the last
+        ``n`` finished tasks with whether each succeeded (field 10)."""
+        current = self.current.task if self.current is not None else None
+        return current, ([(tid, r.successful) for tid, r in list(self.finished.items())[-n:]] if n else [])

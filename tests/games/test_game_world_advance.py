@@ -3,7 +3,8 @@ game drops the wall time a late step could not cover; a hardware game, whose dev
 base's motors) run on the wall clock, steps all of it, so the world's robots move as far as their
 odometry says."""
 from games.hardware import HardwareGame
-from games.processes import ProcessGame, world_advance
+from games.processes import ProcessGame
+from games.world_pace import world_advance
 
 
 def walk(catch_up, ticks):
