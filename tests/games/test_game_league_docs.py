@@ -9,7 +9,6 @@ the base station onto a ring station's slide: 2 points) and gets the score the
 simulator prints at the end."""
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
 import time
@@ -18,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from tests.support.league_server import BASE, LeagueServer
+from tests.support.ports import free_port_offset
 
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("league-docs")]   # a whole game on the wall clock
 
@@ -30,27 +30,9 @@ REFBOX_LISTENS = {"public": 4445, "cyan": 4446}
 PRODUCTION, BS_OUTPUT = 30, 2
 
 
-def free_offset() -> int:
-    """A port offset whose 4441..4447 are free for UDP here."""
-    for off in range(21000, 60000, 97):
-        socks = []
-        try:
-            for port in range(4441 + off, 4448 + off):
-                s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-                socks.append(s)
-                s.bind(("127.0.0.1", port))
-            return off
-        except OSError:
-            continue
-        finally:
-            for s in socks:
-                s.close()
-    raise RuntimeError("no free port offset")
-
-
 @pytest.mark.timeout(900)
 def test_another_team_plugs_in_as_docs_league_md_says(tmp_path):
-    off = free_offset()
+    off = free_port_offset()
     server = LeagueServer(0, ("127.255.255.255", REFBOX_LISTENS["public"] + off, REFBOX_SENDS["public"] + off,
                               REFBOX_LISTENS["cyan"] + off, REFBOX_SENDS["cyan"] + off), TEAM, KEY)
     rll_bt = Path(sys.executable).parent / "rll-bt"

@@ -1,8 +1,6 @@
 """``rll-bt refbox sim`` as a subprocess on UDP loopback, and its argument errors."""
 from __future__ import annotations
 
-import os
-import random
 import signal
 import socket
 import subprocess
@@ -17,6 +15,7 @@ from backends.sim.refbox.messages import enum_name, set_enum
 from rll_bt import msgs
 from rll_bt.cli import main
 from rll_bt.comm import MessageRegistry, StreamClient, UdpPeer
+from tests.support.ports import free_port_offset
 
 RLL_BT = str(Path(sys.executable).parent / "rll-bt")
 MS = msgs.message_set("rcll2016")
@@ -25,25 +24,7 @@ REG = MessageRegistry.from_message_set(MS)
 
 def _free_offset() -> int:
     """A port offset whose sim-layout UDP ports and TCP stream port are all free."""
-    rng = random.Random(os.getpid() ^ int(time.time()))
-    for _ in range(50):
-        off = rng.randrange(15000, 40000)
-        socks = []
-        try:
-            for p in (4441, 4442, 4444, 4445, 4446, 4447):
-                s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-                socks.append(s)
-                s.bind(("0.0.0.0", p + off))
-            t = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-            socks.append(t)
-            t.bind(("0.0.0.0", 4444 + off))
-            return off
-        except OSError:
-            continue
-        finally:
-            for s in socks:
-                s.close()
-    pytest.skip("no free port range found")
+    return free_port_offset((4441, 4442, 4444, 4445, 4446, 4447), (4444,), host="0.0.0.0")
 
 
 def _start(*args) -> subprocess.Popen:
