@@ -188,6 +188,12 @@ def _operate(link: ControllerLink, refbox: ExternalRefbox, team: str, control: s
         while time.monotonic() < end:
             refbox.step()
             time.sleep(0.02)
+    while link.status().phase == "PRE_GAME":      # until its GameState says it took SETUP (a loaded
+        refbox.step()                              # machine may hear it after the field's MachineInfo)
+        if time.monotonic() > deadline:
+            raise Unavailable(f"the refbox at {link.address} stays in PRE_GAME after SetGamePhase SETUP",
+                              where="--refbox-host")
+        time.sleep(0.05)
     gs = link.game_state
     if gs is not None and gs.team_cyan != team:
         raise UserError(f"the refbox did not take the team name {team!r} (cyan is {gs.team_cyan!r})",
