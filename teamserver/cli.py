@@ -3,7 +3,7 @@
     rll-bt teamserver --profile rcll2016 --team Carologistics --key randomkey \\
         [--listen 0.0.0.0:4460] [--state teamserver.sqlite] [--strategy algorithm1] \\
         [--planner htn|greedy] [--robots rll-bt|agenttask] \\
-        [--refbox-host 127.0.0.1] [--ports sim|competition]
+        [--refbox-host 127.0.0.1] [--ports sim|competition] [--refbox-port-offset N]
 
 The robots connect over TCP and take the league's AgentTask.  ``--robots
 rll-bt`` (the default): rll-bt's agents, the link encrypted with the team
@@ -60,6 +60,9 @@ def register(cli) -> None:
                     help="refbox address or broadcast address (default %(default)s)")
     gp.add_argument("--ports", default="sim", choices=("sim", "competition"),
                     help="refbox port layout: split local ports or one port per channel")
+    gp.add_argument("--refbox-port-offset", type=int, default=0, metavar="N",
+                    help="every port of that layout plus N (to play beside another refbox, e.g. "
+                         "rll-bt sim --external-team ... --refbox-port-offset N) (default 0)")
     gp.add_argument("--color", choices=("CYAN", "MAGENTA"), type=str.upper,
                     help="force our colour (training games without team names)")
     gp.add_argument("--heartbeat-timeout", type=float, default=10.0, metavar="S",
@@ -110,11 +113,16 @@ def run(args: argparse.Namespace) -> int:
     from rll_bt.agenttask import link as agent_link
     from rll_bt.cli.watching import close_watch, open_watch
     from rll_bt.clock import WallClock
+    from rll_bt.comm import layout
     from rll_bt.watch.process import watch_links
 
     from .links.refbox_link import udp_refbox_link
     from .server import ServerConfig, TeamServer
 
+    offset = int(args.refbox_port_offset)
+    if not 0 <= offset <= 60000:
+        raise UserError(f"must be 0..60000, not {offset}", where="--refbox-port-offset")
+    ports = layout(args.ports).moved(offset)
     listen = args.listen or LISTEN[args.robots]
     host, port = _host_port(listen)
     clock = WallClock()
@@ -123,10 +131,10 @@ def run(args: argparse.Namespace) -> int:
     if args.beacon is not None:
         config.beacon, config.beacon_number = True, args.beacon
     try:
-        refbox = udp_refbox_link(args.profile, args.refbox_host, args.ports, clock)
+        refbox = udp_refbox_link(args.profile, args.refbox_host, ports, clock)
     except OSError as exc:
         raise Unavailable(f"cannot open the refbox channels: {exc}",
-                          where=f"{args.refbox_host} ({args.ports} ports)") from None
+                          where=f"{args.refbox_host} ({ports.name} ports)") from None
     try:
         agents = agent_link.tcp_server(port, host=host, clock=clock,
                                        key=args.key if args.robots == "rll-bt" else None)
