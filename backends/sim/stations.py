@@ -251,7 +251,7 @@ class Station:
             box((0.0, side * (m.width / 2.0 + 0.001), top - 0.06),
                 (m.depth / 2.0, 0.001, 0.03), TEAM_RGBA[self.team])
         if self.type == "CS":
-            y0, y1 = min(m.shelf_y) - 0.04, max(m.shelf_y) + 0.04
+            y0, y1 = min(m.shelf_y) - 0.04, min(max(m.shelf_y) + 0.04, m.width / 2.0)
             box((m.depth / 4.0, (y0 + y1) / 2.0, belt_top - 0.01),
                 (m.depth / 4.0, (y1 - y0) / 2.0, 0.01), (0.6, 0.6, 0.64, 1.0))
         if self.type == "RS":

@@ -30,9 +30,12 @@ class MpsGeometry:
     tower_cap: float = 0.045            # housing above the three segments (147 mm total)
     # fiducial: one per side, horizontally centred below the belt
     tag_centre_height: float = 0.48     # upper edge about 35 cm below the belt
-    # cap station shelf and ring station slide sit on the input side, beside the belt
-    shelf_y: tuple[float, float, float] = (-0.27, -0.19, -0.11)
-    slide_y: float = -0.20
+    # cap station shelf and ring station slide sit on the input side, beside the belt, on the
+    # right of a robot facing the input (machine +y): the side the real refbox's fixed rotations
+    # of an RS/CS twin by a wall keep off the wall (refbox-protocol.md, mirroring)
+    # (slot 0 farthest from the belt; 0.295, 0.215 and 0.135 m from its centre line, the slide 0.225)
+    shelf_y: tuple[float, float, float] = (0.32, 0.24, 0.16)
+    slide_y: float = 0.25
 
     @property
     def tower_height(self) -> float:

@@ -57,11 +57,11 @@ def test_navigation_past_stations_keeps_a_gap(seed, start, goal):
     assert closest > 0.02, f"came within {100 * closest:.1f} cm of something"
 
 
-def test_put_onto_a_slide_beside_a_neighbouring_station_slides_there_docked():
-    # seed 1: C-CS2 stands so close to C-RS2's input that the robot cannot
-    # stand in front of the slide at the tag-reading distance
-    world, ctx = scene(1, Pose2D(4.2, 2.8, -2.0))
-    slide = place_for("C-RS2", "SLIDE")
+def test_put_onto_a_slide_by_the_wall_slides_there_docked():
+    # seed 0: C-RS1 (45 degrees) has its input toward the far wall (y = 6) and its slide on the
+    # wall's side: the robot cannot stand in front of the slide at the tag-reading distance
+    world, ctx = scene(0, None)
+    slide = place_for("C-RS1", "SLIDE")
     assert shift_docked(ctx, slide)
     m = ctx.settings.manipulation
     assert spot_clearance(ctx, slide, m.coarse_distance) < 0 < spot_clearance(ctx, slide, m.final_distance)
@@ -71,7 +71,7 @@ def test_put_onto_a_slide_beside_a_neighbouring_station_slides_there_docked():
     put = PutOnto(ctx, slide)
     status, closest = drive(world, put)
     assert status is Status.SUCCESS, put.message
-    assert len(world.workpieces_at("C-RS2", "slide")) == 1
+    assert len(world.workpieces_at("C-RS1", "slide")) == 1
     assert world.collision_count == 0 and closest > 0.01
 
 
@@ -130,10 +130,11 @@ def test_a_back_off_into_a_robot_behind_stops_at_the_first_touch():
 
 
 def test_a_shelf_slot_by_the_wall_is_grabbed_from_beside_it_with_the_gripper_reaching_over():
-    # seed 11: C-CS1 stands by the far wall (y = 6); squarely in front of its shelf slot 0
-    # the robot would overlap the wall by 3 cm; 9 cm toward the belt it fits with room for the
-    # motion guard and the gripper's sideways axis reaches the carrier
-    world, ctx = scene(11, Pose2D(-5.45, 4.85, math.pi / 2))
+    # seed 30: C-CS1 stands by the near wall (y = 0) with its shelf on the wall's side; squarely
+    # in front of its shelf slot 0 the robot would overlap the wall by a centimetre; 7 cm toward
+    # the belt it fits with room for the motion guard and the gripper's sideways axis reaches
+    # the carrier
+    world, ctx = scene(30, None)
     slot0 = place_for("C-CS1", "SHELF", 0)
     m = ctx.settings.manipulation
     assert spot_clearance(ctx, slot0, m.final_distance) < 0.0
@@ -148,5 +149,5 @@ def test_a_shelf_slot_by_the_wall_is_grabbed_from_beside_it_with_the_gripper_rea
     assert world.collision_count == 0 and closest > 0.0
     # closer to the wall the robot does not fit beside it either: it is not sent
     st = world.stations["C-CS1"].pose
-    ctx.machines.set("C-CS1", Pose2D(st.x, st.y + 0.08, st.theta))
+    ctx.machines.set("C-CS1", Pose2D(st.x, st.y - 0.08, st.theta))
     assert spot_aside(ctx, slot0) is None
