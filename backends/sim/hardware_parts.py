@@ -175,6 +175,7 @@ class CoupledRig:
         self.world = world
         self.key = key
         self.robot = world.robots[key]
+        self.robot.follows_wheels = True        # the firmware's wheels are the robot's motion, ramped already
         self.kinematics = OmniKinematics()
         self.gripper = GripperLink(self.robot)
         self.angles = angles

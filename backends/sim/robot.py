@@ -8,6 +8,10 @@ counter-clockwise) is clipped to the speed limits of ``rules.ROBOT``
 (``max_accel`` when speeding up, ``max_decel`` when slowing down,
 ``max_alpha``) and integrated each time step.  A drive command older than
 ``RobotConfig.deadman`` seconds of sim time is dropped (the robot brakes).
+A robot whose wheels an emulated base firmware turns (``follows_wheels``,
+:mod:`.hardware_parts`) moves at the wheels' speeds as they are: the host
+ramped its commands and the firmware its motors, and the host's odometry
+counts exactly those speeds.
 
 Odometry integrates the motion the wheels made, with a random-walk error:
 per step the travelled distance gets Gaussian noise of
@@ -116,6 +120,10 @@ class SimRobot:
     ray_group: int = 0
     pose: Pose2D = field(init=False)
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)      # executed, robot frame
+    #: the command is the wheels' actual speed (an emulated firmware ramps them): executed as it is, without
+    #: the world's speed and acceleration limits (ramping it once more, the world turned up to 0.8 rad on
+    #: after a turn at 1.6 rad/s was stopped, while the host's odometry had the wheels standing)
+    follows_wheels: bool = False
     command: tuple[float, float, float] = (0.0, 0.0, 0.0)
     command_stamp: float = -math.inf
     odom: Pose2D = field(init=False)
@@ -174,6 +182,11 @@ class SimRobot:
     def propose(self, dt: float, now: float) -> tuple[Pose2D, tuple[float, float, float]]:
         """Next pose and velocity if nothing blocks the motion."""
         g = self.config.geometry
+        if self.follows_wheels:
+            vx, vy, w = self.command if now - self.command_stamp <= self.config.deadman else (0.0, 0.0, 0.0)
+            if vx == 0.0 and vy == 0.0 and w == 0.0:
+                return self.pose, (0.0, 0.0, 0.0)
+            return self._integrate(vx, vy, w, dt), (vx, vy, w)
         tx, ty, tw = self.target_velocity(now)
         vx, vy, w = self.velocity
         # accelerate the velocity vector as a whole (limits apply to its length)
@@ -186,11 +199,13 @@ class SimRobot:
         w = _approach(w, tw, g.max_alpha * dt, g.max_alpha * dt)
         if abs(vx) < 1e-9 and abs(vy) < 1e-9 and abs(w) < 1e-9:
             return self.pose, (0.0, 0.0, 0.0)
+        return self._integrate(vx, vy, w, dt), (vx, vy, w)
+
+    def _integrate(self, vx: float, vy: float, w: float, dt: float) -> Pose2D:
         th = self.pose.theta + w * dt / 2.0
         c, s = math.cos(th), math.sin(th)
-        pose = Pose2D(self.pose.x + (c * vx - s * vy) * dt, self.pose.y + (s * vx + c * vy) * dt,
+        return Pose2D(self.pose.x + (c * vx - s * vy) * dt, self.pose.y + (s * vx + c * vy) * dt,
                       wrap_angle(self.pose.theta + w * dt))
-        return pose, (vx, vy, w)
 
     def commit(self, pose: Pose2D, velocity, dt: float, wheels: Pose2D | None = None) -> None:
         """Take the step the world allowed and integrate the odometry from
