@@ -24,7 +24,8 @@ game's share of the sim game's points, collisions, and per robot of the
 hardware game the serial poll rate, laser scans and camera frames per
 second, the base's watchdog stops and how often the emulator's thread was
 late (a read more than 100 ms after the one before: the world process is
-busy).  The aim (issue 18): within 10 % of
+busy), and how far the world stood behind the wall clock (more than 0.5 s:
+no laser casts, no camera frames).  The aim (issue 18): within 10 % of
 the sim backend's points on every seed, 0 watchdog stops.  A hardware game
 takes its real length (about 20 minutes for a whole 2016 game).
 """
@@ -86,6 +87,13 @@ def print_table(rows, args, wall: float) -> None:
             print(f"{seed:4d} {name:>7} {h['serial_polls_per_s']:14.1f} {h['scans_per_s']:8.2f} "
                   f"{h['frames_per_s']:9.2f} {h['watchdog_motion_stops']:15d} "
                   f"{h.get('emulator_stalls', 0):10d} {h.get('longest_stall_s', 0.0):9.3f}")
+    print()
+    for seed, hw, _ in rows:
+        lag = (hw or {}).get("world_lag")
+        if lag:
+            print(f"seed {seed}: the world behind the wall clock at most {lag['longest_s']:.2f} s, more than "
+                  f"{lag['stale_above_s']:g} s (no casts, no frames) for {lag['stale_s']:.1f} s in "
+                  f"{lag['stale_spells']} spells")
     print()
     print(f"within 10 % of the sim backend's points on every seed: {'yes' if within else 'NO'}; "
           f"watchdog stops while moving: {stops}")

@@ -16,7 +16,8 @@ catches up the wall time it fell behind (:attr:`catch_up`): the devices'
 motors run on the wall clock, and a world that dropped time moved the
 robots less than their odometry said.  A restarted agent (:meth:`start_agent`)
 is not handed its pose: it localises globally.  :attr:`hardware_stats`
-holds each robot's serial, laser and camera counts at the end.
+holds each robot's serial, laser and camera counts at the end, :attr:`world_lag`
+how far the world stood behind the wall clock (the report's ``world_lag``).
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from pathlib import Path
 
 from .lockstep import TEAM
 from .processes import ProcessGame
+from .world_pace import WorldLag
 
 
 class HardwareGame(ProcessGame):
@@ -36,6 +38,8 @@ class HardwareGame(ProcessGame):
         self.hardware_stats: dict = {}
         self._configs: dict[int, Path] = {}
         self._hw_t0: float | None = None
+        from backends.sim.hardware_parts import STALE_CAST
+        self.world_lag = WorldLag(STALE_CAST)     # how far the world stood behind the devices' wall clock
         super().__init__(options, **kw)
 
     def _start_children(self) -> None:
@@ -67,6 +71,8 @@ class HardwareGame(ProcessGame):
         last = super()._tick(last)
         if self.hw is not None:
             self.hw.sync(at=last)      # the world stands at wall time ``last``: its casts are of then
+            if self._started:
+                self.world_lag.add(self.wall.now(), last)
         return last
 
     def start_agent(self, number: int, known_pose: bool = False) -> None:
@@ -84,6 +90,7 @@ class HardwareGame(ProcessGame):
             self.hardware_stats = stats
         res = super().result(finished)
         res.snapshot["hardware"] = self.hardware_stats
+        res.snapshot["world_lag"] = self.world_lag.summary()
         return res
 
     def close(self) -> None:

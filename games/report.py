@@ -179,6 +179,7 @@ def _summarise(result, options: GameOptions, team: str, wall_time: float | None)
         "messages": result.messages,
         "team_server_restarts": snapshot.get("restarts", 0),
         "hardware_stats": snapshot.get("hardware", {}),
+        **({"world_lag": snapshot["world_lag"]} if snapshot.get("world_lag") else {}),
         **_tally(result, team),
         "awards": [asdict(a) for a in result.awards if a.team == team],
         "events": rec.events,
@@ -225,6 +226,11 @@ def table(summary: dict) -> str:
         for name, h in sorted(hw.items()):
             lines.append(f"{name:8} {h['serial_polls_per_s']:14.1f} {h['scans_per_s']:8.2f} {h['frames_per_s']:9.2f} "
                          f"{h['watchdog_motion_stops']:15d}")
+    lag = s.get("world_lag")
+    if lag:
+        lines += ["", f"world behind the wall clock: at most {lag['longest_s']:.2f} s; more than "
+                  f"{lag['stale_above_s']:g} s (no laser casts, no camera frames) for {lag['stale_s']:.1f} s "
+                  f"in {lag['stale_spells']} spells"]
     return "\n".join(lines)
 
 

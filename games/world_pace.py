@@ -22,3 +22,35 @@ def world_advance(last: float, now: float, longest: float, catch_up: float | Non
     last = max(last, now - catch_up)
     step = min(now - last, longest)
     return step, last + step
+
+
+class WorldLag:
+    """How far a hardware game's world stood behind the wall clock, measured at every tick: the longest
+    lag, and the wall seconds (and spells) it stood more than ``stale`` behind.  A world that far behind
+    casts and renders nothing (backends/sim/hardware_parts.STALE_CAST): its lasers resend their last
+    scan and its cameras go silent, which the agents see as a lost camera after 3 s.  A game over whose
+    end the world had caught up says nothing of that at its end; this says how much of it there was."""
+
+    def __init__(self, stale: float):
+        self.stale = stale
+        self.longest = 0.0
+        self.stale_seconds = 0.0
+        self.stale_spells = 0
+        self._prev: float | None = None
+        self._was_stale = False
+
+    def add(self, now: float, stands_at: float) -> None:
+        """A tick at wall time ``now`` left the world standing at wall time ``stands_at``."""
+        behind = max(now - stands_at, 0.0)
+        self.longest = max(self.longest, behind)
+        stale = behind > self.stale
+        if stale and self._prev is not None:
+            self.stale_seconds += now - self._prev
+        if stale and not self._was_stale:
+            self.stale_spells += 1
+        self._was_stale = stale
+        self._prev = now
+
+    def summary(self) -> dict:
+        return {"longest_s": round(self.longest, 3), "stale_s": round(self.stale_seconds, 1),
+                "stale_spells": self.stale_spells, "stale_above_s": self.stale}

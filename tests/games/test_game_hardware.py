@@ -33,3 +33,6 @@ def test_exploration_through_emulated_hardware_scores_and_keeps_the_links_up(tmp
         log = (out / f"agent{n}.log").read_text()
         assert "Traceback" not in log
     assert "serial polls/s" in text
+    # how far the world stood behind the wall clock the devices run on (how far is the benchmark's business)
+    lag = report["world_lag"]
+    assert lag["longest_s"] >= 0.0 and lag["stale_s"] >= 0.0 and "world behind the wall clock" in text
