@@ -40,6 +40,7 @@ from .exploration import ExploreZone
 from .localisation.config import PRESETS
 from .localisation.relocalise import Relocalise
 from .manipulation import ApproachStation, GrabFrom, PutOnto, place_for
+from .manipulation.shelf import GrabFromShelf, shelf_memory
 from .manipulation.station import back_off_distance
 from .navigation import Navigate, PoseGoal, StationSideGoal, ZoneGoal
 from .navigation.motions import LookTurn, MoveRelative, Turn, facing_station, look_angle
@@ -229,12 +230,31 @@ class Grab(SkillNode):
 
     def done(self, activity):
         self.holding = self._sctx.backend.holding()
+        if self.holding and str(self.side).upper() == "SHELF":      # that slot is empty now
+            shelf_memory(self._sctx).mark_empty(self.machine, self.shelf_slot)
 
     def update(self) -> TreeStatus:
         status = super().update()
         if status is TreeStatus.FAILURE and getattr(self, "_sctx", None) is not None:
             self.holding = self._sctx.backend.holding()
         return status
+
+
+class GrabFromShelfNode(SkillNode):
+    """Pick up a workpiece from whichever slot of a cap station's shelf holds
+    one (:mod:`.manipulation.shelf`: one grab per slot, slots found empty are
+    remembered); GRAB_FAILED "no workpiece found ..." when none does."""
+    node_type = "grab_from_shelf"
+    machine = Input(str, "a cap station, e.g. C-CS1")
+    timeout = Input(float, "seconds", default=400.0)
+    slot = Output(int, "the slot taken from")
+    requires_capabilities = Capability.DRIVE | Capability.ODOMETRY | Capability.LASER | Capability.GRIPPER
+
+    def make(self, sctx):
+        return GrabFromShelf(sctx, self.machine, timeout=self.timeout)
+
+    def done(self, activity):
+        self.slot = activity.slot
 
 
 class Put(SkillNode):
@@ -333,7 +353,7 @@ class HoldingWorkpiece(Node):
 
 
 NODE_TYPES = (NavigateToPose, NavigateToZone, NavigateToStation, ExploreZoneNode, ApproachStationNode,
-              Grab, Put, BackOff, TurnNode, RelocaliseNode, Localised, HoldingWorkpiece)
+              Grab, GrabFromShelfNode, Put, BackOff, TurnNode, RelocaliseNode, Localised, HoldingWorkpiece)
 
 
 @offers(localisation=PRESETS)

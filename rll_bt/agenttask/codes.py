@@ -16,7 +16,8 @@ NAVIGATION_FAILED           UNABLE_TO_MOVE_TO_TARGET (NO_PATH_FOUND when the
 LOCALISATION_LOST           UNABLE_TO_MOVE_TO_TARGET
 MACHINE_NOT_FOUND           MPS_NOT_FOUND
 ALIGN_FAILED                NOT_AT_POSITION
-GRAB_FAILED                 GRASPING_FAILED
+GRAB_FAILED                 GRASPING_FAILED (NO_WORKPIECE_FOUND when the robot
+                            found nothing to take: "no workpiece found ...")
 PUT_FAILED                  MACHINE_POINT_OCCUPIED while the gripper still holds
                             the workpiece, NO_WORKPIECE_IN_GRIPPER once it is empty
 GRIPPER_ERROR, SENSOR_LOST  INTERNAL_ERROR
@@ -58,6 +59,9 @@ TO_LEAGUE = {
     "INTERNAL": "INTERNAL_ERROR",
     "SENSOR_LOST": "INTERNAL_ERROR",
 }
+
+#: how a GRAB_FAILED's text begins when there was nothing to take (skills/manipulation/shelf.py)
+NOTHING_FOUND = "no workpiece found"
 
 #: league ErrorCode name -> rll-bt ErrorCode name
 FROM_LEAGUE = {
@@ -114,12 +118,14 @@ def league_name(value: int) -> str | None:
 def to_league(code: str, text: str = "", holding: bool | None = None) -> str:
     """The league's code name for rll-bt's ``code`` (an unknown name counts as
     INTERNAL).  ``holding`` (the gripper afterwards) and ``text`` refine
-    PUT_FAILED and NAVIGATION_FAILED."""
+    PUT_FAILED, NAVIGATION_FAILED and GRAB_FAILED."""
     code = code if code in TO_LEAGUE else "INTERNAL"
     if code == "PUT_FAILED" and holding is False:
         return "NO_WORKPIECE_IN_GRIPPER"
     if code == "NAVIGATION_FAILED" and "no path" in text.lower():
         return "NO_PATH_FOUND"
+    if code == "GRAB_FAILED" and NOTHING_FOUND in text.lower():
+        return "NO_WORKPIECE_FOUND"
     return TO_LEAGUE[code]
 
 

@@ -13,7 +13,8 @@ move {zone}                        go_to (to the free spot of the zone nearest
                                    its centre)
 move {machine, input/output}       go_to (in front of that side of the station)
 retrieve {machine, input/output}   get_workpiece
-retrieve {CS, shelf}               get_workpiece from shelf slot 0
+retrieve {CS, shelf}               get_workpiece from whichever shelf slot
+                                   holds a workpiece (shelf_slot -1)
 deliver {machine, input}           deliver at a DS, mount_ring at an RS,
                                    mount_cap at a CS, put_workpiece elsewhere
 deliver {RS, slide}                put_workpiece on the slide
@@ -32,8 +33,8 @@ Every kind's parameters: ``task_id``, ``robot_id``, ``team_color``
 
 ===============  ==================================================================
 explore_zone     zone (int), zone_name, viewpoints (list of [x, y, theta])
-get_workpiece    machine, machine_type, side (INPUT/OUTPUT/SHELF), shelf_slot,
-                 face (INPUT/OUTPUT), place (conveyor/shelf0..2)
+get_workpiece    machine, machine_type, side (INPUT/OUTPUT/SHELF), shelf_slot (-1: any),
+                 face (INPUT/OUTPUT), place (conveyor/shelf0..2/shelf)
 put_workpiece    machine, machine_type, side (INPUT/SLIDE), face, place (conveyor/slide)
 retrieve_cap     machine, machine_type, shelf_slot, face (INPUT), place (shelfN)
 mount_ring       machine, machine_type, ring_color ("RING_BLUE" ... or ""), face, place
@@ -62,6 +63,8 @@ BODY_KINDS = {
 }
 BODIES = tuple(BODY_KINDS)
 COLORS = ("CYAN", "MAGENTA")
+#: shelf_slot of a retrieve from a shelf that names no slot: whichever slot holds a workpiece
+ANY_SLOT = -1
 #: the kind a deliver to a station's input runs, by station type
 DELIVER_KIND = {"DS": "deliver", "RS": "mount_ring", "CS": "mount_cap"}
 
@@ -100,9 +103,10 @@ def _machine(profile: Profile, name: str, color: str | None) -> str:
 
 
 def _place(side: str, slot: int = 0) -> tuple[str, str]:
-    """(face, place) of a station side as the navigation skills name them."""
+    """(face, place) of a station side as the navigation skills name them
+    (``shelf`` for :data:`ANY_SLOT`)."""
     if side == "SHELF":
-        return "INPUT", f"shelf{slot}"
+        return "INPUT", f"shelf{slot}" if slot >= 0 else "shelf"
     if side == "SLIDE":
         return "INPUT", "slide"
     return side, "conveyor"
@@ -175,8 +179,9 @@ def read_task(at, detail=None, *, profile: Profile, robot_id: int, color: str | 
         if side == "SHELF" and mtype != "CS":
             raise TaskRejected("INVALID_TARGET", f"{machine} has no shelf")
         kind = _kind(body, detail, machine, side)
-        slot = int(detail.shelf_slot) if detail is not None and detail.HasField("shelf_slot") else 0
-        if side == "SHELF" and not 0 <= slot <= 2:
+        named = detail is not None and detail.HasField("shelf_slot")
+        slot = int(detail.shelf_slot) if named else (ANY_SLOT if side == "SHELF" else 0)
+        if side == "SHELF" and named and not 0 <= slot <= 2:
             raise TaskRejected("INVALID_TARGET", f"shelf slot {slot} is not 0..2")
         p.update(kind=kind, side=side, shelf_slot=slot)
         p["face"], p["place"] = _place(side, slot)

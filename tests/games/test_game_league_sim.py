@@ -221,3 +221,33 @@ def test_rll_bts_team_server_drives_any_agenttask_robot():
         game.close()
         server.close()
         listen.close()
+
+
+@pytest.mark.timeout(900)
+def test_a_league_retrieve_from_a_shelf_takes_a_slot_that_holds_a_carrier():
+    """``retrieve {CS, shelf}`` names no slot: the robot takes the carrier from the slot
+    that holds one, and answers NO_WORKPIECE_FOUND (202) when none does."""
+    game, server = make_game(robots=1, exploration=20.0, seed=8)
+    try:
+        assert in_production(game, server)
+        assert game.run_until(lambda g: server.phase()[1] > 21.0 and len(server.machines) >= 7, 60.0)
+        cs = min(("C-CS1", "C-CS2"), key=lambda m: server.machines[m].zone >= 1000)     # on our half first
+        world = game.world.pybullet           # the PyBullet world itself (workpieces by hand)
+        for slot in ("shelf0", "shelf1"):            # a referee's hand: only slot 2 holds a carrier
+            assert world.remove_workpiece(cs, slot) is not None
+        carrier = world.workpiece_at(cs, "shelf2")
+        tid = server.task(1, retrieve={"machine_id": cs, "machine_point": "shelf"})
+        res = finish(game, server, tid, limit=300.0)
+        assert res.successful, server.error(tid)
+        assert world.robot("CYAN", 1).holding == carrier.id
+        slide = server.task(1, deliver={"machine_id": "C-RS1", "machine_point": "slide"})
+        assert finish(game, server, slide, limit=240.0).successful, server.error(slide)
+        for slot in ("shelf0", "shelf1", "shelf2"):   # (the refbox refilled the shelf once it was empty)
+            world.remove_workpiece(cs, slot)
+        tid = server.task(1, retrieve={"machine_id": cs, "machine_point": "shelf"})
+        res = finish(game, server, tid, limit=300.0)
+        assert not res.successful and server.error(tid) == "NO_WORKPIECE_FOUND", (res, server.error(tid))
+        assert world.robot("CYAN", 1).holding is None
+    finally:
+        game.close()
+        server.close()

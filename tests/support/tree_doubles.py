@@ -132,6 +132,21 @@ class Grab(Double, S.Grab):
         return Status.SUCCESS
 
 
+class GrabFromShelf(Double, S.GrabFromShelfNode):
+    """Double of grab_from_shelf: closes the gripper; GRAB_FAILED "no workpiece found" when it holds
+    nothing 1 s later (as if every slot had been tried)."""
+    fail_code = "GRIPPER_ERROR"
+
+    def act(self, backend):
+        backend.gripper_close()
+
+    def finish(self, backend):
+        if not backend.holding():
+            return self.fail("GRAB_FAILED", f"no workpiece found on {self.machine}'s shelf")
+        self.slot = 0
+        return Status.SUCCESS
+
+
 class Put(Double, S.Put):
     """Double of put: opens the gripper; PUT_FAILED when it still holds something 1 s later."""
     fail_code = "GRIPPER_ERROR"
@@ -159,7 +174,8 @@ class Localised(S.Localised):
 REGISTRY = default_registry().child()
 for _cls, _name in ((Approach, "approach_station"), (BackOff, "back_off"), (Relocalise, "relocalise"),
                     (Explore, "explore_zone"), (NavigatePose, "navigate_to_pose"),
-                    (NavigateZone, "navigate_to_zone"), (Grab, "grab"), (Put, "put"), (Localised, "localised")):
+                    (NavigateZone, "navigate_to_zone"), (Grab, "grab"), (GrabFromShelf, "grab_from_shelf"),
+                    (Put, "put"), (Localised, "localised")):
     REGISTRY.register(_cls, _name)
 
 

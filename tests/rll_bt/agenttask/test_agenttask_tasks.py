@@ -86,7 +86,7 @@ def league(body: str, task_id=3, robot=2, color=0, **fields):
     ("move", {"waypoint": "C-BS", "machine_point": "output"}, "go_to", {"machine": "C-BS", "side": "OUTPUT"}),
     ("retrieve", {"machine_id": "C-BS", "machine_point": "output"}, "get_workpiece", {"side": "OUTPUT"}),
     ("retrieve", {"machine_id": "C-CS1", "machine_point": "shelf"}, "get_workpiece",
-     {"side": "SHELF", "shelf_slot": 0, "place": "shelf0"}),
+     {"side": "SHELF", "shelf_slot": -1, "place": "shelf"}),          # no slot named: any that holds one
     ("deliver", {"machine_id": "C-DS", "machine_point": "input"}, "deliver", {"gate": 0}),
     ("deliver", {"machine_id": "C-RS1", "machine_point": "input"}, "mount_ring", {"ring_color": ""}),
     ("deliver", {"machine_id": "C-CS2", "machine_point": "input"}, "mount_cap", {"cap_color": ""}),
