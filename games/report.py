@@ -38,6 +38,12 @@ def _collision_kinds(log) -> dict[str, int]:
     return out
 
 
+def collisions_of(log, team: str) -> list[list]:
+    """The collisions of ``team``'s robots, each as [game time, robot ("CYAN/2"), what it hit],
+    kept in report.json (a process game is played once: what was hit and when is the evidence)."""
+    return [[round(float(t), 2), robot, what] for t, robot, what in log if robot.split("/")[0] == team]
+
+
 def _exploration(award) -> bool:
     """An exploration award: in its own phase, or a report judged inside PRODUCTION (2025)."""
     if award.phase == "EXPLORATION":
@@ -176,6 +182,7 @@ def _summarise(result, options: GameOptions, team: str, wall_time: float | None)
         "collisions": result.collisions,
         "collisions_by_kind": _collision_kinds(result.collision_log),
         "collisions_between_teams": _other_team_collisions(result.collision_log),
+        "collision_log": collisions_of(result.collision_log, team),
         "messages": result.messages,
         "team_server_restarts": snapshot.get("restarts", 0),
         "hardware_stats": snapshot.get("hardware", {}),

@@ -33,3 +33,9 @@ def test_the_end_of_game_table_shows_broken_stations_and_referee_calls():
     assert next(x for x in lines if x.startswith("stations broken")).split()[2:] == \
         ["2", "timeout", "2"]
     assert "obstruction 1 (-20)" in next(x for x in lines if x.startswith("referee calls"))
+
+
+def test_each_collision_of_the_team_goes_into_the_report():
+    log = [(12.345, "CYAN/2", "C-CS1"), (13.0, "MAGENTA/1", "wall"), (20.0, "CYAN/1", "robot MAGENTA/1")]
+    assert report.collisions_of(log, "CYAN") == [[12.35, "CYAN/2", "C-CS1"], [20.0, "CYAN/1", "robot MAGENTA/1"]]
+    assert report.collisions_of(log, "MAGENTA") == [[13.0, "MAGENTA/1", "wall"]]
