@@ -227,4 +227,6 @@ class KnowledgeBase:
         return [self.tasks[i] for i in ids if i in self.tasks]
 
     def active_robots(self) -> list[M.Robot]:
-        return [r for r in self.robots.values() if r.status == M.ACTIVE]
+        """The active robots by number: the order the robots registered in (which agent process
+        connected first, in a process game) must not change whom the dispatcher serves first."""
+        return sorted((r for r in self.robots.values() if r.status == M.ACTIVE), key=lambda r: r.number)

@@ -118,3 +118,13 @@ def test_observation_of_unknown_machine_or_property_is_rejected():
         M.Observation("C-BS", "colour", 3, 0.5, "R1")
     with pytest.raises(ValueError):
         M.Observation("C-BS", M.ZONE, 3, 1.5, "R1")
+
+
+def test_active_robots_come_by_number_whatever_order_they_registered_in():
+    # a process game: the agent processes connect in any order (seed 2 at 9239667: robot 2
+    # first, and the first exploration task, zone 4, went to robot 2 instead of robot 1)
+    kb = KnowledgeBase(P16)
+    for n in (2, 3, 1):
+        kb.save_robot(M.Robot(n, f"robot{n}"))
+    kb.save_robot(M.Robot(4, "robot4", status=M.LOST))
+    assert [r.number for r in kb.active_robots()] == [1, 2, 3]
