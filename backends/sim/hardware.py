@@ -41,7 +41,7 @@ import numpy as np
 from backends.devices.laser.source import CastSignal
 from rll_bt.clock import Clock, WallClock
 
-from .hardware_parts import CoupledRig, build_devices, device_spec, device_stats, rig_config
+from .hardware_parts import CoupledRig, WheelTrack, build_devices, device_spec, device_stats, rig_config
 
 
 class WorldRig(CoupledRig):
@@ -64,6 +64,15 @@ class WorldRig(CoupledRig):
         self._image = None
         self._image_seq = 0
         self._image_sent = -1
+        self._track = WheelTrack()
+        self.rig.base.on_step = self._record        # called by the emulator's thread, under its lock
+
+    def _record(self, now: float) -> None:
+        self._track.add(now, [m.position for m in self.rig.base.firmware.motors[:3]])
+
+    def _wheels(self, a: float, b: float) -> list[float] | None:
+        with self.rig.base.lock:
+            return self._track.mean_rpm(a, b)
 
     def start(self) -> WorldRig:
         self.rig.start()

@@ -12,6 +12,7 @@ import time
 import numpy as np
 
 from backends.robotino.arduino import GripperFirmware
+from backends.robotino.firmware import RPM_PER_TICK_PER_MS
 from backends.robotino.gripper_protocol import StepsPerMetre
 from backends.robotino.kinematics import OmniKinematics
 from rll_bt.clock import Clock
@@ -37,6 +38,51 @@ SILENT_STOP = 0.3
 #: robot that has moved on, and the world's process needs the time to catch up); nearer, the
 #: devices' own lateness (a tick that rendered three cameras) never stops a laser
 STALE_CAST = 0.5
+
+#: the longest world step of a process game (games/processes.ProcessGame._tick): a world behind the wall
+#: clock steps at most this far at a time, each step followed by a sync
+WORLD_STEP = 0.1
+#: the wheels' positions kept (one row per base-emulator step, about 5 ms): some 5 s, more than a
+#: hardware game's world catches up (ProcessGame.catch_up, 2 s)
+TRACK_ROWS = 1024
+
+
+class WheelTrack:
+    """The base firmware's wheel positions (motor ticks) at the base emulator's steps, in a ring
+    (``rows``: TRACK_ROWS x 4 floats, time and three positions; ``count``: one float, rows written):
+    how fast the wheels turned on average over a stretch of the wall clock.  A world behind the wall
+    clock steps over time gone by: driven by the wheels' speeds of now, a robot that stopped or set off
+    meanwhile moved in the world otherwise than its odometry counted (in a seed-1 game at 420fc1f on a
+    machine whose load left the world's process a quarter of a core, the robots were lost most of the
+    game); driven by the speeds of then, it moves as the odometry says."""
+
+    def __init__(self, rows: np.ndarray | None = None, count: np.ndarray | None = None):
+        self.rows = np.zeros((TRACK_ROWS, 4)) if rows is None else rows
+        self.count = np.zeros(1) if count is None else count
+
+    def add(self, t: float, positions) -> None:
+        n = int(self.count[0])
+        self.rows[n % len(self.rows)] = (t, *positions)
+        self.count[0] = n + 1
+
+    def copy(self) -> WheelTrack:
+        return WheelTrack(self.rows.copy(), self.count.copy())
+
+    def mean_rpm(self, a: float, b: float) -> list[float] | None:
+        """The wheels' mean speeds (rpm) from wall time ``a`` to ``b`` (to the last row when ``b`` is
+        later); None when the rows do not cover ``a`` or the stretch is shorter than a millisecond."""
+        n, size = int(self.count[0]), len(self.rows)
+        k = min(n, size)
+        if k < 2:
+            return None
+        rows = self.rows[np.arange(n - k, n) % size]
+        t = rows[:, 0]
+        b = min(b, float(t[-1]))
+        if a < t[0] or b - a < 1e-3:
+            return None
+        pa = [float(np.interp(a, t, rows[:, 1 + i])) for i in range(3)]
+        pb = [float(np.interp(b, t, rows[:, 1 + i])) for i in range(3)]
+        return [(q - p) * RPM_PER_TICK_PER_MS / ((b - a) * 1000.0) for p, q in zip(pa, pb)]
 
 
 class WorldGripperFirmware(GripperFirmware):
@@ -194,7 +240,14 @@ class CoupledRig:
         """After a world step to ``world_time``, which stands for wall time ``at`` (default: now)."""
         r = self.robot
         rpm, stepped = self._exchange(world_time)
-        if stepped is not None and self.wall() - stepped > SILENT_STOP:
+        past = None
+        if at is not None and self.wall() - at > 0.01:
+            # behind the wall clock: the next step covers wall time gone by, at the wheels' speeds of then
+            past = self._wheels(at, min(at + WORLD_STEP, self.wall()))
+        if past is not None:
+            rpm = past
+            self._silent = False
+        elif stepped is not None and self.wall() - stepped > SILENT_STOP:
             # the base emulator has not run for SILENT_STOP: its firmware stops the wheels at that
             # moment when it runs again (RobotinoEmulator.stall_stop), so the world stops them now
             if any(rpm) and not self._silent:
@@ -225,6 +278,10 @@ class CoupledRig:
     def _exchange(self, world_time: float) -> tuple[list[float], float | None]:
         """Hand the devices what the world has for them; the wheels' speeds (rpm) and the
         time of the base emulator's step they are of (None: not stepped yet)."""
+        raise NotImplementedError
+
+    def _wheels(self, a: float, b: float) -> list[float] | None:
+        """The wheels' mean speeds (rpm) from wall time ``a`` to ``b`` (:class:`WheelTrack`), or None."""
         raise NotImplementedError
 
     def _put_ranges(self, ranges_mm: np.ndarray, cast: float) -> None:

@@ -44,7 +44,7 @@ import numpy as np
 
 from backends.devices.laser.source import CastSignal
 
-from .hardware_parts import CoupledRig, device_spec
+from .hardware_parts import TRACK_ROWS, CoupledRig, WheelTrack, device_spec
 
 log = logging.getLogger(__name__)
 
@@ -54,8 +54,10 @@ RANGES_SEQ, IMAGE_SEQ, HOLDING, G_BUSY, G_POS, G_ACK = 0, 1, 2, 3, 4, 7
 RPM, G_MOVES, G_OPEN, G_TARGET, G_COMMANDS, CLIENTS, IMAGE_H, IMAGE_W = 8, 11, 12, 13, 16, 17, 18, 19
 STEPPED = 20           # the base emulator's step the wheels' speeds are of (time.monotonic(); nan: none yet)
 RANGES_CAST = 21       # when the world cast the laser's ranges (time.monotonic(): the scan's stamp)
+TRACK_COUNT = 22      # rows written to the wheel track (hardware_parts.WheelTrack)
 HEADER = 24
 BEAMS = HEADER         # the laser's ranges (mm) from here
+TRACK = HEADER + MAX_BEAMS     # the wheel track's rows (time, three positions) from here
 
 
 class _Shared:
@@ -63,7 +65,7 @@ class _Shared:
     (bytes of the newest frame), ``lock`` around every read and write."""
 
     def __init__(self, ctx, image_bytes: int):
-        self.floats = ctx.RawArray("d", HEADER + MAX_BEAMS)
+        self.floats = ctx.RawArray("d", TRACK + 4 * TRACK_ROWS)
         self.image = ctx.RawArray("B", image_bytes)
         self.lock = ctx.Lock()
         self.floats[G_POS] = math.nan
@@ -71,6 +73,11 @@ class _Shared:
 
     def view(self) -> tuple[np.ndarray, np.ndarray]:
         return np.frombuffer(self.floats, dtype=np.float64), np.frombuffer(self.image, dtype=np.uint8)
+
+    def track(self) -> WheelTrack:
+        """The wheel track in the block (read and written under :attr:`lock`)."""
+        f = np.frombuffer(self.floats, dtype=np.float64)
+        return WheelTrack(f[TRACK:].reshape(TRACK_ROWS, 4), f[TRACK_COUNT:TRACK_COUNT + 1])
 
 
 class ProcessRig(CoupledRig):
@@ -84,6 +91,7 @@ class ProcessRig(CoupledRig):
         h, w = robot.config.camera_height, robot.config.camera_width
         self._shared = _Shared(ctx, h * w * 3)
         self._floats, self._image = self._shared.view()
+        self._track = self._shared.track()
         self._conn, child = ctx.Pipe()
         self._cast_signal = CastSignal()          # the world's casts wake the child's laser
         self._proc = ctx.Process(target=serve, args=(spec, self._shared, child, self._cast_signal), daemon=True,
@@ -162,6 +170,11 @@ class ProcessRig(CoupledRig):
             f[G_ACK] = commands
         return rpm, stepped
 
+    def _wheels(self, a: float, b: float) -> list[float] | None:
+        with self._shared.lock:
+            track = self._track.copy()
+        return track.mean_rpm(a, b)
+
     def _put_ranges(self, ranges_mm: np.ndarray, cast: float) -> None:
         n = len(ranges_mm)
         with self._shared.lock:
@@ -196,6 +209,7 @@ class _Devices:
         from .hardware_parts import build_devices
         self.shared = shared
         self.floats, self.image = shared.view()
+        self.track = shared.track()
         self.rig, self.gripper_fw = build_devices(spec, clock=WallClock(), laser_source=self._laser_source,
                                                   frame_source=self._frame, laser_wake=cast_signal)
         self.beams = len(self.rig.laser_angles()) if self.rig.laser_device is not None else 0
@@ -227,9 +241,11 @@ class _Devices:
         cam = self.rig.camera_server
         with emu.lock:
             rpm = [m.ss for m in emu.firmware.motors[:3]]
+            positions = [m.position for m in emu.firmware.motors[:3]]
             with self.shared.lock:
                 f[RPM:RPM + 3] = rpm
                 f[STEPPED] = now
+                self.track.add(now, positions)
                 f[G_MOVES], f[G_OPEN], f[G_COMMANDS] = fw.moves, 1.0 if fw.is_open else 0.0, fw.commands
                 f[G_TARGET:G_TARGET + 3] = [float(v) for v in fw.target]
                 f[CLIENTS] = cam.clients if cam is not None else 0
