@@ -29,7 +29,9 @@ for it until it is fed, so the next robot's workpiece is processed with the
   the DS before the order's window) so the dispatcher sends it later
   (:meth:`~FeedMonitor.late`);
 - feeds a spare base to a station PREPARED with an instruction no task
-  needs while a task needs another one (:meth:`~FeedMonitor.unstick`),
+  needs while a task needs another one, or only tasks whose workpiece is
+  still being made need it while another's is ready
+  (:meth:`~FeedMonitor.unstick`),
   which brings it back to IDLE; not under rules that break a machine left
   PREPARED (2025: after 20 s), where it is IDLE again after its BROKEN time
   long before a spare base could come, which would then lie on the input of
@@ -199,21 +201,33 @@ class FeedMonitor:
         return ours <= o.delivered
 
     # -- stations waiting for nothing ----------------------------------------------------
+    def _due(self, task: M.Task) -> bool:
+        """``task``'s workpiece exists: every step before it is done."""
+        return all((d := self.kb.tasks.get(i)) is not None and d.state == M.DONE
+                   for i in task.deps)
+
     def unstick(self) -> list[M.Product]:
         """Feed a spare base to each station PREPARED with an instruction no open task
-        needs while one needs another instruction; returns the products made now.
-        Nothing under a stuck timeout (2025, see the module doc)."""
+        needs while one needs another instruction, or one whose workpiece exists needs
+        another while those that need this one still wait for theirs (a product made
+        again after its feed was lost: 2016 has neither a timeout of a PREPARED station
+        nor a ResetMachine); returns the products made now.  Nothing under a stuck
+        timeout (2025, see the module doc)."""
         if self.kb.profile.stuck_timeout is not None:
             return []
         flushing = dict(self.kb.get("flushing") or {})
         made = []
-        wanted: dict[str, list[dict]] = {}
+        wanted: dict[str, list[M.Task]] = {}
         for t in self.kb.open_tasks():
             if is_feed(t) or (t.prepare and "ss" in t.prepare):     # (a RETRIEVE too)
-                wanted.setdefault(t.prepare["machine"], []).append(t.prepare)
+                wanted.setdefault(t.prepare["machine"], []).append(t)
         for machine, wants in wanted.items():
             instr = self.instruction(machine)
-            if instr is None or instr in wants or self._owner(machine) is not None:
+            if instr is None or self._owner(machine) is not None:
+                continue
+            same = [t for t in wants if t.prepare == instr]
+            if same and (any(self._due(t) for t in same)
+                         or not any(self._due(t) for t in wants if t.prepare != instr)):
                 continue
             p = self.kb.products.get(flushing.get(machine, ""))
             if p is not None and p.state == "ACTIVE":

@@ -116,6 +116,64 @@ def test_a_station_waiting_with_another_gate_is_fed_a_spare_base_first():
     assert feeds.instruction("C-DS") is None and feeds.accepts(want2)
 
 
+def test_a_ds_waiting_for_a_product_made_again_is_flushed_for_a_finished_one():
+    """2016 has no timeout of a PREPARED station and no ResetMachine: a delivery the DS
+    never took leaves it PREPARED with that gate.  While the lost product is made again
+    (its delivery wants that gate, but its workpiece is far from done), a finished
+    product for another gate must not wait for it: the DS gets a spare base first."""
+    ls = Lockstep()
+    production_setup(ls, [{"id": 1, "delivery_gate": 1}, {"id": 2, "delivery_gate": 2}])
+    srv = ls.server
+    kb, feeds = srv.kb, srv.dispatcher.feeds
+    ls.step(n=3)
+    abandon_all_products(srv)
+    lost = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
+                  state=M.FAILED, prepare={"machine": "C-DS", "ds": {"gate": 1}})
+    kb.save_task(lost)
+    feeds.sent(lost)
+    ls.station_states["C-DS"] = "PREPARED"
+    ls.refbox.machines(ls.station_states)
+    ls.step()
+    # order 1's product made again: its delivery waits for a cap mount not yet done
+    cap = M.Task(kb.next_id("task"), M.MOUNT_CAP, {"machine": "C-CS1"},
+                 prepare={"machine": "C-CS1", "cs": {"operation": "MOUNT_CAP"}})
+    again = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
+                   prepare={"machine": "C-DS", "ds": {"gate": 1}}, deps=(cap.id,), carry=True)
+    for t in (cap, again):
+        kb.save_task(t)
+    assert feeds.unstick() == []             # nothing else to deliver: keep the gate
+    done = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 2},
+                  prepare={"machine": "C-DS", "ds": {"gate": 2}}, carry=True, holder=1)
+    kb.save_task(done)
+    assert not feeds.accepts(done)
+    [flush] = feeds.unstick()
+    steps = kb.tasks_of(flush.tasks)
+    assert [t.kind for t in steps] == [M.GET_WORKPIECE, M.DELIVER]
+    assert steps[1].params["gate"] == 1 and steps[1].prepare is None
+
+
+def test_a_ds_waiting_with_the_gate_of_a_finished_product_is_not_flushed():
+    """The same, but order 1's product is finished too: it uses the waiting gate."""
+    ls = Lockstep()
+    production_setup(ls, [{"id": 1, "delivery_gate": 1}, {"id": 2, "delivery_gate": 2}])
+    srv = ls.server
+    kb, feeds = srv.kb, srv.dispatcher.feeds
+    ls.step(n=3)
+    abandon_all_products(srv)
+    lost = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
+                  state=M.FAILED, prepare={"machine": "C-DS", "ds": {"gate": 1}})
+    kb.save_task(lost)
+    feeds.sent(lost)
+    ls.station_states["C-DS"] = "PREPARED"
+    ls.refbox.machines(ls.station_states)
+    ls.step()
+    for gate, holder in ((1, 2), (2, 1)):
+        kb.save_task(M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": gate},
+                            prepare={"machine": "C-DS", "ds": {"gate": gate}}, carry=True,
+                            holder=holder))
+    assert feeds.unstick() == []
+
+
 def test_a_feed_still_being_checked_is_neither_adopted_nor_flushed():
     ls = Lockstep()
     production_setup(ls, [{"id": 1, "delivery_gate": 1}])
