@@ -5,7 +5,9 @@ to idle robots with empty grippers by travel distance plus ``urgency``
 times the seconds left until the order's window closes (an optimal
 assignment, ``scipy.optimize.linear_sum_assignment``), earlier products
 first on ties; tasks that free a stuck robot are preferred by ``unblock``
-metres.  Pickups that would leave one more robot stuck wait while
+metres, and the steps of a product whose retrieved cap waits in a cap
+station by ``cap_first`` metres (the cap keeps that station from every
+other product until it is mounted).  Pickups that would leave one more robot stuck wait while
 ``robots - 1`` are (:mod:`.holding`), but a pickup that frees a stuck robot
 by clearing its station's output; when all are stuck, a base held for a full
 slide goes to another slide.  Locks are taken at assignment.
@@ -17,7 +19,7 @@ from scipy.optimize import linear_sum_assignment
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
-from ..production.caps import Caps
+from ..production.caps import FREE, Caps
 from ..production.locks import StationLocks
 from ..production.slides import Slides
 from ..production.world import PlanningWorld
@@ -83,12 +85,14 @@ class Matcher:
             return assigned
         positions = self.world.positions()
         frees = (self.holding.unblocking(game_time) | swaps) if stuck else set()
+        capped = {p for p in self.caps.buffers.owners.values() if p != FREE}
         cost = np.zeros((len(free), len(pool)))
         for i, r in enumerate(free):
             for j, t in enumerate(pool):
                 cost[i, j] = (travel(r, positions.get(t.machine)) + 1e-3 * _age(t)
                               + self.config.urgency * self._slack(t, game_time)
-                              - self.config.unblock * (t.id in frees))
+                              - self.config.unblock * (t.id in frees)
+                              - self.config.cap_first * (t.product in capped))
         rows, cols = linear_sum_assignment(cost)
         for i, j in sorted(zip(rows, cols), key=lambda ij: cost[ij[0], ij[1]]):
             t, r = pool[j], free[i]

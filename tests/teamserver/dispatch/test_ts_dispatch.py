@@ -407,3 +407,41 @@ def test_the_fleet_tells_how_long_a_robot_has_been_without_work():
         r.task_id = 99
         ls.server.kb.save_robot(r)
     assert fleet.idle_for() == 0.0
+
+
+def test_the_steps_of_a_product_whose_cap_waits_in_a_cap_station_go_first():
+    """Product A's cap waits in C-CS1 (which takes no other product's cap until it is
+    mounted); the only free robot stands next to C-CS2, where product B's cap
+    retrieval could start, yet it fetches A's base."""
+    ls = Lockstep(robots=1, config=ALONE)
+    production_setup(ls, [])
+    ls.step(n=2)
+    kb, d = ls.server.kb, ls.server.dispatcher
+    products = ls.server.production.products
+    x, y = ls.server.production.world.positions()["C-CS2"][:2]
+    ls.agents[0].pose = (x + 0.8, y, 0.0)
+    ls.agents[0].status()
+    ls.step()
+    a, b = products.new("P", 1), products.new("P", 2)
+    base = M.Task(kb.next_id("task"), M.GET_WORKPIECE,
+                  {"machine": "C-BS", "side": M.OUTPUT, "base": "BASE_RED"}, product=a.id,
+                  prepare={"machine": "C-BS", "bs": {"side": M.OUTPUT, "color": "BASE_RED"}},
+                  locks=("C-BS",), releases=("C-BS",))
+    retrieve = M.Task(kb.next_id("task"), M.RETRIEVE_CAP, {"machine": "C-CS2"}, product=b.id,
+                      prepare={"machine": "C-CS2", "cs": {"operation": "RETRIEVE_CAP"}},
+                      locks=("C-CS2", "C-CS2#cap"))
+    for p, t in ((a, base), (b, retrieve)):
+        kb.save_task(t)
+        p.tasks = (t.id,)
+        kb.save_product(p)
+    d.matcher.assign(0.0)
+    assert kb.tasks[retrieve.id].state == M.ASSIGNED      # nothing waits: the nearer one
+    kb.tasks[retrieve.id].state, kb.tasks[retrieve.id].robot = M.PENDING, None
+    ls.server.production.locks.release(b.id)
+    robot = kb.robots[1]
+    robot.task_id = None
+    kb.save_robot(robot)
+    ls.server.production.buffers.take("C-CS1", a.id)
+    d.matcher.assign(0.0)
+    assert kb.tasks[base.id].state == M.ASSIGNED and kb.tasks[base.id].robot == 1
+    assert kb.tasks[retrieve.id].state == M.PENDING
