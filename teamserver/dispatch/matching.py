@@ -53,6 +53,7 @@ class Matcher:
             return []
         self.caps.adopt_free_caps()
         self.slides.top_up_slides()
+        self.slides.waive_stocked_puts()
         self.slides.waive_full_slide_puts()
         if self._all_stuck_for(game_time) >= self.config.divert_after:
             for t in self.kb.open_tasks():  # a base for a full slide goes elsewhere

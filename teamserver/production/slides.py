@@ -20,9 +20,15 @@ So
   once the mount has used some.  It still waits for what the put waited
   for (the pickup of the base, and so the cap retrieval that freed a
   cap-less base): the product's cap mount, after the ring, must find the
-  cap in its station (a MOUNT_CAP prepared without one breaks it).  Else the mount waited for puts that waited
-  for the mount, and the robots holding its workpiece and its bases stood
-  still for the rest of the game (rcll2016 seed 10: from 540 s to the end).
+  cap in its station (a MOUNT_CAP prepared without one breaks it).  Else the
+  mount waited for puts that waited for the mount, and the robots holding its
+  workpiece and its bases stood still for the rest of the game (rcll2016 seed
+  10: from 540 s to the end);
+- a mount that waits for nothing but the puts of its own bases, while its
+  slide holds what it costs beyond the bases other waiting mounts put there,
+  waits for none of them (:meth:`Slides.waive_stocked_puts`): they go on the
+  slide after it, and the cap-less base's pickup (so the cap retrieval) is
+  waited for by the product's cap mount instead.
 """
 from __future__ import annotations
 
@@ -30,7 +36,7 @@ import logging
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
-from ..planning.domain import EXTRA
+from ..planning.domain import CAPLESS, EXTRA
 from .products import Products
 
 log = logging.getLogger("teamserver.production")
@@ -103,6 +109,71 @@ class Slides:
                      "task(s) %s, which the full slide cannot take", t.id, t.machine, cost,
                      waived)
         return changed
+
+    def waive_stocked_puts(self) -> list[M.Task]:
+        """Drop from each pending ring mount whose workpiece is ready, and that waits
+        for nothing but its own bases (their puts on its slide, or the pickups that a
+        waived put left it waiting for), while its slide holds what its ring costs
+        beyond the bases other mounts waiting there have put, those steps (the bases go
+        on the slide after it); the cap-less base's pickup (so the cap retrieval) goes
+        to the product's cap mount, which must find the cap in its station.  The mount
+        used to wait for its own bases beside bases other products had discarded on the
+        slide (rcll2016 seed 9: a C2's robot held it at C-RS2 for 200 s beside 2 and 3
+        bases while its cap-less base waited for its cap retrieval).  Returns the mounts
+        changed."""
+        changed = []
+        for t in self.kb.open_tasks():
+            if t.kind != M.MOUNT_RING or t.state != M.PENDING:
+                continue
+            st = self.kb.stations.get(t.machine or "")
+            cost = int(t.params.get("cost", 0))
+            if st is None or cost <= 0:
+                continue
+            deps = [self.kb.tasks.get(d) for d in t.deps]
+            waiting = [d for d in deps if d is None or d.state != M.DONE]
+            if not waiting or not all(self._own_base(d, t) for d in waiting):
+                continue
+            if st.loaded_with - self._put_for_others(t) < cost:
+                continue
+            waived = {d.id for d in waiting}
+            t.deps = tuple(d for d in t.deps if d not in waived)
+            self.kb.save_task(t)
+            capless = [q for d in waiting for q in [d] + [self.kb.tasks.get(e) for e in d.deps]
+                       if q is not None and q.state != M.DONE and q.kind == M.GET_WORKPIECE
+                       and q.params.get("role") == CAPLESS]
+            product = self.kb.products.get(t.product or "")
+            for cap in self.kb.tasks_of(product.tasks if product else ()):
+                if cap.kind == M.MOUNT_CAP and cap.state == M.PENDING and capless:
+                    cap.deps = tuple(cap.deps) + tuple(q.id for q in capless if q.id not in cap.deps)
+                    self.kb.save_task(cap)
+            changed.append(t)
+            log.info("task %d: %s holds the %d base(s) it costs; it no longer waits for "
+                     "its own, task(s) %s", t.id, t.machine, cost, sorted(waived))
+        return changed
+
+    def _own_base(self, task: M.Task | None, mount: M.Task) -> bool:
+        """Is ``task`` (a step ``mount`` waits for) a base for ``mount``'s slide: a put
+        there, or the pickup of a base a put there carries on?"""
+        if task is None or task.id == mount.params.get("carry_from"):
+            return False
+        if task.kind == M.PUT_WORKPIECE:
+            return task.params.get("side") == M.SLIDE and task.machine == mount.machine
+        return task.kind == M.GET_WORKPIECE and any(
+            q.params.get("carry_from") == task.id and q.kind == M.PUT_WORKPIECE
+            and q.params.get("side") == M.SLIDE and q.machine == mount.machine
+            for q in self.kb.open_tasks())
+
+    def _put_for_others(self, mount: M.Task) -> int:
+        """Bases on ``mount``'s slide that other pending mounts there have put."""
+        n = 0
+        for t in self.kb.open_tasks():
+            if (t.kind != M.MOUNT_RING or t.state != M.PENDING or t.id == mount.id
+                    or t.machine != mount.machine):
+                continue
+            done = sum(1 for d in t.deps if (q := self.kb.tasks.get(d)) is not None
+                       and q.kind == M.PUT_WORKPIECE and q.state == M.DONE)
+            n += min(done, int(t.params.get("cost", 0)))
+        return n
 
     def _blocked_put(self, task: M.Task | None, machine: str) -> bool:
         return (task is not None and task.kind == M.PUT_WORKPIECE and task.state == M.PENDING

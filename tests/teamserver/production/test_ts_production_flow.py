@@ -523,3 +523,43 @@ def test_when_every_robot_is_stuck_a_base_for_a_full_slide_goes_to_another_slide
     ls.agents[2].result(put.id)
     ls.step(n=3)
     assert kb.tasks[get.id].state == M.ASSIGNED and kb.tasks[get.id].robot == 3
+
+
+def test_a_mount_whose_slide_holds_its_cost_goes_without_waiting_for_its_own_bases():
+    """A ring mount whose workpiece is ready and whose slide holds what the ring costs
+    (bases other products discarded there) goes at once: its own bases go on the slide
+    after it, and the cap-less base's pickup, so the cap retrieval, is what the cap
+    mount waits for (rcll2016 seeds 9 and 12: a C2's and a C3's robot held them at the
+    ring station for 140 s and 347 s beside the bases while their caps waited for a
+    cap station busy with another product's cap)."""
+    ls = Lockstep()
+    production_setup(ls, [{"id": 5, "complexity": 1, "rings": ["RING_BLUE"]}],   # 2 bases, RS1
+                     states={"C-CS2": "DOWN"})                 # no cap retrieved for now
+    ls.stations = Stations(ls)
+    ls.stations.slides["C-RS1"] = 2
+    ls.stations._send()
+    kb, bad = ls.server.kb, []
+    [p] = [p for p in kb.products.values() if p.order_id == 5]
+
+    def mounted(gt):
+        if "BROKEN" in ls.stations.states.values() or ls.stations.slides["C-RS1"] > 3:
+            bad.append(gt)
+        return any(t.kind == M.MOUNT_RING and t.state == M.DONE for t in kb.tasks_of(p.tasks))
+    assert play(ls, mounted, steps=400)                     # while C-CS2 is still DOWN
+    tasks = kb.tasks_of(p.tasks)
+    [retrieve] = [t for t in tasks if t.kind == M.RETRIEVE_CAP]
+    [pickup] = [t for t in tasks if t.params.get("role") == "capless"]
+    [mount_cap] = [t for t in tasks if t.kind == M.MOUNT_CAP]
+    assert retrieve.state == M.PENDING and pickup.id in mount_cap.deps
+    ls.stations.states["C-CS2"] = "IDLE"
+    ls.stations._send()
+
+    def done(gt):
+        if "BROKEN" in ls.stations.states.values() or ls.stations.slides["C-RS1"] > 3:
+            bad.append(gt)
+        return delivered(ls, 5)(gt)
+    assert play(ls, done, t0=300.0, steps=1200)
+    assert not bad
+    retrieve, mount_cap = kb.tasks[retrieve.id], kb.tasks[mount_cap.id]
+    assert mount_cap.assigned_at >= retrieve.finished_at
+    ls.close()
