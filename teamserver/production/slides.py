@@ -82,17 +82,24 @@ class Slides:
                     and t.machine == machine and t.params.get("side") == M.SLIDE)
         return SLIDE_MAX - (st.loaded_with if st is not None else 0) - going
 
-    def waive_full_slide_puts(self) -> list[M.Task]:
-        """Drop from each pending ring mount whose slide holds what its ring costs the
-        pending puts of its bases that the slide has no room for (the puts stay, and
-        go once the mount made room); returns the mounts changed."""
-        changed = []
+    def _pending_mounts(self):
+        """(task, station, cost) of each pending ring mount at a known station whose ring
+        costs bases."""
         for t in self.kb.open_tasks():
             if t.kind != M.MOUNT_RING or t.state != M.PENDING:
                 continue
             st = self.kb.stations.get(t.machine or "")
             cost = int(t.params.get("cost", 0))
-            if st is None or cost <= 0 or st.loaded_with < cost:
+            if st is not None and cost > 0:
+                yield t, st, cost
+
+    def waive_full_slide_puts(self) -> list[M.Task]:
+        """Drop from each pending ring mount whose slide holds what its ring costs the
+        pending puts of its bases that the slide has no room for (the puts stay, and
+        go once the mount made room); returns the mounts changed."""
+        changed = []
+        for t, st, cost in self._pending_mounts():
+            if st.loaded_with < cost:
                 continue
             waived = [d for d in t.deps if self._blocked_put(self.kb.tasks.get(d), t.machine)]
             if not waived:
@@ -122,13 +129,7 @@ class Slides:
         bases while its cap-less base waited for its cap retrieval).  Returns the mounts
         changed."""
         changed = []
-        for t in self.kb.open_tasks():
-            if t.kind != M.MOUNT_RING or t.state != M.PENDING:
-                continue
-            st = self.kb.stations.get(t.machine or "")
-            cost = int(t.params.get("cost", 0))
-            if st is None or cost <= 0:
-                continue
+        for t, st, cost in self._pending_mounts():
             deps = [self.kb.tasks.get(d) for d in t.deps]
             waiting = [d for d in deps if d is None or d.state != M.DONE]
             if not waiting or not all(self._own_base(d, t) for d in waiting):

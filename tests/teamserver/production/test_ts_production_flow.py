@@ -78,21 +78,28 @@ def test_a_feed_reported_failed_that_reached_the_station_counts_as_done():
     assert [g for _, g in ls.stations.deliveries] == [1]
 
 
-def test_a_station_waiting_with_another_gate_is_fed_a_spare_base_first():
+def ds_prepared_for_gate_1(state):
+    """Orders 1 (gate 1) and 2 (gate 2), their products given up, and C-DS left PREPARED
+    by a delivery for gate 1 that ended ``state``: (lockstep, knowledge base, feed monitor)."""
     ls = Lockstep()
     production_setup(ls, [{"id": 1, "delivery_gate": 1}, {"id": 2, "delivery_gate": 2}])
     srv = ls.server
     kb, feeds = srv.kb, srv.dispatcher.feeds
     ls.step(n=3)
-    # the DS waits with gate 1 of a delivery that is over; order 2 needs gate 2
     abandon_all_products(srv)
     old = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
-                 state=M.DONE, prepare={"machine": "C-DS", "ds": {"gate": 1}})
+                 state=state, prepare={"machine": "C-DS", "ds": {"gate": 1}})
     kb.save_task(old)
     feeds.sent(old)
     ls.station_states["C-DS"] = "PREPARED"
     ls.refbox.machines(ls.station_states)
     ls.step()
+    return ls, kb, feeds
+
+
+def test_a_station_waiting_with_another_gate_is_fed_a_spare_base_first():
+    # the DS waits with gate 1 of a delivery that is over; order 2 needs gate 2
+    ls, kb, feeds = ds_prepared_for_gate_1(M.DONE)
     want2 = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 2},
                    prepare={"machine": "C-DS", "ds": {"gate": 2}}, carry=True, holder=1)
     want1 = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
@@ -121,19 +128,7 @@ def test_a_ds_waiting_for_a_product_made_again_is_flushed_for_a_finished_one():
     never took leaves it PREPARED with that gate.  While the lost product is made again
     (its delivery wants that gate, but its workpiece is far from done), a finished
     product for another gate must not wait for it: the DS gets a spare base first."""
-    ls = Lockstep()
-    production_setup(ls, [{"id": 1, "delivery_gate": 1}, {"id": 2, "delivery_gate": 2}])
-    srv = ls.server
-    kb, feeds = srv.kb, srv.dispatcher.feeds
-    ls.step(n=3)
-    abandon_all_products(srv)
-    lost = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
-                  state=M.FAILED, prepare={"machine": "C-DS", "ds": {"gate": 1}})
-    kb.save_task(lost)
-    feeds.sent(lost)
-    ls.station_states["C-DS"] = "PREPARED"
-    ls.refbox.machines(ls.station_states)
-    ls.step()
+    ls, kb, feeds = ds_prepared_for_gate_1(M.FAILED)
     # order 1's product made again: its delivery waits for a cap mount not yet done
     cap = M.Task(kb.next_id("task"), M.MOUNT_CAP, {"machine": "C-CS1"},
                  prepare={"machine": "C-CS1", "cs": {"operation": "MOUNT_CAP"}})
@@ -154,19 +149,7 @@ def test_a_ds_waiting_for_a_product_made_again_is_flushed_for_a_finished_one():
 
 def test_a_ds_waiting_with_the_gate_of_a_finished_product_is_not_flushed():
     """The same, but order 1's product is finished too: it uses the waiting gate."""
-    ls = Lockstep()
-    production_setup(ls, [{"id": 1, "delivery_gate": 1}, {"id": 2, "delivery_gate": 2}])
-    srv = ls.server
-    kb, feeds = srv.kb, srv.dispatcher.feeds
-    ls.step(n=3)
-    abandon_all_products(srv)
-    lost = M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": 1},
-                  state=M.FAILED, prepare={"machine": "C-DS", "ds": {"gate": 1}})
-    kb.save_task(lost)
-    feeds.sent(lost)
-    ls.station_states["C-DS"] = "PREPARED"
-    ls.refbox.machines(ls.station_states)
-    ls.step()
+    ls, kb, feeds = ds_prepared_for_gate_1(M.FAILED)
     for gate, holder in ((1, 2), (2, 1)):
         kb.save_task(M.Task(kb.next_id("task"), M.DELIVER, {"machine": "C-DS", "gate": gate},
                             prepare={"machine": "C-DS", "ds": {"gate": gate}}, carry=True,
