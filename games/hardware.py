@@ -23,6 +23,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from rll_bt.contracts.world import STALE_CAST
+
 from .lockstep import TEAM
 from .processes import ProcessGame
 from .world_pace import WorldLag
@@ -38,7 +40,6 @@ class HardwareGame(ProcessGame):
         self.hardware_stats: dict = {}
         self._configs: dict[int, Path] = {}
         self._hw_t0: float | None = None
-        from backends.sim.hardware_parts import STALE_CAST
         self.world_lag = WorldLag(STALE_CAST)     # how far the world stood behind the devices' wall clock
         super().__init__(options, **kw)
 

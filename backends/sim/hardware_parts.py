@@ -16,6 +16,7 @@ from backends.robotino.firmware import RPM_PER_TICK_PER_MS
 from backends.robotino.gripper_protocol import StepsPerMetre
 from backends.robotino.kinematics import OmniKinematics
 from rll_bt.clock import Clock
+from rll_bt.contracts.world import STALE_CAST  # (re-exported: a world this far behind casts nothing)
 
 from . import sensors
 
@@ -33,11 +34,6 @@ HOLDING_VOLTS, EMPTY_VOLTS = 2.5, 0.3
 #: while the firmware reports them turning (the host would count motion the world did not make)
 SILENT_STOP = 0.3
 
-#: a world further behind the wall clock than this (s) casts and renders nothing until it caught up
-#: (a scan stamped with the time the world stands at is right however old, but it is of no use to a
-#: robot that has moved on, and the world's process needs the time to catch up); nearer, the
-#: devices' own lateness (a tick that rendered three cameras) never stops a laser
-STALE_CAST = 0.5
 
 #: the longest world step of a process game (games/processes.ProcessGame._tick): a world behind the wall
 #: clock steps at most this far at a time, each step followed by a sync

@@ -14,6 +14,13 @@ from typing import Any
 
 from ..backend import Backend, Pose2D
 
+#: a world feeding device emulators that stands further behind the wall clock than this (s)
+#: casts and renders nothing until it caught up (a scan stamped with the time the world stands at
+#: is right however old, but it is of no use to a robot that has moved on, and the world's process
+#: needs the time to catch up); nearer, the devices' own lateness never stops a laser.  The game
+#: that runs such a world counts the time it spent further behind (games/hardware.py).
+STALE_CAST = 0.5
+
 
 class World(abc.ABC):
     """``profile``: the rules profile (:class:`rll_bt.rules.Profile`);

@@ -119,6 +119,7 @@ BLOCKING_CASES = {
     "back_off": "{distance: 0.3}",
     "turn": "{angle: 1.5}",
     "relocalise": "{global_search: true}",
+    "grab_from_shelf": "{machine: C-CS1}",
 }
 
 
