@@ -157,16 +157,12 @@ def fit_face(points: np.ndarray, half_width: float = 0.25, max_ahead: float = 1.
 
 
 def face_centre(points: np.ndarray, width: float, half_span: float = 0.6, inlier: float = 0.02,
-                gap: float = 0.04, bridge: float = 0.08, slack: float = 0.05) -> float | None:
+                gap: float = 0.04, slack: float = 0.05) -> float | None:
     """Sideways position (robot frame, m) of the centre of the station face straight
-    ahead, from where its laser points end on either side: the points on the face's
-    line, cut into runs at gaps over ``gap``; of the spans of consecutive runs through
-    the one nearest straight ahead, joined across gaps of at most ``bridge``, the one
-    within ``slack`` of ``width`` with the fewest joins, then the closest (both edges
-    seen, nothing beside the station in line with its face); None if there is none.
-    A bridge closes a hole the laser's noise leaves in a face (points off the line by
-    more than ``inlier``; 2016 seed 19: a 4.8 cm hole by the face's edge left a DS put
-    4.4 cm beside the belt, the workpiece on the floor)."""
+    ahead, from where its laser points end on either side: the run of points on the
+    face's line through the one nearest straight ahead, unbroken by gaps over
+    ``gap``; None unless the run is ``width`` long within ``slack`` (both edges
+    seen, nothing beside the station in line with its face)."""
     fit = fit_face(points)
     if fit is None:
         return None
@@ -178,24 +174,15 @@ def face_centre(points: np.ndarray, width: float, half_span: float = 0.6, inlier
     if len(on) < 8:
         return None
     ys = np.sort(on[:, 1])
-    holes = np.diff(ys)
-    breaks = np.nonzero(holes > gap)[0]
+    breaks = np.nonzero(np.diff(ys) > gap)[0]
     starts = np.concatenate([[0], breaks + 1])
     ends = np.concatenate([breaks, [len(ys) - 1]])
     mid = int(np.argmin(np.abs(ys)))
     k = int(np.nonzero((starts <= mid) & (ends >= mid))[0][0])
-    best = None
-    for i in range(k, -1, -1):
-        if i < k and holes[ends[i]] > bridge:
-            break
-        for j in range(k, len(starts)):
-            if j > k and holes[ends[j - 1]] > bridge:
-                break
-            lo, hi = float(ys[starts[i]]), float(ys[ends[j]])
-            key = (j - i, abs((hi - lo) / math.cos(yaw) - width))
-            if key[1] <= slack and (best is None or key < best[0]):
-                best = (key, 0.5 * (lo + hi))
-    return None if best is None else best[1]
+    lo, hi = float(ys[starts[k]]), float(ys[ends[k]])
+    if abs((hi - lo) / math.cos(yaw) - width) > slack:
+        return None
+    return 0.5 * (lo + hi)
 
 
 class Dock(Activity):
