@@ -33,7 +33,6 @@ from ..errors import SkillError, SkillFailure
 from ..navigation import Navigate, StationSideGoal
 from ..navigation.goals import approach_pose, feasible_distance, target_lateral
 from ..navigation.motions import MoveRelative
-from ..navigation.safety import scan_points
 from .align import AlignToTag, Dock, face_centre
 from .gripper import GripperSequence
 from .places import Place, check_place, gripper_height, gripper_target, lateral_offset
@@ -167,7 +166,7 @@ class ApproachStation(Sequence):
         if machine is None or scan is None:
             return 0.0
         mps = ctx.profile.mps
-        seen = face_centre(scan_points(scan, max_range=1.5), mps.width)
+        seen = face_centre(scan, mps.width)
         if seen is None:
             return 0.0
         spot = "conveyor" if self.docked_shift else place.spot     # (a docked shift follows)

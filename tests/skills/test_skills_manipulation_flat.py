@@ -143,15 +143,3 @@ def test_fit_face_finds_distance_and_yaw():
     d, est_yaw, n = fit_face(pts)
     assert d == pytest.approx(0.5, abs=1e-6) and est_yaw == pytest.approx(yaw, abs=1e-6)
     assert fit_face(pts[:5]) is None
-
-
-def test_face_centre_from_the_two_edges_of_the_face():
-    from skills.manipulation.align import face_centre
-    yaw = 0.05
-    ys = np.arange(-0.32, 0.38 + 1e-9, 0.004)                    # a 0.70 m face, centred 0.03 m to the left
-    face = np.column_stack([0.2 / math.cos(yaw) + math.tan(yaw) * ys, ys])
-    beside = np.array([[0.55, y] for y in np.arange(0.40, 0.6, 0.01)])     # the wall behind, off to one side
-    assert face_centre(np.vstack([face, beside]), 0.70) == pytest.approx(0.03, abs=0.005)
-    assert face_centre(face[face[:, 1] < 0.2], 0.70) is None     # one edge not seen: no answer
-    collinear = np.column_stack([np.full(20, face[-1, 0]), np.linspace(0.40, 0.55, 20)])
-    assert face_centre(np.vstack([face, collinear]), 0.70) is None   # something in line with the face
