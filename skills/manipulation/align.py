@@ -158,7 +158,7 @@ def fit_face(points: np.ndarray, half_width: float = 0.25, max_ahead: float = 1.
 
 def face_centre(scan: LaserScan, width: float, max_range: float = 1.5, half_span: float = 0.6,
                 inlier: float = 0.02, gap: float = 0.04, slack: float = 0.05, depth: float = 0.05,
-                resolution: float = 0.03, fit_slack: float = 0.01) -> float | None:
+                resolution: float = 0.03, fit_slack: float = 0.01, one_edge: bool = False) -> float | None:
     """Sideways position (robot frame, m) of the centre of the station face straight
     ahead, from where its laser points end on either side; None unless both edges
     are seen and nothing beside the station continues its face.
@@ -172,15 +172,33 @@ def face_centre(scan: LaserScan, width: float, max_range: float = 1.5, half_span
     holes in a face whose every beam hit it (2016 seed 19 at b5f82db: three beams
     left a 4.9 cm one 9 cm from an edge of C-DS's face; no centre, the put went
     4.4 cm beside the belt and the C3 fell to the floor).  The sorted points' answer
-    stands where there is one, so the line-ups that had one do not move."""
+    stands where there is one, so the line-ups that had one do not move.
+
+    ``one_edge`` (a robot docked beside the belt, in front of a slide or a shelf slot,
+    whose far edge the laser grazes with beams 4-6 cm apart): the beams answer first,
+    and when they pin only the near edge, the face is where a face ``width`` wide from it ends within the far
+    edge's wider bounds; the near edge alone then places it (2016 seed 1 at 2750a55:
+    four bases put beside C-RS2's slide fell to the floor, docked 0.4 m from a
+    neighbour without a tag, where the map's pose alone lined the robot up)."""
     points = scan_points(scan, max_range=max_range)
     fit = fit_face(points)
     if fit is None:
         return None
+    if one_edge:      # the beams first: the sorted points' run answers 2-2.5 cm short there
+        centre = _beam_run_centre(scan, fit, width, max_range, max(half_span, ONE_EDGE_SPAN), inlier,
+                                  depth, resolution, fit_slack, one_edge=True)
+        return centre if centre is not None else _point_run_centre(points, fit, width, half_span,
+                                                                   inlier, gap, slack)
     centre = _point_run_centre(points, fit, width, half_span, inlier, gap, slack)
     if centre is None:
-        centre = _beam_run_centre(scan, fit, width, max_range, half_span, inlier, depth, resolution, fit_slack)
+        centre = _beam_run_centre(scan, fit, width, max_range, half_span, inlier, depth, resolution,
+                                  fit_slack)
     return centre
+
+
+#: m to either side within which the beams follow a face seen from beside the belt: the far
+#: edge of a face seen from shelf slot 0 (0.32 m beside the belt) lies 0.67 m to the side
+ONE_EDGE_SPAN = 0.8
 
 
 def _face_line(fit: tuple[float, float, int]) -> tuple[float, float, float]:
@@ -212,7 +230,8 @@ def _point_run_centre(points: np.ndarray, fit, width: float, half_span: float, i
 
 
 def _beam_run_centre(scan: LaserScan, fit, width: float, max_range: float, half_span: float,
-                     inlier: float, depth: float, resolution: float, fit_slack: float) -> float | None:
+                     inlier: float, depth: float, resolution: float, fit_slack: float,
+                     one_edge: bool = False) -> float | None:
     """The centre of the face from the run of consecutive beams that hit it.
 
     A beam hits the face when its return lies within ``depth`` of the face's line
@@ -254,20 +273,28 @@ def _beam_run_centre(scan: LaserScan, fit, width: float, max_range: float, half_
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (a + b * oy - ox) / (c - b * s)          # along each beam to the face's line
     cross = np.where(t > 0.0, oy + t * s, np.nan)     # where it crosses it (robot y)
-    edges = []
+    edges, pinned = [], []
     for inner, outer in ((lo, lo - 1), (hi, hi + 1)):
         if outer < 0 or outer >= len(r) or (ok[outer] and res[outer] < depth):
             return None                               # the edge is not in view, or hidden
         span = (cross[inner], cross[outer])
-        if not np.all(np.isfinite(span)) or abs(span[1] - span[0]) > resolution:
-            return None                               # not pinned
+        if not np.all(np.isfinite(span)):
+            return None
         edges.append(span)
+        pinned.append(abs(span[1] - span[0]) <= resolution)
+    if not all(pinned) and not (one_edge and any(pinned)):
+        return None                                   # not pinned
     (lo_in, lo_out), (hi_in, hi_out) = sorted(edges, key=lambda e: e[0])
     half = 0.5 * width * math.cos(yaw)
     low = max(min(lo_in, lo_out) + half, min(hi_in, hi_out) - half)
     high = min(max(lo_in, lo_out) + half, max(hi_in, hi_out) - half)
     if low - high > fit_slack:
         return None                                   # the face is not that wide
+    if not all(pinned):                               # the pinned edge alone places the face
+        near = edges[pinned.index(True)]
+        if near[0] == min(lo_in, hi_in):
+            return 0.5 * (min(near) + max(near)) + half
+        return 0.5 * (min(near) + max(near)) - half
     return 0.5 * (low + high)
 
 

@@ -166,10 +166,10 @@ class ApproachStation(Sequence):
         if machine is None or scan is None:
             return 0.0
         mps = ctx.profile.mps
-        seen = face_centre(scan, mps.width)
+        spot = "conveyor" if self.docked_shift else place.spot     # (a docked shift follows)
+        seen = face_centre(scan, mps.width, one_edge=spot != "conveyor")
         if seen is None:
             return 0.0
-        spot = "conveyor" if self.docked_shift else place.spot     # (a docked shift follows)
         goal = approach_pose(machine, place.side, ctx.settings.manipulation.final_distance,
                              target_lateral(spot, mps), mps)
         face = machine.compose(Pose2D((1.0 if place.side == "INPUT" else -1.0) * mps.depth / 2.0, 0.0, 0.0))

@@ -124,3 +124,26 @@ def test_face_centre_ends_the_face_where_a_beam_passes_beside_it():
     assert face_centre(scan, WIDTH) == pytest.approx(0.0, abs=0.01)
     # 1 cm beside it, no beam through the gap: the run is too long, no answer
     assert face_centre(cast([face(0.0), ((0.273, 0.36), (0.273, 0.9))]), WIDTH) is None
+
+
+@pytest.mark.parametrize("centre", [0.16, 0.18, 0.24, 0.25, 0.32, -0.25])
+def test_in_front_of_a_slot_or_the_slide_the_near_edge_places_the_face(centre):
+    # docked beside the belt (one_edge: the skill docks at a slide or a shelf slot), the
+    # near edge is pinned and a face as wide as the rules' ends within the far edge's
+    # wider bounds: 2016 seed 1 at 2750a55 put four bases 2.5-4 cm beside C-RS2's slide
+    # (no tag that close to a neighbour, the map's pose alone) and they fell to the floor
+    rng = np.random.default_rng(7)
+    for yaw in (-0.02, 0.0, 0.02):
+        scan = cast([face(centre, yaw=yaw)])
+        assert face_centre(scan, WIDTH, one_edge=True) == pytest.approx(centre, abs=0.01)
+        seen = face_centre(noisy(scan, rng), WIDTH, one_edge=True)
+        assert seen is None or seen == pytest.approx(centre, abs=0.015)
+
+
+def test_one_edge_still_gives_no_answer_when_the_face_is_not_that_wide():
+    # something in line with the face beyond its far edge, touching it: the far
+    # edge's bounds no longer hold the end of a face as wide as the rules'
+    scan = cast([face(0.25), ((0.273, -0.10), (0.273, -0.45))])
+    assert face_centre(scan, WIDTH, one_edge=True) is None
+    # a face too narrow for the far edge's bounds (the near edge is the edge of something else)
+    assert face_centre(cast([face(0.25, width=0.45)]), WIDTH, one_edge=True) is None
