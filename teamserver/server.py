@@ -171,7 +171,6 @@ class TeamServer:
             Lookout(self.profile, prefix, thresh=cfg.explore_thresh), self.refbox,
             self.dispatcher.fleet, self.tasks, self.send_refbox,
             report_period=cfg.report_period, on_end=self._map_now)
-        self.dispatcher.readiness.unfound = self.explorer.unfound
         if self.refbox_link is not None:
             self.refbox_link.set_team(color, self.key)
 
@@ -187,11 +186,10 @@ class TeamServer:
         if self.dispatcher.dropouts.check_heartbeats():
             self._replan = True
         if self.refbox.running():
-            exploring = self.explorer.active()
-            if exploring:
+            if self.explorer.active():
                 self.explorer.explore()
-            if self.refbox.phase == "PRODUCTION" and (not exploring or self.explorer.beside()):
-                self._produce(exploring)
+            elif self.refbox.phase == "PRODUCTION":
+                self._produce()
         self.tasks.flush()
         self._periodic()
 
@@ -337,11 +335,9 @@ class TeamServer:
             self.agents.send(msg, to=robot.peer)
 
     # -- production -----------------------------------------------------------------------------
-    def _produce(self, exploring: bool = False) -> None:
-        """A production step; ``exploring``: beside exploration's tail (its tasks stay,
-        no looks for rotations yet)."""
+    def _produce(self) -> None:
         d, pm = self.dispatcher, self.production
-        if not exploring and self.explorer.exploring_blindly():
+        if self.explorer.exploring_blindly():
             self.explorer.end()
         now = self.clock.now()
         gt = self.refbox.game_time()
@@ -362,8 +358,7 @@ class TeamServer:
         d.feeds.unstick()
         d.dropouts.release_unusable()
         d.discards.discard_orphans()
-        if not exploring:
-            self.explorer.look_for_rotations()
+        self.explorer.look_for_rotations()
         for t in d.matcher.assign(gt):
             if t.kind == M.RETRIEVE_CAP:
                 pm.caps.choose_shelf_slot(t)
