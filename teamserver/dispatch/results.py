@@ -6,7 +6,8 @@ station took the workpiece (:mod:`teamserver.production.feeding`); a feed
 reported failed although its station took the workpiece counts as done.
 A failure after which the same step may simply be tried again
 (:data:`RETRY_ERRORS`, at most ``max_attempts`` times, not at a place the
-robots keep failing at) gets a fresh copy of the step; any other failure,
+robots keep failing at, not a cap retrieval from a shelf gone dry:
+:mod:`teamserver.production.shelves`) gets a fresh copy of the step; any other failure,
 or a lost workpiece, has the product repaired.  Every outcome at a station
 is counted by :mod:`teamserver.production.health`.
 """
@@ -169,6 +170,7 @@ class Results:
                 self.repairs.station_broke(task.machine)
         retry = (not lost and error in RETRY_ERRORS and task.attempts < self.config.max_attempts
                  and not (task.kind == M.DISCARD and not task.machine)
+                 and not (task.kind == M.RETRIEVE_CAP and self.shelves.dry(task.machine or ""))
                  and self.health.usable(task, self.clock.now()))
         if retry:
             again = self.products.retry(task)

@@ -96,7 +96,8 @@ class ProductionContext:
     ``rs_colors``: RS machine name -> the ring colours it mounts;
     ``ring_costs``: ring colour -> additional bases; ``cs_caps``: CS machine
     name -> cap colour on its shelf; ``unusable``: stations not to plan with
-    (``"<RS>:SLIDE"``: only that ring station's slide);
+    (``"<RS>:SLIDE"``: only that ring station's slide; ``"<CS>:SHELF"``: no cap retrieval
+    at that cap station, its shelf's carriers out of reach);
     ``ds_by_order``: True from 2017 on (DS prepared with the order id);
     ``storage``: the storage station to use where it pays, None without one.
     """
@@ -194,6 +195,8 @@ def op_mount_ring(ctx: ProductionContext, rs: str, color: str, holder: str | Non
 
 @DOMAIN.operator("retrieve_cap")
 def op_retrieve_cap(ctx: ProductionContext, cs: str):
+    if f"{cs}:{M.SHELF}" in ctx.unusable:
+        return None
     return _step(M.RETRIEVE_CAP, {"machine": cs, "cap": ctx.cs_caps[cs]},
                  prepare={"machine": cs, "cs": {"operation": "RETRIEVE_CAP"}},
                  locks=(cs, cs + CAP_LOCK))

@@ -191,7 +191,8 @@ class Caps:
         for cs, cap in sorted(self.cs_caps.items()):
             st = self.kb.stations.get(cs)
             if buf.get(cs) is not None or cs in busy or cs in prefilling or st is None or \
-                    st.state != "IDLE" or cs in self.world.unusable() or cs in self.locks.owners:
+                    st.state != "IDLE" or cs in self.world.unusable() or cs in self.locks.owners or \
+                    self.shelves.dry(cs):
                 continue
             wanted = any(o.cap == cap and o.open > 0 for o in self.kb.orders.values())
             if not wanted and game_time > self.prefill_unknown:

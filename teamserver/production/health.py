@@ -15,7 +15,8 @@ orders), and products that need it are repaired or abandoned.
 Only ring and cap stations are taken out: the base and delivery stations
 have no alternative, so giving up on them would stop production.
 Places are ``"C-RS2"`` (the station: its input or output) and
-``"C-RS2:SLIDE"`` (a ring station's slide only).  Times are seconds of the
+``"C-RS2:SLIDE"`` (a ring station's slide only: the bases put there and the
+workpieces discarded there, :mod:`.slides`).  Times are seconds of the
 server's clock; the state lives in the knowledge base (``health``).
 """
 from __future__ import annotations
@@ -36,7 +37,7 @@ def place_of(task: M.Task) -> str | None:
     machine = task.machine
     if not machine or machine[2:4] not in ("RS", "CS"):
         return None
-    if task.kind == M.PUT_WORKPIECE and task.params.get("side") == M.SLIDE:
+    if task.kind in (M.PUT_WORKPIECE, M.DISCARD) and task.params.get("side") == M.SLIDE:
         return f"{machine}:{M.SLIDE}"
     return machine
 

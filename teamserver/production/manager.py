@@ -78,15 +78,16 @@ class ProductionManager:
         self.locks = StationLocks(kb)
         self.shelf = Shelf(kb, ss)
         self.products = Products(kb, self.shelf)
+        self.cap_shelves = CapShelves(kb)
         self.world = PlanningWorld(kb, planner, self.products, self.locks, self.shelf,
                                    self.health, prefix=prefix, cs_caps=self.cs_caps, clock=clock,
-                                   max_products=max_products, confirm_time=confirm_time)
+                                   max_products=max_products, confirm_time=confirm_time,
+                                   cap_shelves=self.cap_shelves)
         self.buffers = CapBuffers(kb)
-        self.cap_shelves = CapShelves(kb)
         self.caps = Caps(kb, self.buffers, self.products, planner, self.world, self.locks,
                          self.cap_shelves,
                          prefix=prefix, cs_caps=self.cs_caps, prefill=prefill)
-        self.slides = Slides(kb, self.products, prefix=prefix, clock=clock)
+        self.slides = Slides(kb, self.products, prefix=prefix, clock=clock, health=self.health)
         self.cleanup = Cleanup(kb, self.products, planner, self.shelf, prefix=prefix,
                                cs_caps=self.cs_caps)
         self.tracker = Tracker(kb, self.buffers, self.shelf)

@@ -12,6 +12,18 @@ three of its slots are empty.  So the team server books every slot:
   beside the shelf).  Not tried again at that
   station while a reachable slot holds a carrier.
 
+A slot a wall leaves no room in front of (:mod:`.reach`, from the station's place
+and rotation) is out of reach before any robot tries it.  A shelf whose carriers all
+stand in such slots is *dry* (:meth:`CapShelves.dry`): it is never refilled (a
+carrier stays on it), so its station retrieves no cap any more and the planner
+leaves that retrieval out (``"<CS>:SHELF"`` among the places not to plan with,
+:mod:`.world`).  The real generator may stand a cap station with its shelf by a
+wall (refbox-rules.md, field generation): 2025 seed 4 has C-CS1's shelf against
+the x = 7 wall with slot 0 out of reach, and robots
+tried it again and again (seven RETRIEVE_CAPs of 45 s each at
+20 % loss).  Slots found out of reach by a robot's failure are not dry-making: a
+robot in the way is no wall.
+
 :meth:`CapShelves.choose` gives a RETRIEVE_CAP the first slot that holds a carrier,
 that no other robot's RETRIEVE_CAP under way is to empty, and that can be reached;
 when none can, a slot out of reach that still holds one (the only cap source left
@@ -25,6 +37,7 @@ import logging
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
+from .reach import Reach
 
 log = logging.getLogger("teamserver.production")
 
@@ -45,6 +58,7 @@ class CapShelves:
 
     def __init__(self, kb: KnowledgeBase):
         self.kb = kb
+        self.reach = Reach(kb)
 
     def _books(self) -> dict[str, dict[str, list[int]]]:
         return {cs: {k: list(v) for k, v in b.items()}
@@ -58,8 +72,16 @@ class CapShelves:
         return self._slots(cs, "empty")
 
     def unreachable(self, cs: str) -> set[int]:
-        """The slots of ``cs``'s shelf the robots could not stand in front of."""
-        return self._slots(cs, "unreachable")
+        """The slots of ``cs``'s shelf the robots could not stand in front of, or that a
+        wall leaves no room in front of."""
+        return self._slots(cs, "unreachable") | self.reach.shelf_walled(cs)
+
+    def dry(self, cs: str) -> bool:
+        """Do ``cs``'s carriers all stand in slots a wall leaves no room in front of
+        (see the module doc)?"""
+        walled = self.reach.shelf_walled(cs)
+        full = [s for s in SLOTS if s not in self.empty(cs)]
+        return bool(walled) and all(s in walled for s in full)
 
     def emptied(self, cs: str, slot: int) -> None:
         """``slot`` of ``cs`` holds no carrier now; the shelf is full again once all are empty."""

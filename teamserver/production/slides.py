@@ -37,7 +37,9 @@ import logging
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
 from ..planning.domain import CAPLESS, EXTRA
+from .health import StationHealth
 from .products import Products
+from .reach import Reach
 
 log = logging.getLogger("teamserver.production")
 
@@ -52,12 +54,14 @@ class Slides:
     last put before a short slide is topped up."""
 
     def __init__(self, kb: KnowledgeBase, products: Products, *, prefix: str, clock=None,
-                 settle: float = 6.0):
+                 settle: float = 6.0, health: StationHealth | None = None):
         self.kb = kb
+        self.health = health
         self.products = products
         self.prefix = prefix
         self.clock = clock
         self.settle = settle
+        self.reach = Reach(kb)
 
     def slide_ready(self, task: M.Task) -> bool:
         """May ``task`` go now as far as slides are concerned?  A ring mount when the
@@ -216,10 +220,14 @@ class Slides:
 
     def _nearest_slide(self, near, distance) -> str | None:
         """The nearest (``distance(near, machine)``) of our usable ring stations whose
-        slide has room, or None."""
+        slide has room, or None: not one a wall leaves no room in front of
+        (:mod:`.reach`), nor one the robots keep failing at (:mod:`.health`)."""
+        paused = (self.health.unusable(self.clock.now())
+                  if self.health is not None and self.clock is not None else frozenset())
         slides = [st.name for st in self.kb.stations.values()
                   if st.name.startswith(f"{self.prefix}-RS")
-                  and st.state not in ("BROKEN", "DOWN") and self.room(st.name) > 0]
+                  and st.state not in ("BROKEN", "DOWN") and self.room(st.name) > 0
+                  and not self.reach.slide_walled(st.name) and f"{st.name}:{M.SLIDE}" not in paused]
         return min(slides, key=lambda m: distance(near, m)) if slides else None
 
     def top_up_slides(self) -> list[M.Task]:

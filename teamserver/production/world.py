@@ -19,6 +19,7 @@ from ..planning.planner import ProductionPlanner, World
 from .health import StationHealth
 from .locks import StationLocks
 from .products import CLEANUP_ORDER, DELIVERED, Products
+from .shelves import CapShelves
 from .storage import Shelf
 
 
@@ -30,7 +31,7 @@ class PlanningWorld:
     def __init__(self, kb: KnowledgeBase, planner: ProductionPlanner, products: Products,
                  locks: StationLocks, shelf: Shelf, health: StationHealth, *, prefix: str,
                  cs_caps: dict[str, str], clock=None, max_products: int | None = None,
-                 confirm_time: float = 20.0):
+                 confirm_time: float = 20.0, cap_shelves: CapShelves | None = None):
         self.kb = kb
         self.profile: Profile = kb.profile
         self.planner = planner
@@ -43,11 +44,18 @@ class PlanningWorld:
         self.clock = clock
         self.max_products = max_products
         self.confirm_time = confirm_time
+        self.cap_shelves = cap_shelves
         self._positions: tuple | None = None     # (what they were computed from, positions)
 
     def unusable(self) -> frozenset[str]:
-        """Places the robots keep failing at (see :mod:`teamserver.production.health`)."""
-        return self.health.unusable(self.clock.now()) if self.clock is not None else frozenset()
+        """Places the robots keep failing at (see :mod:`teamserver.production.health`), and
+        ``"<CS>:SHELF"`` for a cap station whose shelf is dry (:mod:`.shelves`), ``"<RS>:SLIDE"``
+        for a ring station whose slide a wall leaves no room in front of (:mod:`.reach`)."""
+        out = self.health.unusable(self.clock.now()) if self.clock is not None else frozenset()
+        if self.cap_shelves is not None:
+            out |= {f"{cs}:{M.SHELF}" for cs in self.cs_caps if self.cap_shelves.dry(cs)}
+            out |= {f"{rs}:{M.SLIDE}" for rs in self.rs_colors() if self.cap_shelves.reach.slide_walled(rs)}
+        return out
 
     def rs_colors(self) -> dict[str, tuple[str, ...]]:
         out = {}
