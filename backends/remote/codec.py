@@ -66,7 +66,7 @@ def encode(value):
                            for lt in value.lights]}
     if isinstance(value, GripperStatus):
         return {"state": value.state.value, "is_open": value.is_open, "position": list(value.position),
-                "holding": value.holding, "message": value.message}
+                "holding": value.holding, "message": value.message, "sensed": value.sensed}
     if isinstance(value, Battery):
         return {"voltage": value.voltage, "current": value.current, "soc": value.soc,
                 "external_power": value.external_power}
@@ -107,7 +107,7 @@ def decode(method: str, r, shift: float = 0.0):
         return Detections(r["stamp"] + shift, tags, lights, _unextr(r["extrinsics"]))
     if method == "gripper_status":
         return GripperStatus(GripperState(r["state"]), r["is_open"], tuple(r["position"]), r["holding"],
-                             r["message"])
+                             r["message"], r.get("sensed"))
     if method == "battery":
         return Battery(**r)
     w, h, fx, fy, cx, cy, dist = r["intrinsics"]

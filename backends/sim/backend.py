@@ -25,7 +25,8 @@ Perception: with ``world.perception == "oracle"`` :meth:`detections` reports
 the tags and lights in view (capability ``DETECTIONS``); with ``"rendered"``
 it raises :class:`CapabilityError` and skills run their detectors on
 :meth:`camera_image`.  Gripper: see :mod:`backends.sim.gripper` for the axes;
-:meth:`gripper_status` ``holding`` is the truth.
+:meth:`gripper_status` ``holding`` is the truth, and ``sensed`` whether a workpiece is
+between the fingers (one held, or one a close would take).
 """
 from __future__ import annotations
 
@@ -122,8 +123,9 @@ class SimBackend(Backend):
 
     def gripper_status(self) -> GripperStatus:
         g = self._robot.gripper
-        return GripperStatus(g.state(), g.is_open, tuple(g.position),
-                             holding=self._robot.holding is not None)
+        held = self._robot.holding is not None
+        return GripperStatus(g.state(), g.is_open, tuple(g.position), holding=held,
+                             sensed=held or self.world.within_grip(self._robot) is not None)
 
     def close(self) -> None:
         if not self._closed and self.world.connected:

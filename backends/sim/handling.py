@@ -4,7 +4,8 @@
 When a close finishes, the nearest workpiece not in a gripper whose centre
 is within ``grab_tolerance`` (horizontally) of the gripper point and whose
 mid-base height is within ``grab_tolerance_z`` of the gripper's is taken,
-unless the grab fails (probability ``grab_failure``).  When an open finishes
+unless the grab fails (probability ``grab_failure``); the gripper's workpiece
+sensor (``GripperStatus.sensed``) tells whether there is one (:meth:`within_grip`).  When an open finishes
 with a workpiece held, it goes to the nearest free station slot within
 ``place_tolerance`` / ``place_tolerance_z`` of the gripper point, or else
 onto the floor below it.  Takes from and puts on slots, and drops on the
@@ -35,9 +36,9 @@ class GripperHandling:
         z = gz - WORKPIECE.base_height / 2.0 if bottom else gz
         return (r.pose.x + c * fx - s * gy, r.pose.y + s * fx + c * gy, z)
 
-    def _grab(self, r: SimRobot) -> None:
-        if r.holding is not None:
-            return
+    def within_grip(self, r: SimRobot) -> int | None:
+        """The workpiece a close would take now (not counting ``grab_failure``): the
+        nearest one not in a gripper within the grab tolerances of the gripper point."""
         gp = self.gripper_point(r)
         cfg = r.config
         best, best_d = None, math.inf
@@ -45,8 +46,15 @@ class GripperHandling:
             d = horizontal(gp, pos)
             if d <= cfg.grab_tolerance and abs(gp[2] - grab_height(pos)) <= cfg.grab_tolerance_z and d < best_d:
                 best, best_d = wp_id, d
+        return best
+
+    def _grab(self, r: SimRobot) -> None:
+        if r.holding is not None:
+            return
+        best = self.within_grip(r)
         if best is None:
             return
+        cfg = r.config
         if cfg.grab_failure > 0.0 and r.rng.random() < cfg.grab_failure:
             return
         loc = self.store.location(best)

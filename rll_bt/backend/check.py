@@ -266,6 +266,8 @@ class _Checker:
         self.numbers("gripper_status().position", st.position, 3, MAX_MOUNT)
         self.expect(st.holding is None or isinstance(st.holding, bool),
                     f"gripper_status().holding: expected True, False or None, got {st.holding!r}")
+        self.expect(st.sensed is None or isinstance(st.sensed, bool),
+                    f"gripper_status().sensed: expected True, False or None, got {st.sensed!r}")
         return st
 
     def battery(self, bat) -> None:

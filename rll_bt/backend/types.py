@@ -137,6 +137,9 @@ class GripperStatus:
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)   # metres, gripper axes
     holding: bool | None = None       # None when the hardware cannot tell
     message: str = ""
+    #: a workpiece between the fingers (the gripper's workpiece sensor, read with the fingers
+    #: open at a place: is there anything to take?); None when the gripper has no such sensor
+    sensed: bool | None = None
 
 
 @dataclass(frozen=True)

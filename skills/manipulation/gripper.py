@@ -4,16 +4,22 @@ and waited for until the gripper reports IDLE again.
 A step is done when the gripper reports IDLE after having reported MOVING,
 or after ``min_wait`` seconds (a real gripper reports its state late).
 
-Steps: ``("open",)``, ``("close",)``, ``("move", x, y, z)``,
+Steps: ``("open",)``, ``("close",)``, ``("move", x, y, z)``, ``("sense",)``,
 ``("expect_holding", True|False, code)``.  An ``expect_holding`` step
 checks ``backend.holding()`` and fails with ``code`` (GRAB_FAILED after a
 grab, PUT_FAILED after a put) when it disagrees: the paper's first error
-detection.  A gripper in state ERROR fails with GRIPPER_ERROR; a step
+detection.  A ``sense`` step (with the open fingers at the place) reads the
+gripper's workpiece sensor (``GripperStatus.sensed``): a grab that finds
+the gripper empty after the sensor saw nothing there fails with a message
+beginning :data:`NOTHING_FOUND` (nothing to take: the league's
+NO_WORKPIECE_FOUND), else with "no workpiece in the gripper" (the grasp
+failed: GRASPING_FAILED).  A gripper in state ERROR fails with GRIPPER_ERROR; a step
 taking longer than ``step_time`` too.  However the sequence ends, the
 gripper is sent back home (x = 0, y = 0) unless told otherwise.
 """
 from __future__ import annotations
 
+from rll_bt.agenttask.codes import NOTHING_FOUND
 from rll_bt.backend import BackendError, CapabilityError, GripperState
 
 from ..activity import Activity, Status
@@ -30,6 +36,7 @@ class GripperSequence(Activity):
         self.home_z = home_z
         self.step_time = step_time or ctx.settings.manipulation.gripper_step_time
         self.holding: bool | None = None
+        self.sensed: bool | None = None     # the workpiece sensor at the last ``sense`` step
         self.min_wait = 0.2       # s; a gripper may report MOVING only after a while
         if name:
             self.name = name
@@ -38,6 +45,7 @@ class GripperSequence(Activity):
         self._index = 0
         self._sent_at: float | None = None
         self._seen_moving = False
+        self.sensed = None
 
     def _status(self):
         try:
@@ -53,8 +61,14 @@ class GripperSequence(Activity):
                 held = self.ctx.backend.holding()
                 self.holding = held
                 if held is not None and bool(held) != want:
+                    if want and self.sensed is False:
+                        raise SkillFailure(code, f"{NOTHING_FOUND} ({self.name}: nothing between the open fingers)")
                     what = "no workpiece in the gripper" if want else "the workpiece is still in the gripper"
                     raise SkillFailure(code, f"{what} ({self.name})")
+                self._index += 1
+                continue
+            if step[0] == "sense":
+                self.sensed = self._status().sensed
                 self._index += 1
                 continue
             if self._sent_at is None:

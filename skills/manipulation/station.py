@@ -13,8 +13,10 @@
   slot by a wall), it stops beside it, toward the belt, as far as its
   gripper's sideways axis reaches over (:func:`spot_aside`); it fails with
   ``ALIGN_FAILED`` "no room" only when it does not fit there either.
-- :class:`GrabFrom`: approach, open, reach in, close, pull back, check the
-  gripper holds a workpiece (``GRAB_FAILED`` when it does not), back off.
+- :class:`GrabFrom`: approach, open, reach in, read the gripper's workpiece
+  sensor, close, pull back, check the gripper holds a workpiece
+  (``GRAB_FAILED`` when it does not: "no workpiece found ..." when the
+  sensor saw nothing there, :mod:`.gripper`), back off.
 - :class:`PutOnto`: approach, reach in, open, pull back, check the gripper
   is empty (``PUT_FAILED`` when not), back off.
 
@@ -277,7 +279,7 @@ class GrabFrom(Sequence):
         self.place = place
 
         def steps(x, y, z):
-            return [("open",), ("move", x, y, z), ("close",), ("move", 0.0, 0.0, z),
+            return [("open",), ("move", x, y, z), ("sense",), ("close",), ("move", 0.0, 0.0, z),
                     ("expect_holding", True, SkillError.GRAB_FAILED)]
 
         super().__init__(ctx, _handling(ctx, place, steps, approach, use_tag, timeout,

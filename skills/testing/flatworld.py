@@ -351,7 +351,15 @@ class FlatRobot(Backend):
     def gripper_status(self) -> GripperStatus:
         gr = self.gripper
         return GripperStatus(GripperState.MOVING if gr.busy else GripperState.IDLE, gr.is_open,
-                             tuple(map(float, gr.pos)), gr.holding is not None)
+                             tuple(map(float, gr.pos)), gr.holding is not None,
+                             sensed=gr.holding is not None or self._within_grip() is not None)
+
+    def _within_grip(self):
+        """The workpiece a close would take now (the gripper's workpiece sensor)."""
+        gx, gy, gz = self.gripper_point()
+        return next((wp for wp in self.world.workpieces
+                     if wp.held_by is None and math.hypot(wp.x - gx, wp.y - gy) <= self.world.grab_tolerance
+                     and abs(wp.z + 0.0225 / 2.0 - gz) <= self.world.grab_tolerance), None)
 
     def gripper_point(self) -> tuple[float, float, float]:
         p = self.true_pose.compose(Pose2D(self.world.geometry.gripper_reach + self.gripper.pos[0],
@@ -363,15 +371,12 @@ class FlatRobot(Backend):
         for action in gr.advance(self.world.clock.now(), dt):
             gx, gy, gz = self.gripper_point()
             if action == "close" and gr.holding is None:
-                for wp in self.world.workpieces:
-                    if (wp.held_by is None and math.hypot(wp.x - gx, wp.y - gy) <= self.world.grab_tolerance
-                            and abs(wp.z + 0.0225 / 2.0 - gz) <= self.world.grab_tolerance):
-                        if self.world.fail_next_grab:
-                            self.world.fail_next_grab = False
-                            break
-                        wp.held_by = self.index
-                        gr.holding = wp
-                        break
+                wp = self._within_grip()
+                if wp is not None and self.world.fail_next_grab:
+                    self.world.fail_next_grab = False
+                elif wp is not None:
+                    wp.held_by = self.index
+                    gr.holding = wp
             elif action == "open" and gr.holding is not None:
                 gr.holding.x, gr.holding.y, gr.holding.z = gx, gy, gz - 0.0225 / 2.0
                 gr.holding.held_by = None

@@ -223,10 +223,11 @@ def test_rll_bts_team_server_drives_any_agenttask_robot():
         listen.close()
 
 
-@pytest.mark.timeout(900)
+@pytest.mark.timeout(1200)
 def test_a_league_retrieve_from_a_shelf_takes_a_slot_that_holds_a_carrier():
     """``retrieve {CS, shelf}`` names no slot: the robot takes the carrier from the slot
-    that holds one, and answers NO_WORKPIECE_FOUND (202) when none does."""
+    that holds one (twice in a row: two carriers), and answers NO_WORKPIECE_FOUND (202)
+    when none does, and for an output that holds nothing."""
     game, server = make_game(robots=1, exploration=20.0, seed=8)
     try:
         assert in_production(game, server)
@@ -242,9 +243,25 @@ def test_a_league_retrieve_from_a_shelf_takes_a_slot_that_holds_a_carrier():
         assert world.robot("CYAN", 1).holding == carrier.id
         slide = server.task(1, deliver={"machine_id": "C-RS1", "machine_point": "slide"})
         assert finish(game, server, slide, limit=240.0).successful, server.error(slide)
-        for slot in ("shelf0", "shelf1", "shelf2"):   # (the refbox refilled the shelf once it was empty)
-            world.remove_workpiece(cs, slot)
+        # the refbox refilled the emptied shelf: two retrieves in a row take two carriers
+        shelf = {slot: world.workpiece_at(cs, slot).id for slot in ("shelf0", "shelf1", "shelf2")}
+        taken = []
+        for _ in range(2):
+            tid = server.task(1, retrieve={"machine_id": cs, "machine_point": "shelf"})
+            res = finish(game, server, tid, limit=300.0)
+            assert res.successful, server.error(tid)
+            taken.append(world.robot("CYAN", 1).holding)
+            slide = server.task(1, deliver={"machine_id": "C-RS1", "machine_point": "slide"})
+            assert finish(game, server, slide, limit=240.0).successful, server.error(slide)
+        assert taken == [shelf["shelf0"], shelf["shelf1"]]
+        world.remove_workpiece(cs, "shelf2")          # the last one gone by hand: nothing on the shelf
         tid = server.task(1, retrieve={"machine_id": cs, "machine_point": "shelf"})
+        res = finish(game, server, tid, limit=300.0)
+        assert not res.successful and server.error(tid) == "NO_WORKPIECE_FOUND", (res, server.error(tid))
+        assert world.robot("CYAN", 1).holding is None
+        # nothing at the station's output (it was not prepared): nothing found, no grasp failed
+        assert world.workpiece_at(cs, "output") is None
+        tid = server.task(1, retrieve={"machine_id": cs, "machine_point": "output"})
         res = finish(game, server, tid, limit=300.0)
         assert not res.successful and server.error(tid) == "NO_WORKPIECE_FOUND", (res, server.error(tid))
         assert world.robot("CYAN", 1).holding is None

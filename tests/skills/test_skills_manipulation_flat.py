@@ -1,9 +1,11 @@
 """Approach, grab and put on the flat world; the failed-grab detection."""
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
+from rll_bt.agenttask import codes
 from rll_bt.backend import Detections, Pose2D
 from skills.activity import Status
 from skills.errors import SkillError, SkillFailure
@@ -59,6 +61,9 @@ def test_a_failed_grab_is_detected():
     grab = GrabFrom(scene.ctx, Place("C-BS", "OUTPUT"))
     assert scene.run(grab) is Status.FAILURE
     assert grab.error is SkillError.GRAB_FAILED and "no workpiece" in grab.message
+    # the workpiece sensor saw it between the fingers: the grasp failed, there was something to take
+    assert not grab.message.startswith(codes.NOTHING_FOUND), grab.message
+    assert codes.to_league(grab.error.value, grab.message, False) == "GRASPING_FAILED"
     # the gripper went home and the retry from where the robot stands works
     for _ in range(30):
         scene.advance(0.1)
@@ -71,6 +76,18 @@ def test_grab_where_there_is_nothing_fails_with_grab_failed():
     scene = Scene()
     grab = GrabFrom(scene.ctx, Place("C-BS", "OUTPUT"))
     assert scene.run(grab) is Status.FAILURE and grab.error is SkillError.GRAB_FAILED
+    # the workpiece sensor saw nothing between the open fingers: nothing was there to take
+    assert grab.message.startswith(codes.NOTHING_FOUND), grab.message
+    assert codes.to_league(grab.error.value, grab.message, False) == "NO_WORKPIECE_FOUND"
+
+
+def test_a_gripper_without_a_workpiece_sensor_says_only_that_it_holds_nothing():
+    scene = Scene()
+    status = scene.robot.gripper_status
+    scene.robot.gripper_status = lambda: dataclasses.replace(status(), sensed=None)
+    grab = GrabFrom(scene.ctx, Place("C-BS", "OUTPUT"))
+    assert scene.run(grab) is Status.FAILURE and grab.error is SkillError.GRAB_FAILED
+    assert codes.to_league(grab.error.value, grab.message, False) == "GRASPING_FAILED", grab.message
 
 
 def test_put_that_does_not_release_fails_with_put_failed():

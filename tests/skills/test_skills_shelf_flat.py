@@ -35,6 +35,31 @@ def test_an_empty_shelf_is_no_workpiece_found():
     assert codes.to_league("GRAB_FAILED", "no workpiece in the gripper after closing", False) == "GRASPING_FAILED"
 
 
+def test_slots_known_empty_are_tried_last_not_never():
+    # what the robot knows is out of date: the shelf was refilled and another robot took
+    # slot 2 since; the robot tries slot 2 first, then the slots it knew empty
+    scene = Scene(seed=6)
+    wps = shelf(scene, 0, 1)
+    for s in (0, 1):
+        shelf_memory(scene.ctx).mark_empty("C-CS1", s)
+    grab = GrabFromShelf(scene.ctx, "C-CS1")
+    assert scene.run(grab) is Status.SUCCESS, grab.message
+    assert grab.tried == [2, 0] and grab.slot == 0 and wps[0].held_by == 0
+
+
+def test_a_missed_carrier_is_a_failed_grasp_not_an_empty_shelf():
+    scene = Scene(seed=6)
+    shelf(scene, 1)
+    scene.world.fail_next_grab = True                   # the carrier on slot 1 is missed once
+    for s in (0, 2):
+        shelf_memory(scene.ctx).mark_empty("C-CS1", s)
+    grab = GrabFromShelf(scene.ctx, "C-CS1")
+    assert scene.run(grab) is Status.FAILURE
+    assert grab.tried == [1, 0, 2] and grab.missed == [1]
+    assert codes.to_league(grab.error.value, grab.message, False) == "GRASPING_FAILED", grab.message
+    assert shelf_memory(scene.ctx).left("C-CS1") == [1]             # not taken for empty
+
+
 def test_slots_known_empty_are_not_tried_again():
     scene = Scene(seed=6)
     wps = shelf(scene, 0, 1)

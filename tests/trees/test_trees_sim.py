@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pytest
 
+from rll_bt.agenttask import league_name
 from tests.support.tree_sim import TM, SimTaskRig, error, status
 
 
@@ -128,9 +129,21 @@ def test_a_grab_that_never_works_ends_in_grab_failed():
         rig.world.spawn_workpiece("C-BS", "output", "BASE_RED")
         res = rig.task("get_workpiece", machine="C-BS", side="OUTPUT")
         assert status(res) == "FAILED" and error(res) == "GRAB_FAILED"
+        assert league_name(res.league_code) == "GRASPING_FAILED", res     # the workpiece was there
         assert levels == {0, 1, 2}                                   # both recovery levels ran
         assert not res.holding and rig.held() is None
         v = rig.robot.odometry()
         assert (v.vx, v.vy, v.omega) == (0.0, 0.0, 0.0)              # stopped
     finally:
         rig.close()
+
+
+def test_a_grab_where_nothing_is_ends_in_no_workpiece_found(rig):
+    """Nothing on the base station's output: every grab, after re-aligning and approaching
+    again, finds nothing between the open fingers: the league's NO_WORKPIECE_FOUND (202),
+    not GRASPING_FAILED."""
+    assert rig.world.workpiece_at("C-BS", "output") is None
+    res = rig.task("get_workpiece", machine="C-BS", side="OUTPUT")
+    assert status(res) == "FAILED" and error(res) == "GRAB_FAILED" and not res.holding
+    assert league_name(res.league_code) == "NO_WORKPIECE_FOUND", res
+    assert res.text.startswith("no workpiece found"), res

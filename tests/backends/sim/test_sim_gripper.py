@@ -170,3 +170,16 @@ def test_listener_may_change_the_world(world):
     bot.gripper_open()
     settle(world, bot)
     assert world.workpiece_at("C-RS1", "output") == held
+
+
+def test_the_workpiece_sensor_sees_what_a_close_would_take(world):
+    bs = world.station("C-BS")
+    bot = SimBackend(world, ("CYAN", 1), pose=bs.approach_pose("output"))
+    assert bot.gripper_status().sensed is False                 # nothing on the output
+    wp = world.spawn_workpiece("C-BS", "output", "BASE_RED")
+    assert bot.gripper_status().sensed is True and not bot.holding()
+    bot.gripper_close()
+    st = settle(world, bot)
+    assert st.holding and st.sensed and world.held_workpiece("CYAN", 1) == wp
+    world.teleport("CYAN", 1, bs.approach_pose("input"))        # nothing there, one held
+    assert bot.gripper_status().sensed is True
