@@ -80,3 +80,61 @@ def test_the_team_server_command_drives_the_league_simulators_robots(tmp_path):
         assert len([s for s in kb.stations.values() if s.zone]) >= 7, kb.stations
     finally:
         kb.store.close()
+
+
+@pytest.mark.timeout(300)
+def test_the_team_server_command_gives_a_robot_its_first_task_and_stops_on_ctrl_c(tmp_path):
+    """Short: ``rll-bt teamserver --robots agenttask`` as a program, the league
+    simulator's robot in this process (games.league_sim.ExternalGame on the refbox
+    ports moved by a free offset): the robot connects, gets an explore task over
+    AgentTask and finishes it; Ctrl-C (SIGINT) then stops the server with exit code
+    130, its state database kept; ``--help`` names the option and exits 0."""
+    from games.league_sim import ExternalGame, ExternalTeam
+    from rll_bt.comm import layout
+    from teamserver.status import load
+    rll_bt = str(Path(sys.executable).parent / "rll-bt")
+    helped = subprocess.run([rll_bt, "teamserver", "--help"], capture_output=True, text=True, timeout=120)
+    assert helped.returncode == 0 and "--robots {rll-bt,agenttask}" in helped.stdout, helped.stdout
+    off = free_port_offset()
+    listen = free_ports(1, tcp=True)[0]
+    state, err = tmp_path / "ts.sqlite", tmp_path / "ts.err"
+    cmd = [rll_bt, "teamserver", "--profile", "rcll2025", "--team", TEAM, "--key", KEY, "--robots", "agenttask",
+           "--listen", f"127.0.0.1:{listen}", "--refbox-host", "127.255.255.255", "--refbox-port-offset", str(off),
+           "--state", str(state), "--heartbeat-timeout", "60"]     # (a loaded machine may stall this process)
+    with open(err, "w") as fe:      # Ctrl-C as from a terminal (a test worker may ignore SIGINT, and so its children)
+        ts = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=fe,
+                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    game = None
+    try:
+        game = ExternalGame([ExternalTeam("CYAN", ("127.0.0.1", listen), TEAM, KEY, robots=1)],
+                            profile="rcll2025", seed=8, layout=layout("sim").moved(off),
+                            phases={"setup": 3.0, "exploration": 600.0, "production": 1200.0}, speed=3.0)
+        assert game.connect(timeout=60.0), err.read_text()       # (it retries until the server listens)
+        agent = game.agents[("CYAN", 1)]
+
+        def done(g):
+            return any(r.successful for r in agent.finished.values())
+        assert game.run_until(done, 240.0), (err.read_text()[-3000:], agent.finished)
+        ids = [tid for tid, r in agent.finished.items() if r.successful]
+        # the next task comes once the server has taken the result in
+        assert game.run_until(lambda g: agent.book.current is not None and agent.book.current.task_id not in ids,
+                              120.0), err.read_text()[-3000:]
+        assert ts.poll() is None, err.read_text()[-3000:]
+        ts.send_signal(signal.SIGINT)
+        assert ts.wait(timeout=60.0) == 130, err.read_text()[-3000:]
+    finally:
+        if ts.poll() is None:
+            ts.kill()
+            ts.wait()
+        if game is not None:
+            game.close()
+    text = err.read_text()
+    assert f"listening on 127.0.0.1:{listen} for agenttask robots" in text and "interrupted" in text, text
+    kb = load(str(state))
+    try:
+        assert sorted(kb.robots) == [1]
+        done = [t for t in kb.tasks.values() if t.robot == 1 and t.state == "DONE"]
+        assert done and {t.kind for t in done} == {"explore_zone"}, \
+            [(t.kind, t.state, t.robot) for t in kb.tasks.values()]
+    finally:
+        kb.store.close()
