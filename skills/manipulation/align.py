@@ -179,7 +179,14 @@ def face_centre(scan: LaserScan, width: float, max_range: float = 1.5, half_span
     and when they pin only the near edge, the face is where a face ``width`` wide from it ends within the far
     edge's wider bounds; the near edge alone then places it (2016 seed 1 at 2750a55:
     four bases put beside C-RS2's slide fell to the floor, docked 0.4 m from a
-    neighbour without a tag, where the map's pose alone lined the robot up)."""
+    neighbour without a tag, where the map's pose alone lined the robot up).
+
+    Docked at the belt, the last resort is the same: where neither run gives a centre
+    because one edge is grazed (beams 5 cm apart where the face ends 0.4 m to the side
+    of a laser 0.1 m from it, and range noise leaves a 4 cm hole in the sorted points
+    there), the pinned edge places the face (2016 seed 11 at e913fe8: docked at C-DS's
+    input 5 cm beside the belt, the laser saw the face from -0.28 to 0.42 m but gave no
+    centre; the C3 and the C2 put there fell to the floor)."""
     points = scan_points(scan, max_range=max_range)
     fit = fit_face(points)
     if fit is None:
@@ -193,6 +200,9 @@ def face_centre(scan: LaserScan, width: float, max_range: float = 1.5, half_span
     if centre is None:
         centre = _beam_run_centre(scan, fit, width, max_range, half_span, inlier, depth, resolution,
                                   fit_slack)
+    if centre is None:      # one edge pinned, the other grazed: the pinned one places the face
+        centre = _beam_run_centre(scan, fit, width, max_range, max(half_span, ONE_EDGE_SPAN), inlier,
+                                  depth, resolution, fit_slack, one_edge=True)
     return centre
 
 

@@ -107,14 +107,32 @@ def test_face_centre_found_in_nine_scans_of_ten_under_range_noise(seed):
 
 
 @pytest.mark.parametrize("centre", [0.18, 0.19, 0.25, 0.32])
-def test_face_centre_gives_no_answer_in_front_of_a_shelf_slot_or_the_slide(centre):
+def test_face_centre_beside_a_shelf_slot_or_the_slide_comes_from_the_near_edge(centre):
     # docked in front of a cap-shelf slot or the slide (0.16-0.32 m beside the belt
     # line) the laser sees the far edge at 78-80 degrees, its beams 4-6 cm apart: the
-    # edge is not pinned and the map's pose stays the line-up (7456f4e joined the
-    # sorted points' runs across such gaps and lined a robot up 2.2 cm off slot 2).
-    # (At 0.15-0.17 the sorted points' run, as at 57572d9, still answers 2-2.5 cm short.)
+    # far edge is not pinned, and the sorted points' runs joined across such gaps
+    # answered 2.2 cm off slot 2 (7456f4e); the pinned near edge places the face
     for yaw in (-0.02, 0.0, 0.02):
-        assert face_centre(cast([face(centre, yaw=yaw)]), WIDTH) is None
+        assert face_centre(cast([face(centre, yaw=yaw)]), WIDTH) == pytest.approx(centre, abs=0.01)
+
+
+def test_docked_at_the_belt_with_one_edge_grazed_the_other_places_the_face():
+    # 2016 seed 11 (e913fe8, 857.8 s): docked at C-DS's input 7 cm beside the face's
+    # centre, the far edge grazed at 76-77 degrees (beams 5 cm apart there, not pinned)
+    # and two beams' range noise left a 4 cm hole among the sorted points 8 cm from it:
+    # no centre, no correction, and the C3 put there fell to the floor
+    scan = cast([face(0.07)])
+    y = ys(scan)
+    [inward] = np.nonzero((y > 0.32) & (y < 0.335))[0]
+    [outward] = np.nonzero((y > 0.34) & (y < 0.355))[0]
+    ranges = np.array(scan.ranges)
+    ranges[inward] -= 0.012                                    # 1.2 sigma: its point slides inward
+    ranges[outward] += 0.012                                   # and the next one's outward
+    noisy = LaserScan(0.0, scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max,
+                      ranges, MOUNT)
+    pts = np.sort(ys(noisy)[np.isfinite(ranges) & (np.abs(ys(noisy)) < 0.6)])
+    assert np.diff(pts).max() > 0.04                           # the hole, by the grazed edge
+    assert face_centre(noisy, WIDTH) == pytest.approx(0.07, abs=0.01)
 
 
 def test_face_centre_ends_the_face_where_a_beam_passes_beside_it():
