@@ -2,7 +2,8 @@
 
 - :class:`ApproachStation`: navigate to ``coarse_distance`` in front of the
   place (from the machine map; closer where a wall or station leaves less
-  room), line up on the tag (when a tag source works and the camera can
+  room, down to the docked distance, so a map a few centimetres off does not
+  shut a narrow face), line up on the tag (when a tag source works and the camera can
   see the tag from there, else on the map pose), dock by laser to
   ``final_distance``.  A spot beside the belt (shelf slot, slide) is
   lined up with at the coarse distance when the robot fits there; where a
@@ -113,11 +114,11 @@ class ApproachStation(Sequence):
             check_place(place, ctx.profile)
             pose = ctx.machines.get(place.machine)
             if pose is not None:      # less room in front of the station: stop closer
-                d = feasible_distance(ctx, pose, place.side, m.coarse_distance, ctx.profile.mps.belt_offset_y)
+                d = feasible_distance(ctx, pose, place.side, m.coarse_distance, ctx.profile.mps.belt_offset_y,
+                                      minimum=m.final_distance)
                 self.coarse = m.coarse_distance if d is None else d
             # in front of the tag (it is centred under the belt), so the camera sees it
-            goal = StationSideGoal(place.machine, place.side, self.coarse, "conveyor")
-            return Navigate(ctx, goal, position_tolerance=0.03, heading_tolerance=0.04)
+            return Navigate(ctx, self._coarse_goal(ctx), position_tolerance=0.03, heading_tolerance=0.04)
 
         def align():
             self.docked_shift = shift_docked(ctx, place, self.coarse)
@@ -155,6 +156,16 @@ class ApproachStation(Sequence):
         super().__init__(ctx, [navigate, align, lambda: Dock(ctx, m.final_distance), centre, to_spot], timeout,
                          name=f"approach {place.describe()}")
 
+    def _coarse_goal(self, ctx) -> StationSideGoal:
+        """Where the navigation stops: ``self.coarse`` in front of the belt line.
+        Where the map leaves no room at the usual standoff the stop may come as
+        close as the docked pose (``final_distance``; the station's own clearance
+        keeps it a little farther): the laser's dock covers the rest, and a map a
+        few centimetres off (a rendered or real camera's) must not take a face
+        with 0.4-0.5 m of room in front of it out of the game."""
+        place, m = self.place, ctx.settings.manipulation
+        return StationSideGoal(place.machine, place.side, self.coarse, "conveyor", minimum=m.final_distance)
+
     def _face_offset(self, ctx, place: Place) -> float:
         """Sideways move (m) that brings the station face's centre, as the laser
         sees it, where it appears from the docked pose in front of the place's
@@ -190,7 +201,7 @@ class ApproachStation(Sequence):
         here = ctx.pose()
         if here is None or ctx.machines.get(place.machine) is None:
             return 0.0
-        goal, _ = StationSideGoal(place.machine, place.side, self.coarse, "conveyor").resolve(ctx)
+        goal, _ = self._coarse_goal(ctx).resolve(ctx)
         err = goal.relative_to(here).y
         return err if abs(err) <= self.MAX_LATERAL_FIX else 0.0
 

@@ -62,7 +62,8 @@ def feasible_distance(ctx, machine_pose: Pose2D, side: str, distance: float, lat
                       minimum: float = 0.40) -> float | None:
     """The largest distance from the face, at most ``distance`` and at least
     ``minimum``, where the robot fits in front of the station (walls and
-    other stations of the map leave room); None when none does."""
+    other stations of the map leave room, and the station itself: never
+    closer to its face than the planner's clearance); None when none does."""
     mps = ctx.profile.mps
     dist = ctx.map.distance(ctx.settings.costmap_resolution)
     need = standing_clearance(ctx)
@@ -126,11 +127,12 @@ class ZoneGoal:
 class StationSideGoal:
     """In front of ``side`` of ``machine``, facing it, ``distance`` metres
     from the face (less where a wall or another station leaves less room,
-    down to 0.4 m), aligned with ``place`` (conveyor, slide, shelfN)."""
+    down to ``minimum``), aligned with ``place`` (conveyor, slide, shelfN)."""
     machine: str
     side: str
     distance: float = 0.6
     place: str = "conveyor"
+    minimum: float = 0.40
 
     def resolve(self, ctx) -> tuple[Pose2D, bool]:
         pose = ctx.machines.get(self.machine)
@@ -142,7 +144,7 @@ class StationSideGoal:
             side_sign(self.side)
         except ValueError as exc:
             raise SkillFailure(SkillError.INVALID_TASK, str(exc)) from None
-        d = feasible_distance(ctx, pose, self.side, self.distance, lateral)
+        d = feasible_distance(ctx, pose, self.side, self.distance, lateral, self.minimum)
         if d is None:
             raise SkillFailure(SkillError.NAVIGATION_FAILED,
                                f"no room for the robot in front of {self.describe()}")
