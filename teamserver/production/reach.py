@@ -3,7 +3,8 @@
 A robot puts a base on a ring station's slide and takes a cap carrier from a
 cap station's shelf standing in front of the input face, beside the belt
 (machine +y: the slide 0.25 m, the shelf slots 0.32, 0.24 and 0.16 m), its
-centre at least 0.4 m from the face (the skills dock no closer).  The real
+centre 0.4 m from the face on its way in (closer only where something ahead leaves
+less room: that moves it along the face's normal, not toward a wall beside it).  The real
 generator stands a cyan RS or CS in the column by the x = 7 wall at rotation
 270 (refbox-rules.md, field generation), which turns that side to the wall:
 2025 seed 11 has C-RS1 in C_Z76, and every base put on its slide and every
@@ -22,7 +23,7 @@ import math
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
 
-#: m from the face to the robot's centre at the closest the skills dock
+#: m from the face to the robot's centre where it stops in front of the place
 MIN_DISTANCE = 0.40
 
 
