@@ -40,7 +40,11 @@ class ExecutorUnavailable(RuntimeError):
 class LocalExecutor:
     def __init__(self, jobs: int = 1):
         self.jobs = max(1, int(jobs))
-        self.pool = ProcessPoolExecutor(self.jobs, mp_context=mp.get_context("spawn"), max_tasks_per_child=4)
+        # a fresh process per game (bounded memory); not more games per worker: Python 3.11-3.13's
+        # ProcessPoolExecutor stops for good once workers with max_tasks_per_child > 1 reach their limit
+        # with games still queued (CPython gh-115634: 2 workers x 4 played 8 games of a 40-game
+        # tournament, then waited forever)
+        self.pool = ProcessPoolExecutor(self.jobs, mp_context=mp.get_context("spawn"), max_tasks_per_child=1)
         self.workers = self.jobs
 
     def run(self, fn: Callable[[dict], dict], items: list[dict]) -> Iterator[tuple[int, dict]]:

@@ -109,6 +109,17 @@ def test_a_game_its_worker_loses_is_an_error_row_not_a_lost_tournament():
     assert "lost" in got[0]["error"] and got[1]["points"] == {"cyan": 1, "magenta": 1}
 
 
+
+@pytest.mark.timeout(300)     # before: the pool stopped for good after 4 games (a hang, not a slow run)
+def test_the_local_pool_plays_more_games_than_its_workers_task_limit():
+    """Each worker process plays a bounded number of games, then a new one takes its place; a
+    tournament of more games than that goes on to the end (2 workers stopped after 8 of 40)."""
+    matches = [Match("a", "b", seed).to_dict() for seed in range(1, 11)]
+    with LocalExecutor(1) as ex:
+        got = dict(ex.run(_fake_game, matches))
+    assert sorted(got) == list(range(10))
+    assert all(got[i]["points"] == {"cyan": i + 1, "magenta": i + 1} for i in range(10))
+
 def test_address_needs_dask():
     with pytest.raises(ValueError, match="--executor dask"):
         open_executor("local", address="127.0.0.1:8786")
