@@ -58,6 +58,25 @@ def standing_clearance(ctx) -> float:
     return ctx.robot.radius + ctx.settings.plan_padding + 0.01
 
 
+def nearest_fit(field_map, x: float, y: float, need: float, reach: float = 0.5,
+                step: float = 0.01) -> tuple[float, float] | None:
+    """The point nearest to (x, y), within ``reach`` metres, whose exact
+    clearance from the map's walls and stations is at least ``need`` (on a
+    ``step`` lattice round the point); None when there is none."""
+    k = int(math.ceil(reach / step))
+    off = np.arange(-k, k + 1) * step
+    dx, dy = np.meshgrid(off, off)
+    r = np.hypot(dx, dy).ravel()
+    inside = r <= reach + 1e-9
+    px, py = x + dx.ravel()[inside], y + dy.ravel()[inside]
+    r = r[inside]
+    ok = field_map.clearance(px, py) >= need
+    if not ok.any():
+        return None
+    i = int(np.argmin(np.where(ok, r, np.inf)))
+    return float(px[i]), float(py[i])
+
+
 def feasible_distance(ctx, machine_pose: Pose2D, side: str, distance: float, lateral: float,
                       minimum: float = 0.40) -> float | None:
     """The largest distance from the face, at most ``distance`` and at least
@@ -65,13 +84,15 @@ def feasible_distance(ctx, machine_pose: Pose2D, side: str, distance: float, lat
     other stations of the map leave room, and the station itself: never
     closer to its face than the planner's clearance); None when none does."""
     mps = ctx.profile.mps
-    dist = ctx.map.distance(ctx.settings.costmap_resolution)
     need = standing_clearance(ctx)
     ds = np.arange(distance, minimum - 1e-9, -0.02)
     if len(ds) == 0:
         return None
     poses = [approach_pose(machine_pose, side, float(d), lateral, mps) for d in ds]
-    clear = dist.lookup(np.array([p.x for p in poses]), np.array([p.y for p in poses]))
+    # the exact distance to the map's segments: a 5-cm cell's value holds
+    # only at its centre, up to 3.5 cm off elsewhere, enough to shut a
+    # window of a few centimetres in front of a face
+    clear = ctx.map.clearance(np.array([p.x for p in poses]), np.array([p.y for p in poses]))
     ok = np.nonzero(clear >= need)[0]
     return float(ds[ok[0]]) if len(ok) else None
 

@@ -34,7 +34,7 @@ from rll_bt.backend import CapabilityError, Pose2D, wrap_angle
 from ..activity import Activity, Status
 from ..errors import SkillError, SkillFailure
 from .controller import Limits, PathFollower
-from .goals import standing_clearance
+from .goals import nearest_fit, standing_clearance
 from .laserview import laser_view, points_now
 from .others import occupied, station_zones, unexplained
 from .planner import GridPlanner, NoPath
@@ -274,24 +274,21 @@ class Navigate(Activity):
         """A goal inside a wall or station fails; one merely too close to
         one moves to the nearest spot where the robot fits (within 0.5 m)."""
         ctx = self.ctx
-        dist = ctx.map.distance(ctx.settings.costmap_resolution)
-        clear = float(dist.lookup(np.array([target.x]), np.array([target.y]))[0])
-        inside = not bool(ctx.map.in_arena(np.array([target.x]), np.array([target.y]))[0])
-        if clear <= 0.0 or inside:
+        # the exact distance to the map's walls and stations (0 inside one or
+        # outside the field), not a 5-cm cell's: that is up to 3.5 cm off
+        clear = float(ctx.map.clearance(target.x, target.y)[0])
+        if clear <= 0.0:
             raise SkillFailure(SkillError.NAVIGATION_FAILED,
                                f"the goal ({target.x:.2f}, {target.y:.2f}) is blocked: inside a wall or station")
         need = standing_clearance(ctx)
         if clear >= need:
             return target, heading
-        xs, ys = dist.spec.centres()
-        ok = (dist.distance >= need + 0.01) & ctx.map.arena_mask(ctx.settings.costmap_resolution)
-        d = np.where(ok, np.hypot(xs - target.x, ys - target.y), np.inf)
-        r, c = np.unravel_index(int(np.argmin(d)), d.shape)
-        if not np.isfinite(d[r, c]) or d[r, c] > 0.5:
+        spot = nearest_fit(ctx.map, target.x, target.y, need + 0.01, reach=0.5)
+        if spot is None:
             raise SkillFailure(SkillError.NAVIGATION_FAILED,
                                f"the goal ({target.x:.2f}, {target.y:.2f}) is blocked: no room for the robot")
-        self.adjusted = float(d[r, c])
-        return Pose2D(float(xs[r, c]), float(ys[r, c]), target.theta), heading
+        self.adjusted = math.hypot(spot[0] - target.x, spot[1] - target.y)
+        return Pose2D(spot[0], spot[1], target.theta), heading
 
     def _lookahead(self, pose: Pose2D, longest: float = 0.5, shortest: float = 0.1) -> float:
         """The longest look-ahead (m) whose carrot the robot can head for in
