@@ -171,6 +171,7 @@ class TeamServer:
             Lookout(self.profile, prefix, thresh=cfg.explore_thresh), self.refbox,
             self.dispatcher.fleet, self.tasks, self.send_refbox,
             report_period=cfg.report_period, on_end=self._map_now)
+        self.dispatcher.readiness.unfound = self.explorer.unfound
         if self.refbox_link is not None:
             self.refbox_link.set_team(color, self.key)
 
@@ -186,10 +187,11 @@ class TeamServer:
         if self.dispatcher.dropouts.check_heartbeats():
             self._replan = True
         if self.refbox.running():
-            if self.explorer.active():
+            exploring = self.explorer.active()
+            if exploring:
                 self.explorer.explore()
-            elif self.refbox.phase == "PRODUCTION":
-                self._produce()
+            if self.refbox.phase == "PRODUCTION" and (not exploring or self.explorer.beside()):
+                self._produce(exploring)
         self.tasks.flush()
         self._periodic()
 
@@ -335,9 +337,11 @@ class TeamServer:
             self.agents.send(msg, to=robot.peer)
 
     # -- production -----------------------------------------------------------------------------
-    def _produce(self) -> None:
+    def _produce(self, exploring: bool = False) -> None:
+        """A production step; ``exploring``: beside exploration's tail (its tasks stay,
+        no looks for rotations yet)."""
         d, pm = self.dispatcher, self.production
-        if self.explorer.exploring_blindly():
+        if not exploring and self.explorer.exploring_blindly():
             self.explorer.end()
         now = self.clock.now()
         gt = self.refbox.game_time()
@@ -358,7 +362,8 @@ class TeamServer:
         d.feeds.unstick()
         d.dropouts.release_unusable()
         d.discards.discard_orphans()
-        self.explorer.look_for_rotations()
+        if not exploring:
+            self.explorer.look_for_rotations()
         for t in d.matcher.assign(gt):
             if t.kind == M.RETRIEVE_CAP:
                 pm.caps.choose_shelf_slot(t)

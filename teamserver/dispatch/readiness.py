@@ -24,7 +24,12 @@ A production task is *ready* when
   (:mod:`teamserver.production.slides`);
 - a cap retrieval's station holds no cap and its product has started its
   last ring mount that does not need the cap-less base
-  (:mod:`teamserver.production.caps`).
+  (:mod:`teamserver.production.caps`);
+- while production goes on beside exploration (2017+), neither it nor any
+  other step of its product is at a station not found yet
+  (:attr:`Readiness.unfound`, set by the team server to
+  :meth:`~teamserver.exploration.explorer.Explorer.unfound`): a robot would
+  not know where to drive, or would hold a workpiece until it does.
 
 A delivery's DS is prepared only inside the order's window
 (:meth:`Readiness.window_open`).  A rule about when a station may be used
@@ -32,6 +37,8 @@ A delivery's DS is prepared only inside the order's window
 storing) goes here or into the collaborator it is about.
 """
 from __future__ import annotations
+
+from collections.abc import Callable
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
@@ -63,6 +70,8 @@ class Readiness:
         self.config = config
         self.tasks = tasks
         self.clock = clock
+        #: our stations not found yet (exploring beside production: see the module doc)
+        self.unfound: Callable[[], frozenset[str]] = frozenset
 
     def held_by(self, task: M.Task) -> int | None:
         """The robot that may still run ``task`` (cancelled on it, its stop not proven,
@@ -121,6 +130,8 @@ class Readiness:
                 return False
         if not self.locks.free_for(task, but):
             return False
+        if self._needs_unfound(task):
+            return False
         if not self.station_usable(task.machine):
             return False
         if self.held_by(task) is not None or self.station_held_by(task) is not None:
@@ -136,6 +147,17 @@ class Readiness:
         # a CS holding a cap cannot retrieve another
         return not (task.kind == M.RETRIEVE_CAP and (self.buffers.owners.get(task.machine)
                                                      or not self.caps.cap_due(task)))
+
+    def _needs_unfound(self, task: M.Task) -> bool:
+        """Is ``task``, or an open step of its product, at a station not found yet?"""
+        gone = self.unfound()
+        if not gone:
+            return False
+        if task.machine in gone:
+            return True
+        p = self.kb.products.get(task.product or "")
+        return p is not None and any(t.machine in gone for t in self.kb.tasks_of(p.tasks)
+                                     if t.state in (M.PENDING, M.ASSIGNED))
 
     def deliver_from(self, task: M.Task) -> float:
         """Game time from which a delivery may start: its robot reaches the DS when
