@@ -33,12 +33,13 @@ from rll_bt.backend import CapabilityError, Pose2D, wrap_angle
 
 from ..activity import Activity, Status
 from ..errors import SkillError, SkillFailure
+from .closing import ClosingWatch
 from .controller import Limits, PathFollower
 from .goals import nearest_fit, standing_clearance
 from .laserview import laser_view, points_now
 from .others import occupied, station_zones, unexplained
 from .planner import GridPlanner, NoPath
-from .safety import LATE, clear_distance, poll_lag, scan_points, speed_limit, to_field
+from .safety import LATE, clear_distance, poll_lag, radial_limit, scan_points, speed_limit, to_field
 from .yielding import PATIENT, blocker, yield_delay, yield_spot
 
 log = logging.getLogger(__name__)
@@ -47,6 +48,8 @@ log = logging.getLogger(__name__)
 GOAL_WAIT = 1.0
 #: room (m) beyond the robot's radius a goal needs free of other robots
 GOAL_ROOM = 0.1
+#: m beyond the robot's disc within which a robot coming closer from the side limits the speed toward it
+RADIAL_NEAR = 0.6
 
 
 def tight_speed(gap, settings) -> np.ndarray:
@@ -119,6 +122,7 @@ class Navigate(Activity):
         self.yields = 0
         self._yield = None
         self._yield_retry = -math.inf
+        self.closing = ClosingWatch()     # other robots coming closer from the side
         self._block_start = None
         self._no_way = False
         self.lag = self.ctx.settings.control_period      # s between polls, the worst lately
@@ -181,6 +185,8 @@ class Navigate(Activity):
             seen = moving                 # other robots in this scan
             now_t = ctx.clock.now()
             ctx.laser_memory.add(moving + here, now_t, (pose.x, pose.y), laser_view(ctx, pose, 3.0))
+            self.closing.update(seen + here, here, now_t, ctx.robot.radius)
+            closing = max(self.closing.closing, 0.0) if self.closing.active(now_t) else None
             remembered = ctx.laser_memory.relative(pose, now_t)
             # what was seen where the laser is blind now (another robot beside
             # and behind, when the direction of travel still lies in view)
@@ -214,6 +220,9 @@ class Navigate(Activity):
                     if side is not None:
                         limit = min(limit, speed_limit(seen, ux, uy, ctx.robot.radius, s.safety_margin + 0.07,
                                                        side, decel, self.lag + 0.1, s.closing_speed))
+                if closing is not None:     # a robot beside the way coming closer: keep from it sideways too
+                    limit = min(limit, radial_limit(seen, ux, uy, ctx.robot.radius, s.safety_margin, decel,
+                                                    self.lag + 0.1, closing, RADIAL_NEAR))
                 # the laser does not see behind: creep where it is blind, and
                 # stop for what it saw there a moment ago
                 if abs(wrap_angle(math.atan2(uy, ux) - pose.theta)) > half_fov - 0.4:

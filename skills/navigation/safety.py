@@ -106,6 +106,32 @@ def speed_limit(points: np.ndarray, vx: float, vy: float, radius: float, margin:
     return decel * (-b + math.sqrt(b * b - 2.0 * c / decel))
 
 
+
+def radial_limit(points: np.ndarray, ux: float, uy: float, radius: float, margin: float, decel: float,
+                 latency: float, closing: float, near: float) -> float:
+    """Highest speed (m/s) along the unit direction (ux, uy) whose part
+    toward each point (robot-centred, field axes) within ``near`` of the
+    robot's disc still stops ``margin`` short of it (braking at ``decel``
+    after ``latency``) while the point comes on at ``closing`` m/s: the
+    limit of :func:`speed_limit` along the line to the point, divided by how
+    much of the motion goes that way.  0 means blocked; ``inf`` when no point
+    near lies ahead of the robot's side."""
+    if len(points) == 0:
+        return math.inf
+    d = np.hypot(points[:, 0], points[:, 1])
+    ok = d > 1e-6
+    toward = np.zeros(len(points))
+    toward[ok] = (points[ok, 0] * ux + points[ok, 1] * uy) / d[ok]
+    sel = ok & (d - radius < near) & (toward > 0.05)
+    if not sel.any():
+        return math.inf
+    free = d[sel] - radius - margin
+    b = latency + closing / decel
+    c = closing * latency - free
+    vr = np.where(c >= 0.0, 0.0, decel * (-b + np.sqrt(np.maximum(b * b - 2.0 * c / decel, 0.0))))
+    return float((vr / toward[sel]).min())
+
+
 #: s a poll may come later than the control period before it counts as a longer reaction time
 LATE = 0.02
 

@@ -224,3 +224,46 @@ def test_a_short_guarded_motion_polled_late_keeps_a_wider_berth_from_a_robot_bes
     late = guard.limit(0.15, 0.0, 0.4)
     assert on_time == math.inf and guard.limit(0.15, 0.0) == math.inf
     assert 0.0 <= late < 0.15                                   # slower than the motion asks
+
+
+def _converging(angle_deg: float):
+    """Two robots 1.6 m apart side by side, each driving at ``angle_deg`` from the line between
+    them toward the other's side: their ways cross ahead, and each has the other beside its way,
+    never in it, until they meet."""
+    a = math.radians(angle_deg)
+    y = 2.0 + 1.6 * math.tan(a)
+    return {}, [(1, Pose2D(-0.8, 2.0, a), Pose2D(0.8, y, a)),
+                (2, Pose2D(0.8, 2.0, math.pi - a), Pose2D(-0.8, y, math.pi - a))]
+
+
+@pytest.mark.parametrize("angle", [55.0, 60.0, 65.0, 68.0])
+def test_robots_whose_ways_converge_at_a_shallow_angle_do_not_touch_side_to_side(angle):
+    """The 2025 head-to-head game of seed 3 (two teams, 382.7 s): two robots at 0.6 m/s, ways
+    converging, each always beside the other's way; the check along the way never saw the other
+    and they met side to side (before: 4 contacts at 60 and 65 degrees, 3 at 68).  A robot
+    coming closer from the side now limits the speed toward it; both still arrive."""
+    navs, world, _ = _standoff(_converging(angle))
+    for nav in navs:
+        assert nav.status is Status.SUCCESS, nav.message
+    assert world.collisions == 0
+
+
+def test_driving_past_a_parked_robot_is_not_taken_for_one_coming_closer():
+    """A robot standing 0.2 m beside the way, seen from ever other sides as the robot drives
+    past: the disc's centre does not move, so the sideways limit never starts."""
+    start, goal = Pose2D(-1.5, 3.0, 0.0), Pose2D(1.5, 3.0, 0.0)
+    scene = Scene(seed=4, start=start)
+    scene.world.add_robot(Pose2D(0.0, 3.0 + 2 * 0.225 + 0.2, math.pi / 2))
+    nav = Navigate(scene.ctx, PoseGoal(goal))
+    closest, watched = math.inf, 0
+    nav.start()
+    while not nav.status.done and scene.world.clock.now() < 60.0:
+        nav.poll()
+        scene.advance(0.1)
+        closest = min(closest, abs(scene.robot.true_pose.x))
+        watched += bool(nav.closing.scans and len(nav.closing.scans[-1][1]))
+    assert nav.status is Status.SUCCESS, nav.message
+    assert closest < 0.1                                   # it drove right past the parked robot
+    assert watched > 10                                    # seen near in scan after scan
+    assert nav.closing.hot_until == -math.inf
+    assert scene.world.collisions == 0
