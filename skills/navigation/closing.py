@@ -36,7 +36,7 @@ NEAR = 1.0
 
 class ClosingWatch:
     def __init__(self):
-        self.scans: deque[tuple[float, np.ndarray]] = deque()
+        self.scans: deque[tuple[float, np.ndarray, np.ndarray]] = deque()    # (time, points, robot position)
         self.closing = 0.0          # m/s, the nearest unexplained point's speed toward the robot
         self.hot_until = -np.inf
 
