@@ -63,11 +63,17 @@ def test_a_window_narrower_than_the_robot_needs_stays_shut(border):
     assert feasible_distance(ctx, pose, "INPUT", 0.40, belt, minimum=0.20) is None
 
 
-def test_a_navigation_goal_that_fits_by_the_exact_distance_is_kept():
-    ctx, pose = scene(0.665, 0.335)
-    goal = approach_pose(pose, "INPUT", 0.34, PROFILE.mps.belt_offset_y)
+def _navigating(ctx, pose, distance):
+    """A navigation started toward ``distance`` m in front of the station's input, and its goal."""
+    goal = approach_pose(pose, "INPUT", distance, PROFILE.mps.belt_offset_y)
     nav = Navigate(ctx, PoseGoal(goal))
     nav.start()
+    return nav, goal
+
+
+def test_a_navigation_goal_that_fits_by_the_exact_distance_is_kept():
+    ctx, pose = scene(0.665, 0.335)
+    nav, goal = _navigating(ctx, pose, 0.34)
     # it fits where it is; the cells moved it 0.45 m, beside the station
     assert (nav.target.x, nav.target.y) == (goal.x, goal.y) and nav.adjusted == 0.0
     nav.cancel()
@@ -76,9 +82,7 @@ def test_a_navigation_goal_that_fits_by_the_exact_distance_is_kept():
 def test_a_navigation_goal_that_does_not_fit_moves_to_the_nearest_spot_that_does():
     ctx, pose = scene(0.665, 0.0)
     # 0.015 m short of the face's clearance (the cells let it stand there)
-    goal = approach_pose(pose, "INPUT", 0.30, PROFILE.mps.belt_offset_y)
-    nav = Navigate(ctx, PoseGoal(goal))
-    nav.start()
+    nav, goal = _navigating(ctx, pose, 0.30)
     moved = nav.target.relative_to(pose).x - PROFILE.mps.depth / 2.0
     # along the face's normal, by about what it lacked (and 1 cm more), no farther
     assert 0.30 + 0.02 <= moved <= 0.30 + 0.035 and nav.adjusted < 0.04
@@ -90,8 +94,6 @@ def test_a_navigation_goal_that_does_not_fit_moves_to_the_nearest_spot_that_does
 
 def test_a_goal_in_a_gap_too_narrow_for_the_robot_is_refused():
     ctx, pose = scene(0.50, 0.0)
-    goal = approach_pose(pose, "INPUT", 0.25, PROFILE.mps.belt_offset_y)
-    nav = Navigate(ctx, PoseGoal(goal))
-    nav.start()
+    nav, _ = _navigating(ctx, pose, 0.25)
     assert nav.status is Status.FAILURE and nav.error is SkillError.NAVIGATION_FAILED
     assert "no room for the robot" in nav.message
