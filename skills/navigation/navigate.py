@@ -19,7 +19,8 @@ commanded counts as blocked too (something the laser does not see).  Time blocke
 another robot does not count toward the time limit taken from the distance.  Blocked
 by another robot with no way round it, a navigation steps aside for a while
 (:mod:`.yielding`: two robots each in the other's only way would otherwise wait
-for each other until both fail, again and again).  Losing localisation fails with
+for each other until both fail, again and again).  A robot coming closer from the side
+(:mod:`.closing`) bounds the speed toward it, not only along the way.  Losing localisation fails with
 ``LOCALISATION_LOST``; the time limit with ``TIMEOUT``.
 """
 from __future__ import annotations

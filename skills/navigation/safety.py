@@ -106,7 +106,6 @@ def speed_limit(points: np.ndarray, vx: float, vy: float, radius: float, margin:
     return decel * (-b + math.sqrt(b * b - 2.0 * c / decel))
 
 
-
 def radial_limit(points: np.ndarray, ux: float, uy: float, radius: float, margin: float, decel: float,
                  latency: float, closing: float, near: float) -> float:
     """Highest speed (m/s) along the unit direction (ux, uy) whose part
