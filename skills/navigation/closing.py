@@ -21,6 +21,8 @@ from collections import deque
 
 import numpy as np
 
+from .yielding import disc_centre
+
 #: m/s toward the robot above which the nearest unexplained point counts as coming closer
 COMING = 0.08
 #: s the watch stays on after the last time something came closer (both robots stopped:
@@ -57,19 +59,16 @@ class ClosingWatch:
         if not then:
             return 0.0
         t, old, there = then[0]
-        centre = _centre(near, here, radius)
-        same = old[np.hypot(*(old - centre).T) < SAME] if len(old) else old
-        if not len(same):
+        now_disc = disc_centre(near, here, radius)
+        if now_disc is None:
             return 0.0
-        before = _centre(same, there, radius)
-        return float((np.hypot(*(before - here)) - np.hypot(*(centre - here))) / (now - t))
+        centre = now_disc[0]
+        same = old[np.hypot(*(old - centre).T) < SAME] if len(old) else old
+        before = disc_centre(same, there, radius)
+        if before is None:
+            return 0.0
+        return float((np.hypot(*(before[0] - here)) - np.hypot(*(centre - here))) / (now - t))
 
     def active(self, now: float) -> bool:
         return now < self.hot_until
 
-
-def _centre(points: np.ndarray, seen_from: np.ndarray, radius: float) -> np.ndarray:
-    """The centre of the disc of ``radius`` whose nearest point to ``seen_from`` is the nearest of ``points``."""
-    d = np.hypot(*(points - seen_from).T)
-    k = int(np.argmin(d))
-    return points[k] + radius * (points[k] - seen_from) / max(d[k], 1e-6)

@@ -70,15 +70,25 @@ def blocker(points: np.ndarray, here: tuple[float, float], radius: float) -> tup
     (field points of other robots) within :data:`NEAR`, pushed back by
     ``radius`` along the line of sight (the laser sees its near side); None
     when none is that near."""
+    got = disc_centre(points, here, radius)
+    if got is None or got[1] > NEAR:
+        return None
+    return float(got[0][0]), float(got[0][1])
+
+
+def disc_centre(points: np.ndarray, here, radius: float) -> tuple[np.ndarray, float] | None:
+    """(centre, distance to it from ``here``'s nearest point of them) of the disc of
+    ``radius`` whose nearest point to ``here`` is the nearest of ``points``: the point
+    a laser at ``here`` sees of another robot lies on the line to its centre, so the
+    centre does not move as the view changes.  None without points (or one at ``here``)."""
     if len(points) == 0:
         return None
     d = np.hypot(points[:, 0] - here[0], points[:, 1] - here[1])
     i = int(np.argmin(d))
-    if d[i] > NEAR or d[i] < 1e-6:
+    if d[i] < 1e-6:
         return None
-    p = points[i]
     k = (d[i] + radius) / d[i]
-    return float(here[0] + (p[0] - here[0]) * k), float(here[1] + (p[1] - here[1]) * k)
+    return np.array([here[0] + (points[i, 0] - here[0]) * k, here[1] + (points[i, 1] - here[1]) * k]), float(d[i])
 
 
 def yield_spot(costmap, planner, here: tuple[float, float], other: tuple[float, float],
