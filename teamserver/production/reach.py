@@ -2,9 +2,9 @@
 
 A robot puts a base on a ring station's slide and takes a cap carrier from a
 cap station's shelf standing in front of the input face, beside the belt
-(machine +y: the slide 0.25 m, the shelf slots 0.32, 0.24 and 0.16 m), its
-centre 0.4 m from the face on its way in (closer only where something ahead leaves
-less room: that moves it along the face's normal, not toward a wall beside it).  The real
+(machine +y: the slide 0.25 m, the shelf slots 0.32, 0.24 and 0.16 m): docked, its
+centre 0.27 m from the face, it moves sideways from the belt to the place (on its way in
+it stops in front of the belt, 0.4 m out or closer where that leaves no room).  The real
 generator stands a cyan RS or CS in the column by the x = 7 wall at rotation
 270 (refbox-rules.md, field generation), which turns that side to the wall:
 2025 seed 11 has C-RS1 in C_Z76, and every base put on its slide and every
@@ -23,8 +23,12 @@ import math
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
 
-#: m from the face to the robot's centre where it stops in front of the place
-MIN_DISTANCE = 0.40
+#: m from the face to the robot's centre where it stands at the place: docked (the skills'
+#: ``final_distance``), where it moves sideways from the belt to a slide or shelf slot; on its way
+#: in it stops farther out (0.40 m) in front of the belt, or closer where that leaves no room.
+#: (0.40 here, before: C-CS1 at 135 degrees by the x = -6 wall, 2016 seed 6, had every slot
+#: walled by 4 mm for a pose 2 cm off and no grey cap all game, though slot 2 leaves 9 cm docked)
+DOCKED_DISTANCE = 0.27
 
 
 class Reach:
@@ -74,7 +78,7 @@ class Reach:
             return False
         (x, y), th = got
         prof = self.kb.profile
-        ahead = prof.mps.depth / 2.0 + MIN_DISTANCE
+        ahead = prof.mps.depth / 2.0 + DOCKED_DISTANCE
         px = x + math.cos(th) * ahead - math.sin(th) * lateral
         py = y + math.sin(th) * ahead + math.cos(th) * lateral
         f = prof.field

@@ -2,6 +2,7 @@
 the real generator stands a cyan RS or CS by the x = 7 wall at rotation 270, which turns
 its slide and shelf (machine +y) to the wall."""
 from teamserver.knowledge import model as M
+from teamserver.production.shelves import CapShelves
 from teamserver.server import ServerConfig
 from tests.support.teamserver import Lockstep, machines_known
 from tests.teamserver.production.test_ts_storage import COSTS, Stations2025, send_orders
@@ -60,3 +61,16 @@ def test_no_base_goes_to_a_slide_by_the_wall_and_no_cap_from_a_dry_shelf():
     tasks = list(ls.server.kb.tasks.values())
     assert not [t for t in tasks if t.machine == "C-RS1" and t.params.get("side") == M.SLIDE]
     assert not [t for t in tasks if t.kind == M.RETRIEVE_CAP and t.machine == "C-CS1"]
+
+
+def test_a_shelf_turned_away_at_an_angle_counts_where_the_robot_stands_docked():
+    """2016 seed 6: C-CS1 at 135 degrees by the x = -6 wall, its shelf facing away from the wall
+    at an angle.  Docked (0.27 m from the face) slot 2 leaves 9 cm to spare and slot 1 3 cm;
+    reckoned 0.40 m out, all three were walled (slot 2 by 4 mm), the shelf dry, and the game with
+    a 2 s delay (whose fused pose was 2 cm better) never made a product with a grey cap."""
+    ls = Lockstep("rcll2016", config=ServerConfig(prefill_caps=False))
+    ls.agents[0].observe("C-CS1", orientation=135, oconf=0.99, pose=(-5.2288, 1.9937, 2.356), pconf=0.99)
+    ls.step(n=5)
+    shelves = CapShelves(ls.server.kb)
+    assert shelves.reach.shelf_walled("C-CS1") == {0}
+    assert not shelves.dry("C-CS1")
