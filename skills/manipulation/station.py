@@ -153,7 +153,10 @@ class ApproachStation(Sequence):
 
         self.docked_shift = False
         self.used_tag = False
-        super().__init__(ctx, [navigate, align, lambda: Dock(ctx, m.final_distance), centre, to_spot], timeout,
+        # centred twice: the first look at a face 8-9 cm to the side is 1-2 cm short (the far
+        # edge's run ends early), the second, from in front of it, is not
+        super().__init__(ctx, [navigate, align, lambda: Dock(ctx, m.final_distance), centre, centre, to_spot],
+                         timeout,
                          name=f"approach {place.describe()}")
 
     def _coarse_goal(self, ctx) -> StationSideGoal:
@@ -170,7 +173,7 @@ class ApproachStation(Sequence):
         """Sideways move (m) that brings the station face's centre, as the laser
         sees it, where it appears from the docked pose in front of the place's
         spot (of the belt line when the robot shifts to the spot later); 0 when the
-        laser does not show both edges or the move would be over ``MAX_LATERAL_FIX``."""
+        laser does not show both edges or the move would be over ``MAX_FACE_FIX``."""
         machine = ctx.machines.get(place.machine)
         try:
             scan = ctx.backend.laser_scan()
@@ -187,7 +190,13 @@ class ApproachStation(Sequence):
                              target_lateral(spot, mps), mps)
         face = machine.compose(Pose2D((1.0 if place.side == "INPUT" else -1.0) * mps.depth / 2.0, 0.0, 0.0))
         move = seen - face.relative_to(goal).y
-        return move if 0.003 <= abs(move) <= self.MAX_LATERAL_FIX else 0.0
+        return move if 0.003 <= abs(move) <= self.MAX_FACE_FIX else 0.0
+
+    #: m; the laser's view of the face (both edges, a face as wide as a station's within 5 cm)
+    #: is believed up to this far: a localiser 6-7 cm off beside a wall plus the navigation's
+    #: tolerance (2016 seed 6, reach-docked: docked 8.4 cm beside C-DS's belt in the corner by the
+    #: wall; the move was over the 8 cm cap of the pose's own error, and the C2 fell to the floor)
+    MAX_FACE_FIX = 0.20
 
     #: m; a larger lateral error than this after the navigation is not the navigation's tolerance
     #: (a pose the localiser just corrected): no correction then, the laser's dock goes on as before

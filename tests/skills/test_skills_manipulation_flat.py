@@ -160,3 +160,18 @@ def test_fit_face_finds_distance_and_yaw():
     d, est_yaw, n = fit_face(pts)
     assert d == pytest.approx(0.5, abs=1e-6) and est_yaw == pytest.approx(yaw, abs=1e-6)
     assert fit_face(pts[:5]) is None
+
+
+@pytest.mark.parametrize("off", [-0.09, 0.09, 0.12])
+def test_without_a_tag_the_laser_lines_up_a_robot_whose_map_is_a_hand_off_sideways(off):
+    """2016 seed 6 (reach-docked): the localiser was 6.6 cm off beside the wall at C-DS (45 degrees
+    in the corner) and the robot docked 8.4 cm beside the belt; the laser saw the face's two edges,
+    but a move over 8 cm was not made, the put went beside the belt and the C2 fell to the floor.
+    Here the map's station stands ``off`` metres along its face from the true one."""
+    scene = Scene(seed=9)
+    true = scene.world.stations["C-BS"].pose
+    scene.ctx.machines.set("C-BS", true.compose(Pose2D(0.0, off, 0.0)))
+    app = ApproachStation(scene.ctx, Place("C-BS", "OUTPUT"), use_tag=False)
+    assert scene.run(app) is Status.SUCCESS, app.message
+    rel = scene.robot.true_pose.relative_to(true)
+    assert rel.y == pytest.approx(scene.profile.mps.belt_offset_y, abs=0.015)
