@@ -8,7 +8,9 @@ away (points the map does not explain, other robots, ``OTHER_MARGIN`` and
 ``OTHER_LATERAL`` more), braking at the base's deceleration; toward where the laser is blind
 (behind) the unexplained points remembered by navigation
 (``ctx.laser_memory``: other robots seen on the way in) count instead.  A
-pressed bumper stops every motion.  Units: metres, seconds, the robot
+pressed bumper stops every motion but one away from what it touches (:meth:`MotionGuard.touching`:
+the map's walls and stations near the robot's outline, and the laser's points), at
+``BUMPED_SPEED``; with nothing of the kind near, it stops every motion.  Units: metres, seconds, the robot
 frame (x forward, y left).
 """
 from __future__ import annotations
@@ -27,6 +29,11 @@ from .safety import LATE, scan_points, speed_limit, to_field
 #: more room (m) kept from what the map does not explain (other robots): ahead and beside
 OTHER_MARGIN = 0.07
 OTHER_LATERAL = 0.04
+#: m beyond the robot's radius within which the map's walls and stations (from the believed pose,
+#: a few centimetres off) and the laser's points may be what a pressed bumper touches
+TOUCH_BAND = 0.12
+#: m/s; the most a robot whose bumper is pressed moves away from what it touches
+BUMPED_SPEED = 0.05
 
 
 class MotionGuard:
@@ -103,10 +110,14 @@ class MotionGuard:
         speed = math.hypot(vx, vy)
         if speed < 1e-9:
             return math.inf
-        if self.bumped():
-            self.reason = "the bumper is pressed"
-            return 0.0
         ux, uy = vx / speed, vy / speed
+        top = math.inf
+        if self.bumped():
+            toward = self.touching()
+            if not len(toward) or float((toward @ np.array([ux, uy])).max()) > 0.0:
+                self.reason = "the bumper is pressed"
+                return 0.0
+            top = BUMPED_SPEED        # away from all it may touch: slowly
         r = self.ctx.robot
         decel = self.ctx.settings.max_decel * 0.8
         s = self.ctx.settings
@@ -122,7 +133,35 @@ class MotionGuard:
                   speed_limit(other, ux, uy, r.radius, self.margin + OTHER_MARGIN, side, decel, period))
         if cap <= 0.0:
             self.reason = "something is in the way" + (" (seen earlier, behind the robot)" if blind else "")
-        return cap
+        return min(cap, top)
+
+    def touching(self) -> np.ndarray:
+        """Unit vectors (robot frame) toward what a pressed bumper may be touching: the
+        nearest point of every wall and station edge of the map within ``TOUCH_BAND`` of the
+        robot's outline (from the believed pose), and the laser's points that near.  Empty
+        when nothing is (another robot behind, unseen) or the pose is not known: then no
+        direction is known to be away from it."""
+        r = self.ctx.robot.radius
+        fixed, other = self._points()
+        pts = np.concatenate([fixed, other], axis=0)
+        near = pts[np.hypot(pts[:, 0], pts[:, 1]) <= r + TOUCH_BAND] if len(pts) else pts
+        try:
+            pose = self.ctx.pose()
+        except NotLocalised:
+            pose = None
+        if pose is not None:
+            segs = self.ctx.map.segments()
+            a, ab = segs[:, :2], segs[:, 2:] - segs[:, :2]
+            q = np.array([pose.x, pose.y]) - a
+            t = np.clip((q * ab).sum(axis=1) / np.maximum((ab * ab).sum(axis=1), 1e-12), 0.0, 1.0)
+            closest = a + t[:, None] * ab
+            d = np.hypot(closest[:, 0] - pose.x, closest[:, 1] - pose.y)
+            rel = closest[d <= r + TOUCH_BAND] - np.array([pose.x, pose.y])
+            c, s = math.cos(-pose.theta), math.sin(-pose.theta)
+            near = np.concatenate([near, np.column_stack([c * rel[:, 0] - s * rel[:, 1],
+                                                          s * rel[:, 0] + c * rel[:, 1]])], axis=0)
+        n = np.hypot(near[:, 0], near[:, 1])
+        return near[n > 1e-9] / n[n > 1e-9, None]
 
     def clamp(self, vx: float, vy: float, lag: float | None = None) -> tuple[float, float]:
         """(vx, vy) slowed to :meth:`limit` along its direction."""

@@ -151,3 +151,33 @@ def test_a_shelf_slot_by_the_wall_is_grabbed_from_beside_it_with_the_gripper_rea
     st = world.stations["C-CS1"].pose
     ctx.machines.set("C-CS1", Pose2D(st.x, st.y - 0.08, st.theta))
     assert spot_aside(ctx, slot0) is None
+
+
+def _backed_against(seed, name, gap):
+    """Robot 1 in front of ``name``'s output face, facing away from it, its back ``gap`` m
+    from the face: the bumper feels the station."""
+    world = sim.World("rcll2016", seed=seed)
+    st = world.stations[name].pose
+    r = world.robot_config.geometry.radius
+    pose = st.compose(Pose2D(-(world.profile.mps.depth / 2 + r + gap), 0.0, math.pi))
+    bot = open_backend("sim", world=world, robot=("CYAN", 1), pose=pose)
+    ctx = SkillContext.create(bot, world.clock, world.profile, pose, localisation=None)
+    for n, s in world.stations.items():
+        ctx.machines.set(n, s.pose)
+    return world, bot, ctx
+
+
+def test_a_robot_whose_bumper_touches_a_station_behind_may_move_away_from_it_but_not_into_it():
+    """2016 seed 3 with a 2 s delay: the navigation stopped robot 3 1 mm from C-CS2's face (the
+    localiser 8 cm off between C-CS2 and C-RS2 by the wall), the bumper felt it, and the motion
+    guard stopped every motion: lining up with C-RS2's slide, 0.08 m ahead and 0.23 m aside,
+    failed after 20 s, twice (100 s and a product late)."""
+    world, bot, ctx = _backed_against(3, "C-CS2", 0.002)
+    assert bot.bumper()
+    status, _ = drive(world, MoveRelative(ctx, 0.08, -0.2, speed=0.15), limit=20.0)
+    assert status is Status.SUCCESS
+    assert not bot.bumper() and world.collision_count <= 1
+    world, bot, ctx = _backed_against(3, "C-CS2", 0.002)
+    into = MoveRelative(ctx, -0.1, 0.0, speed=0.15)
+    status, _ = drive(world, into, limit=20.0)
+    assert status is Status.FAILURE and "bumper" in into.message
