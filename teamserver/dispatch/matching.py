@@ -21,6 +21,7 @@ from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
 from ..production.caps import FREE, Caps
 from ..production.locks import StationLocks
+from ..production.products import CLEANUP_ORDER
 from ..production.slides import Slides
 from ..production.world import PlanningWorld
 from .config import DispatchConfig
@@ -93,7 +94,7 @@ class Matcher:
                 cost[i, j] = (travel(r, positions.get(t.machine)) + 1e-3 * _age(t)
                               + self.config.urgency * self._slack(t, game_time)
                               - self.config.unblock * (t.id in frees)
-                              - self.config.cap_first * (t.product in capped))
+                              - self.config.cap_first * (t.product in capped or self._cap_due(t)))
         rows, cols = linear_sum_assignment(cost)
         for i, j in sorted(zip(rows, cols), key=lambda ij: cost[ij[0], ij[1]]):
             t, r = pool[j], free[i]
@@ -119,6 +120,15 @@ class Matcher:
         if self._all_stuck_since is None:
             self._all_stuck_since = now
         return now - self._all_stuck_since
+
+    def _cap_due(self, task: M.Task) -> bool:
+        """Is ``task`` a product's cap retrieval whose rings are under way?  (A ready
+        RETRIEVE_CAP is due, :meth:`Caps.cap_due`.)  The product waits for that cap
+        next: its retrieval is on the product's critical path."""
+        if task.kind != M.RETRIEVE_CAP:
+            return False
+        p = self.kb.products.get(task.product or "")
+        return p is not None and p.order_id != CLEANUP_ORDER
 
     def _travel(self, robot: M.Robot, machine: str) -> float:
         return travel(robot, self.world.positions().get(machine))
