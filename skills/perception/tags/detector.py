@@ -37,6 +37,11 @@ class TagDetector:
         self.min_side_px = min_side_px
         params = cv2.aruco.DetectorParameters()
         params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_SUBPIX
+        # a tag whose white margin reaches the image's edge is still whole: with
+        # OpenCV's default (3 px) the tag was lost in a band where its margin ends
+        # 1-3 px above the bottom edge, 0.60-0.615 m from the face in the sim's
+        # camera, right where the robot lines up with a station (coarse_distance)
+        params.minDistanceToBorder = 0
         self._detector = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(DICTIONARY), params)
         self._obj = marker_object_points(self.tag_size)
 
@@ -83,13 +88,17 @@ class TagDetector:
         return found
 
     def _solve(self, pts, k, dist, up):
-        n, rvecs, tvecs, errs = cv2.solvePnPGeneric(self._obj, pts, k, dist,
-                                                    flags=cv2.SOLVEPNP_IPPE_SQUARE)
-        if not n or errs is None:          # degenerate corners (all on a line or one point): no pose
+        # IPPE_SQUARE returns NaN for a tag seen squarely, its corners an exact
+        # axis-aligned trapezoid (the sim's camera 0.685 m in front of a face);
+        # the general IPPE solves that one (but also "solves" corners on a line)
+        x, y = pts[:, 0], pts[:, 1]
+        if abs(float(x @ np.roll(y, -1) - y @ np.roll(x, -1))) < 2.0:   # twice the area, px^2
             return None
-        cands = [(float(np.ravel(e)[0]), r, t) for r, t, e in zip(rvecs, tvecs, errs)
-                 if np.all(np.isfinite(r)) and np.all(np.isfinite(t)) and np.all(np.isfinite(e)) and t[2, 0] > 0]
-        if not cands:
+        for flags in (cv2.SOLVEPNP_IPPE_SQUARE, cv2.SOLVEPNP_IPPE):
+            cands = self._candidates(pts, k, dist, flags)
+            if cands:
+                break
+        else:
             return None
         cands.sort(key=lambda c: c[0])
         best = cands[0]
@@ -103,3 +112,11 @@ class TagDetector:
             if upright(alt) > upright(best) and alt[0] < 2.0 * best[0] + 0.5:
                 best = alt
         return best[1], best[2]
+
+    def _candidates(self, pts, k, dist, flags) -> list:
+        """(reprojection error, rvec, tvec) of each finite pose in front of the camera."""
+        n, rvecs, tvecs, errs = cv2.solvePnPGeneric(self._obj, pts, k, dist, flags=flags)
+        if not n or errs is None:          # degenerate corners (all on a line or one point): no pose
+            return []
+        return [(float(np.ravel(e)[0]), r, t) for r, t, e in zip(rvecs, tvecs, errs)
+                if np.all(np.isfinite(r)) and np.all(np.isfinite(t)) and np.all(np.isfinite(e)) and t[2, 0] > 0]

@@ -117,3 +117,29 @@ def test_the_same_frame_again_is_not_detected_again(world, reader):
     again = source.detections()
     assert again.stamp == world.time and again.stamp > first.stamp
     assert again.tags == first.tags and again.lights == first.lights and not calls
+
+
+def test_the_tag_is_found_at_every_distance_a_robot_lines_up_from():
+    """Lining up, the robot stands about 0.62 m from the face, and the game's
+    camera (320 x 240) then sees the tag at the bottom of its image.  Its white
+    margin reaches the edge 0.600-0.615 m out: OpenCV's default border distance
+    lost the tag there (rcll2016 seed 2 with rendered perception: four cap
+    retrievals at C-CS2 failed with ALIGN_FAILED, 92 points instead of 406).
+    Seen squarely 0.685 m out, the corners are an exact trapezoid that OpenCV's
+    square-tag solver gives no pose for."""
+    with World("rcll2016", seed=2, perception="rendered") as w:
+        robot = w.add_robot("CYAN", 1)
+        prof = w.profile
+        detector = TagDetector(prof.tag_size, valid_ids=set(prof.all_tag_ids))
+        for name in ("C-BS", "C-CS2"):
+            st = w.station(name)
+            centre, frame = st.tag_frame("input")
+            nx, ny = frame[0, 2], frame[1, 2]
+            heading = math.atan2(-ny, -nx)
+            for mm in range(575, 705, 5):
+                d = mm / 1000
+                w.teleport("CYAN", 1, Pose2D(centre[0] + d * nx, centre[1] + d * ny, heading))
+                w.step(0.02)
+                img = w.camera_image(robot)
+                found = [t.tag_id for t in detector.detect(img.image, img.intrinsics)]
+                assert found == [st.tag_id("input")], f"{name} at {d:.3f} m from its face: {found}"
