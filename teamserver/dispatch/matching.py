@@ -7,7 +7,9 @@ assignment, ``scipy.optimize.linear_sum_assignment``), earlier products
 first on ties; tasks that free a stuck robot are preferred by ``unblock``
 metres, and the steps of a product whose retrieved cap waits in a cap
 station by ``cap_first`` metres (the cap keeps that station from every
-other product until it is mounted).  Pickups that would leave one more robot stuck wait while
+other product until it is mounted), and a product's due cap retrieval (its
+rings under way: the product waits for that cap next) by ``cap_due``.  A robot
+on its way to a pickup that will leave it stuck counts as stuck.  Pickups that would leave one more robot stuck wait while
 ``robots - 1`` are (:mod:`.holding`), but a pickup that frees a stuck robot
 by clearing its station's output; when all are stuck, a base held for a full
 slide goes to another slide.  Locks are taken at assignment.
@@ -94,7 +96,8 @@ class Matcher:
                 cost[i, j] = (travel(r, positions.get(t.machine)) + 1e-3 * _age(t)
                               + self.config.urgency * self._slack(t, game_time)
                               - self.config.unblock * (t.id in frees)
-                              - self.config.cap_first * (t.product in capped or self._cap_due(t)))
+                              - self.config.cap_first * (t.product in capped)
+                              - self.config.cap_due * self._cap_due(t))
         rows, cols = linear_sum_assignment(cost)
         for i, j in sorted(zip(rows, cols), key=lambda ij: cost[ij[0], ij[1]]):
             t, r = pool[j], free[i]

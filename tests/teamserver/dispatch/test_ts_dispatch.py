@@ -362,10 +362,14 @@ def test_a_prepared_station_going_down_keeps_its_task(tcp):
     assert kb.tasks[bs.id].state == M.ASSIGNED             # the base comes out after DOWN
 
 
-def test_work_that_frees_a_stuck_robot_goes_first():
-    """Robot 1 holds a base whose cap mount waits for its cap retrieval at C-CS2
-    (DOWN until now); the only free robot stands next to C-CS1 where another
-    product's cap retrieval waits, yet it goes for the one that frees robot 1."""
+@pytest.mark.parametrize("holding", [True, False], ids=["holds", "on-its-way"])
+def test_work_that_frees_a_stuck_robot_goes_first(holding):
+    """Robot 1 holds a base (or is on its way to pick it up) whose cap mount waits
+    for its cap retrieval at C-CS2 (DOWN until now); the only free robot stands
+    next to C-CS1 where another product's cap retrieval waits, yet it goes for the
+    one that frees robot 1.  (On its way, robot 1 did not count: rcll2025 seed 2
+    with 20 % loss, a robot fetched a product whose cap nobody had started on,
+    and held it 100 s.)"""
     ls = Lockstep(robots=2, config=ALONE)
     place(ls, [(5.0, 1.2, 0.0), (-5.0, 5.5, 0.0)])
     production_setup(ls, [{"id": 1}], states={"C-CS2": "DOWN"})
@@ -373,7 +377,8 @@ def test_work_that_frees_a_stuck_robot_goes_first():
     ls.step(n=3)
     [get] = [t for t in kb.tasks.values() if t.machine == "C-BS" and t.state == M.ASSIGNED]
     assert get.robot == 1
-    ls.agents[0].result(get.id, holding=True)                       # robot 1 holds the base
+    if holding:
+        ls.agents[0].result(get.id, holding=True)                   # robot 1 holds the base
     ls.step(n=3)
     [retrieve] = [t for t in kb.tasks.values() if t.kind == M.RETRIEVE_CAP]
     assert retrieve.state == M.PENDING                              # C-CS2 is DOWN
@@ -445,3 +450,37 @@ def test_the_steps_of_a_product_whose_cap_waits_in_a_cap_station_go_first():
     d.matcher.assign(0.0)
     assert kb.tasks[base.id].state == M.ASSIGNED and kb.tasks[base.id].robot == 1
     assert kb.tasks[retrieve.id].state == M.PENDING
+
+
+def test_a_cap_retrieval_its_product_waits_for_goes_before_a_base_a_little_nearer():
+    """Product A's rings are under way (it has none): its cap retrieval at C-CS2 is
+    what it waits for next; the only free robot stands 3 m nearer to C-BS, where
+    product B (same order) could fetch its first base, yet it starts A's cap."""
+    ls = Lockstep(robots=1, config=ALONE)
+    production_setup(ls, [])
+    ls.step(n=2)
+    kb, d = ls.server.kb, ls.server.dispatcher
+    products = ls.server.production.products
+    pos = ls.server.production.world.positions()
+    (bx, by), (cx, cy) = pos["C-BS"][:2], pos["C-CS2"][:2]
+    dist = ((bx - cx) ** 2 + (by - cy) ** 2) ** 0.5
+    ux, uy = (bx - cx) / dist, (by - cy) / dist
+    at = (dist + 3.0) / 2                    # 3 m nearer to C-BS than to C-CS2
+    ls.agents[0].pose = (cx + ux * at, cy + uy * at, 0.0)
+    ls.agents[0].status()
+    ls.step()
+    a, b = products.new("P", 1), products.new("P", 1)
+    retrieve = M.Task(kb.next_id("task"), M.RETRIEVE_CAP, {"machine": "C-CS2"}, product=a.id,
+                      prepare={"machine": "C-CS2", "cs": {"operation": "RETRIEVE_CAP"}},
+                      locks=("C-CS2", "C-CS2#cap"))
+    base = M.Task(kb.next_id("task"), M.GET_WORKPIECE,
+                  {"machine": "C-BS", "side": M.OUTPUT, "base": "BASE_RED"}, product=b.id,
+                  prepare={"machine": "C-BS", "bs": {"side": M.OUTPUT, "color": "BASE_RED"}},
+                  locks=("C-BS",), releases=("C-BS",))
+    for p, t in ((a, retrieve), (b, base)):
+        kb.save_task(t)
+        p.tasks = (t.id,)
+        kb.save_product(p)
+    d.matcher.assign(0.0)
+    assert kb.tasks[retrieve.id].state == M.ASSIGNED and kb.tasks[retrieve.id].robot == 1
+    assert kb.tasks[base.id].state == M.PENDING
