@@ -134,3 +134,37 @@ def test_bad_calibration_files_say_what_is_wrong(tmp_path, text, message):
     (tmp_path / "c.yaml").write_text(text)
     with pytest.raises(CalibrationError, match=message):
         load_intrinsics(tmp_path / "c.yaml")
+
+
+def test_a_frame_goes_out_when_it_is_there_not_a_period_later(wait_for):
+    """The emulated camera's world renders on its own clock and the source has
+    nothing new between renders: a frame that appears between the server's looks
+    goes out at once (polled once a period, it waited up to 0.2 s at 5 fps, and
+    tags seen while the robot turned put stations 0.3 m off)."""
+    state = {"sparse": False, "pending": None, "sent": 0.0}
+
+    def source():
+        if state["sparse"] and state["pending"] is None:
+            return None
+        state["pending"], state["sent"] = None, time.monotonic()
+        return np.full((240, 320, 3), 90, np.uint8)
+
+    server = MjpegServer(source, fps=1.0)             # a look a second at most
+    server.start()
+    cam = CameraGrabber(server.url, hfov=math.radians(60), timeout=10.0).start(wait=120)
+    try:
+        assert wait_for(lambda: cam.stats().frames >= 2, 30)
+        state["sparse"] = True
+        delays = []
+        for _ in range(3):
+            before = cam.stats().frames
+            # just after one of the server's looks (a second apart before this change)
+            assert wait_for(lambda: time.monotonic() - state["sent"] >= 1.05, 10)
+            made = time.monotonic()
+            state["pending"] = made
+            assert wait_for(lambda: cam.stats().frames > before, 10)
+            delays.append(cam.latest().stamp - made)
+        assert max(delays) < 0.5, f"frames waited for the server's next look: {delays}"
+    finally:
+        cam.close()
+        server.stop()
