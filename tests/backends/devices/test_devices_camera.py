@@ -162,7 +162,7 @@ def test_a_frame_goes_out_when_it_is_there_not_a_period_later(wait_for):
             assert wait_for(lambda: time.monotonic() - state["sent"] >= 1.05, 10)
             made = time.monotonic()
             state["pending"] = made
-            assert wait_for(lambda: cam.stats().frames > before, 10)
+            assert wait_for(lambda before=before: cam.stats().frames > before, 10)
             delays.append(cam.latest().stamp - made)
         assert max(delays) < 0.5, f"frames waited for the server's next look: {delays}"
     finally:
