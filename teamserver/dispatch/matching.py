@@ -10,9 +10,10 @@ station by ``cap_first`` metres (the cap keeps that station from every
 other product until it is mounted), and a product's due cap retrieval (its
 rings under way: the product waits for that cap next) by ``cap_due``.  A robot
 on its way to a pickup that will leave it stuck counts as stuck.  Pickups that
-would leave one more robot stuck wait while ``robots - 1`` are (:mod:`.holding`), but a pickup that frees a stuck robot
-by clearing its station's output; when all are stuck, a base held for a full
-slide goes to another slide.  Locks are taken at assignment.
+would leave one more robot stuck wait while ``robots - 1`` are
+(:mod:`.holding`), but a pickup that frees a stuck robot by clearing its
+station's output; when all are stuck, a base held for a full slide goes to
+another slide.  Locks are taken at assignment.
 """
 from __future__ import annotations
 
