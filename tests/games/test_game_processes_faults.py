@@ -12,6 +12,7 @@ import pytest
 
 from games import GameOptions, finish
 from games.processes import ProcessGame
+from games.teamlog import read_lines
 from rll_bt import rules
 from teamserver.knowledge.kb import KnowledgeBase
 from teamserver.knowledge.store import Store
@@ -82,6 +83,13 @@ def _beacons(log) -> set[str]:
     """The robots whose beacons the refbox process logged in ``log``."""
     lines = log.read_text().splitlines() if log.exists() else []
     return {json.loads(x).get("msg", {}).get("peer_name") for x in lines if '"BeaconSignal"' in x}
+
+
+def _confident(game, robot, since) -> list[dict]:
+    """The restarted agent's confident RobotStatus messages the team servers logged so far, after ``since``."""
+    return [e for logs in game._team_logs.values() for path in logs for e in read_lines(path, game.time_map)
+            if e.get("type") == "RobotStatus" and e.get("from") == f"R{robot}" and e["t"] - game._t0 >= since
+            and (e.get("msg") or {}).get("pose_confidence", 0) >= 0.5 and "pose" in e["msg"]]
 
 
 def _relocalised(log, rec, robot, since) -> list[float]:
@@ -187,6 +195,9 @@ def test_agent_killed_and_back_team_server_restarted_station_down(tmp_path):
         assert game.run_until(rejoined, limit=150.0), f"not re-joined: {game.refbox.status()}"
         assert game.run_until(lambda g: {"R1", "R2"} <= _beacons(g.dir / "refbox-messages-2.jsonl"), limit=30.0), \
             "the restarted refbox heard no beacon of a robot"
+        # (the later a restart, the less game is left: wait for the new agent's confident poses)
+        assert game.run_until(lambda g: len(_confident(g, victim, restarted_at + 20.0)) >= 5, limit=120.0), \
+            "the restarted agent reported no confident pose"
         result = game.result(False)
     finally:
         game.close()
