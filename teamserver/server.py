@@ -292,7 +292,7 @@ class TeamServer:
         if tid not in self.kb.tasks:
             return
         t = self.link.task_of(wire)
-        if t is None or r.task_id != t.id:
+        if t is None or (r.task_id != t.id and not (t.state == M.ASSIGNED and t.robot == r.number)):  # (queued)
             self.send_agent(r, self.link.cancel_wire(wire, r.number, self.color))
 
     def _league_beacon(self, r: M.Robot, m) -> None:
@@ -361,6 +361,7 @@ class TeamServer:
             self._last["plan"] = now
         d.feeds.unstick()
         d.dropouts.release_unusable()
+        d.fleet.settle_queued()         # queued behind a task taken back or cancelled: back to the pool
         d.discards.discard_orphans()
         if not exploring:
             self.explorer.look_for_rotations()

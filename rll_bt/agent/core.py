@@ -9,7 +9,8 @@ tree when a tick is due (``config.hz`` on the agent's clock) and sends what
 is due: BeaconSignal to the team server and to the refbox, RobotStatus (and
 on every change), MachineObservations as they change, and task results
 (the league's AgentTask, :mod:`rll_bt.agenttask`).  A task for a busy robot
-waits for the running one, but rll-bt's team server's (with TaskDetail) is refused.
+waits for the running one, but rll-bt's team server's (with TaskDetail) is refused
+unless it was sent to run after that one (:meth:`TaskBook.may_follow`).
 """
 from __future__ import annotations
 
@@ -29,7 +30,7 @@ from .machinemap import KnownMachines, changed_names, distribute
 from .observations import ObservationFeed
 from .pose import PoseReader
 from .refbox import RefboxLink
-from .results import full_gripper_refusal, make_result
+from .results import follow_refusal, full_gripper_refusal, make_result
 from .runner import InvalidTask, Outcome, TaskRun, default_trees_dir, load_task_tree
 from .serverlink import ServerLink
 from .stations import StationStates
@@ -90,11 +91,10 @@ class RobotAgent:
         self._read_at = now                     # when the link to the team server was last read
         self._next_status = now
         self._next_beacon = now
-        self._attached: set[int] = set()
         self.observers: list = []    # stepped(agent), task_started(agent, run), task_ended(agent, run, outcome)
         if config.color:
             self._set_color(config.color)
-        self._attach_observers()
+        self.feed.attach_services(self.services.values())
 
     # -- compatibility views --------------------------------------------------------------
     @property
@@ -217,7 +217,8 @@ class RobotAgent:
             return
         if where is not None:
             return                                          # sent again while it runs or waits
-        if detail is not None and self.run is not None and not self.run.done:
+        after = int(detail.after) if detail is not None and detail.HasField("after") else None
+        if detail is not None and self.run is not None and not self.run.done and after != self.run.task_id:
             busy = f"robot {me} is busy with task {self.run.task_id}; cancel it first"   # rll-bt's server replans
             return self.server.result(make_result(at, robot_id=me, status="FAILED", code="INVALID_TASK", text=busy,
                                                   holding=self._holding(), stamp=self.clock.now()))
@@ -231,6 +232,8 @@ class RobotAgent:
                                      stamp=self.clock.now(), team_color=self._team_value()))
             return
         entry = Entry(at, detail, kind, params, paused=bool(at.pause_task))
+        if self.book.may_follow(entry) is False:                # sent to run after a task that failed
+            return self._record(follow_refusal(entry, self._holding(), robot_id=me, stamp=self.clock.now()))
         if self.book.take(entry):
             self._start(entry)
         else:
@@ -267,6 +270,9 @@ class RobotAgent:
 
     def _start_next(self) -> None:
         nxt = self.book.next()
+        while nxt is not None and self.book.may_follow(nxt) is False:     # its predecessor failed
+            self._record(follow_refusal(nxt, self._holding(), robot_id=self.config.robot_id, stamp=self.clock.now()))
+            nxt = self.book.next()
         if nxt is not None and (self.run is None or self.run.task_id != nxt.task_id):
             self._start(nxt)
 
@@ -466,18 +472,9 @@ class RobotAgent:
     def _services_changed(self) -> None:
         """New services exist: let them feed observations and give them the machine map."""
         self._n_services = len(self.services)
-        self._attach_observers()
+        self.feed.attach_services(self.services.values())     # those that publish sightings feed the stream
         if self.machines is not None:
             distribute(self.services, self.machines)
-
-    def _attach_observers(self) -> None:
-        """Let services that publish sightings (``subscribe``) feed the observation stream."""
-        for svc in list(self.services.values()):
-            for src in (svc, getattr(svc, "machines", None)):
-                if src is None or src is self.feed or id(src) in self._attached:
-                    continue
-                if callable(getattr(src, "subscribe", None)) and self.feed.attach(src):
-                    self._attached.add(id(src))
 
     # -- life cycle ---------------------------------------------------------------------------
     def shutdown(self, reason: str = "agent shut down") -> None:

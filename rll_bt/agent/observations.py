@@ -74,6 +74,7 @@ class ObservationFeed:
                  max_queue: int = 500):
         self.profile = profile
         self.clock = clock
+        self._attached: set[int] = set()        # sources subscribed to (:meth:`attach_services`)
         self.robot_id = robot_id
         self.pose_tolerance = pose_tolerance
         self.angle_tolerance = angle_tolerance
@@ -94,6 +95,14 @@ class ObservationFeed:
             return False
         sub(self.report)
         return True
+
+    def attach_services(self, services) -> None:
+        """:meth:`attach` every service (and its ``machines``) that publishes sightings,
+        each once."""
+        for svc in list(services):
+            for src in (svc, getattr(svc, "machines", None)):
+                if src is not None and src is not self and id(src) not in self._attached and self.attach(src):
+                    self._attached.add(id(src))
 
     def report(self, obs: Any) -> bool:
         """Report one sighting; True if it changed what the server knows (a

@@ -69,3 +69,11 @@ def full_gripper_refusal(entry, holding: bool | None, *, robot_id: int, stamp: f
     return make_result(entry.task, robot_id=robot_id, status="FAILED", code="INVALID_TASK",
                        text="the gripper already holds a workpiece",
                        league_code="WORKPIECE_ALREADY_IN_GRIPPER", holding=True, stamp=stamp)
+
+
+def follow_refusal(entry, holding: bool | None, *, robot_id: int, stamp: float) -> Result:
+    """The refusal of a task rll-bt's team server sent to run after another (its
+    TaskDetail's ``after``) that did not succeed (or that this robot never ran):
+    FAILED with NOT_RUNNING, which the server answers by giving the task out anew."""
+    return make_result(entry.task, robot_id=robot_id, status="FAILED", code="NOT_RUNNING",
+                       text=f"the task before it ({entry.after}) did not succeed", holding=holding, stamp=stamp)

@@ -6,7 +6,9 @@ at most once.  Every id the robot took is in exactly one place:
 
 - ``current``: the task it runs;
 - ``waiting``: tasks that arrived while it was busy (the league's robots
-  queue them; rll-bt's team server sends one at a time);
+  queue them; rll-bt's team server sends a task early only to run after the
+  current one, TaskDetail ``after``: it starts once that one succeeded and is
+  refused otherwise, :meth:`TaskBook.may_follow`);
 - ``finished``: the last :attr:`keep` results, each the league's result (the
   AgentTask echoed with ``successful`` / ``canceled`` / ``error_code``) and
   rll-bt's ``TaskOutcome``.
@@ -39,6 +41,12 @@ class Entry:
     @property
     def task_id(self) -> int:
         return int(self.task.task_id)
+
+    @property
+    def after(self) -> int | None:
+        """The task (id) this one was sent to run after (rll-bt's TaskDetail ``after``), or None."""
+        d = self.detail
+        return int(d.after) if d is not None and d.HasField("after") else None
 
 
 @dataclass
@@ -110,6 +118,17 @@ class TaskBook:
         self.finished.move_to_end(tid)
         while len(self.finished) > self.keep:
             self.issued.pop(self.finished.popitem(last=False)[0], None)
+
+    def may_follow(self, entry: Entry) -> bool | None:
+        """May ``entry`` start as far as the task it was sent to run after goes?  True once
+        that one succeeded (or without one), False if it ended otherwise or is unknown
+        here, None while it still runs or waits."""
+        if entry.after is None:
+            return True
+        if self.where(entry.after) in ("current", "waiting"):
+            return None
+        r = self.finished.get(entry.after)
+        return r is not None and r.successful
 
     def result(self, task_id: int) -> Result | None:
         return self.finished.get(int(task_id))

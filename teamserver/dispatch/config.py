@@ -33,3 +33,6 @@ class DispatchConfig:
     park: bool = True
     park_retry: float = 15.0
     discard_backoff: float = 5.0
+    # a robot this near (m) the station of a task that leaves its gripper empty gets its next
+    # task before the current one ends, to start once it succeeded (None: never; :mod:`.fleet`)
+    queue_near: float | None = 1.2

@@ -65,6 +65,6 @@ class Dispatcher:
         self.results = Results(kb, clock, feeds=feeds, outcomes=pm.outcomes,
                                products=pm.products, repairs=pm.repairs, health=pm.health,
                                shelves=pm.cap_shelves, parking=self.parking, discards=self.discards, tasks=tasks,
-                               config=config)
+                               config=config, fleet=self.fleet)
         self.dropouts = Dropouts(kb, clock, self.fleet, self.readiness, pm.products, tasks,
                                  config)

@@ -17,9 +17,11 @@ prepared for RETRIEVE_CAP, which broke it (rcll2016 seed 10 at 672a03b).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from ..knowledge import model as M
 from ..knowledge.kb import KnowledgeBase
+from ..links.agents import wire_id
 from ..links.tasks import TaskLink
 from ..production.locks import StationLocks
 
@@ -34,6 +36,18 @@ def travel(robot: M.Robot, pos) -> float:
     return math.hypot(pos[0] - robot.pose[0], pos[1] - robot.pose[1])
 
 
+def queued_task(kb: KnowledgeBase, number: int) -> M.Task | None:
+    """The task sent to robot ``number`` to run after its current one, if any."""
+    return next((t for t in kb.open_tasks() if t.state == M.ASSIGNED and t.robot == number
+                 and t.after is not None), None)
+
+
+def next_task(kb: KnowledgeBase, robot: M.Robot) -> M.Task | None:
+    """What ``robot`` works at next: the task queued behind its current one, else that."""
+    q = queued_task(kb, robot.number)
+    return q if q is not None else (kb.tasks.get(robot.task_id) if robot.task_id is not None else None)
+
+
 class Fleet:
     """See the module doc."""
 
@@ -46,6 +60,7 @@ class Fleet:
         self.unsure_for = unsure_for
         self._idle_since: dict[int, float] = {}
         self._unsure: dict[int, tuple[int, float]] = {}     # robot -> (task id, since)
+        self._finishing: dict[int, M.Robot] = {}            # robot -> its copy (:meth:`finishing`)
 
     def hold_back(self, robot: M.Robot, task: M.Task) -> None:
         """``task`` (a pickup) was taken back from ``robot``: no new work for it until
@@ -91,20 +106,87 @@ class Fleet:
         return [r for r in self.kb.active_robots() if not self.unsure(r)
                 and (r.task_id is None or self.parking_task(r) is not None)]
 
+    def finishing(self, positions: dict, near: float) -> list[M.Robot]:
+        """Robots that may be given their next task before their current one ends (see
+        :mod:`.queueing`), each as a copy standing at its task's station with an empty
+        gripper, as it will be; :meth:`assign` queues a task given to such a copy."""
+        out = []
+        for r in self.kb.active_robots():
+            t = self.kb.tasks.get(r.task_id) if r.task_id is not None else None
+            pos = positions.get(t.machine) if t is not None else None
+            if (t is None or pos is None or t.state != M.ASSIGNED or r.state != "BUSY" or self.unsure(r)
+                    or self.tasks.codec.running.get(r.number) != wire_id(t)       # its status: it runs t
+                    or not (t.carry or t.kind == M.RETRIEVE_CAP) or not self.tasks.codec.speaks_rllbt(r)
+                    or travel(r, pos) > near or self.queued(r) is not None):
+                continue
+            out.append(replace(r, pose=(float(pos[0]), float(pos[1]), 0.0), holding=None, task_id=None))
+        self._finishing = {r.number: r for r in out}
+        return out
+
+    def queued(self, robot: M.Robot) -> M.Task | None:
+        """The task sent to ``robot`` to run after its current one, if any."""
+        return queued_task(self.kb, robot.number)
+
+    def settle_queued(self) -> list[M.Task]:
+        """Queued tasks whose predecessor is no longer its robot's assigned task (cancelled,
+        taken back, the robot dropped, or its result in: :meth:`after_result`) go back to
+        the pool; returns them.  The robot drops such a task itself (its predecessor did
+        not succeed, as far as it knows) or has it cancelled (:meth:`back_to_pool`'s caller)."""
+        out = []
+        for t in self.kb.open_tasks():
+            if t.state != M.ASSIGNED or t.after is None:
+                continue
+            before = self.kb.tasks.get(t.after)
+            if before is None or before.state != M.ASSIGNED or before.robot != t.robot:
+                self._unqueue(t, f"task {t.after} before it ended otherwise")
+                out.append(t)
+        return out
+
+    def after_result(self, robot: M.Robot, task: M.Task) -> M.Task | None:
+        """``task``'s result from ``robot`` was booked: the task queued behind it starts
+        (the robot starts it once ``task`` succeeded) or goes back to the pool."""
+        nxt = next((t for t in self.kb.open_tasks() if t.state == M.ASSIGNED and t.after == task.id
+                    and t.robot == robot.number), None)
+        if nxt is None:
+            return None
+        if task.state != M.DONE or robot.task_id is not None or robot.status != M.ACTIVE:
+            self._unqueue(nxt, f"task {task.id} before it did not succeed")
+            return None
+        nxt.after, nxt.assigned_at = None, self.clock.now()
+        self.kb.save_task(nxt)
+        robot.task_id = nxt.id
+        self.kb.save_robot(robot)
+        return nxt
+
+    def _unqueue(self, task: M.Task, why: str) -> None:
+        task.after = None
+        self.tasks.cancel(task, why)            # (the robot drops it itself; a cancel makes sure)
+        self.back_to_pool(task, why)
+
     def assign(self, task: M.Task, robot: M.Robot) -> None:
-        """Give ``task`` to ``robot`` (which stops parking)."""
+        """Give ``task`` to ``robot`` (which stops parking); to a copy :meth:`finishing`
+        made: queue it behind that robot's current task."""
+        real = self.kb.robots.get(robot.number)
+        if robot is self._finishing.get(robot.number) and real is not None and real.task_id is not None:
+            del self._finishing[robot.number]
+            task.after = real.task_id           # (its current task stays the robot's)
+            self._hand_over(task, real.number)
+            return
         park = self.parking_task(robot)
         if park is not None and park is not task:
             park.state, park.finished_at = M.CANCELLED, self.clock.now()
             self.kb.save_task(park)
             self.tasks.cancel(park, f"task {task.id} for this robot")
-        task.state, task.robot = M.ASSIGNED, robot.number
+        self._hand_over(task, robot.number)
+        robot.task_id = task.id
+        self.kb.save_robot(robot)
+
+    def _hand_over(self, task: M.Task, number: int) -> None:
+        task.state, task.robot = M.ASSIGNED, number
         task.assigned_at, task.attempts = self.clock.now(), task.attempts + 1
         task.prepared_at = None
         self.locks.acquire(task)
         self.kb.save_task(task)
-        robot.task_id = task.id
-        self.kb.save_robot(robot)
         self.tasks.send(task)
 
     def assign_explore(self, robot: M.Robot, zone: int) -> M.Task:

@@ -24,6 +24,7 @@ from ..knowledge.kb import KnowledgeBase
 from ..production.feeding import FeedMonitor
 from ..production.locks import StationLocks
 from .config import DispatchConfig
+from .fleet import next_task
 from .readiness import Readiness
 
 
@@ -91,7 +92,7 @@ class Holding:
         bound = self._next_carries()
         n = 0
         for r in self.kb.active_robots():
-            t = self.kb.tasks.get(r.task_id) if r.task_id is not None else None
+            t = next_task(self.kb, r)          # (a pickup queued behind a put: it will hold that)
             if t is not None and t.state == M.ASSIGNED and t.kind != M.GO_TO:
                 n += self.blocks(t, game_time)
             elif r.holding and r.number in bound:
@@ -111,7 +112,7 @@ class Holding:
         for r in self.kb.active_robots():
             nxt = bound.get(r.number) if r.holding else None
             if nxt is None:
-                t = self.kb.tasks.get(r.task_id) if r.task_id is not None else None
+                t = next_task(self.kb, r)
                 if t is not None and t.state == M.ASSIGNED and self.blocks(t, game_time):
                     nxt = self._carry_after(t)
             elif self.readiness.ready(nxt, game_time):

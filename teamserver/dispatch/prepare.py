@@ -59,8 +59,8 @@ class Preparer:
         now = self.clock.now()
         positions = self.world.positions()
         for t in self.kb.open_tasks():
-            if t.state != M.ASSIGNED or not t.prepare:
-                continue
+            if t.state != M.ASSIGNED or not t.prepare or t.after is not None:
+                continue                # (a queued task: its robot is still at the one before)
             st = self.kb.stations.get(t.prepare["machine"])
             state = st.state if st is not None else "IDLE"
             if t.prepared_at is not None:

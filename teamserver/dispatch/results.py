@@ -9,7 +9,8 @@ A failure after which the same step may simply be tried again
 robots keep failing at, not a cap retrieval from a shelf gone dry:
 :mod:`teamserver.production.shelves`) gets a fresh copy of the step; any other failure,
 or a lost workpiece, has the product repaired.  Every outcome at a station
-is counted by :mod:`teamserver.production.health`.
+is counted by :mod:`teamserver.production.health`.  A task queued behind the
+one whose result came starts, or goes back to the pool (:meth:`Fleet.after_result`).
 """
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ from ..production.repair import Repairs
 from ..production.shelves import CapShelves
 from .config import DispatchConfig
 from .discards import Discards
+from .fleet import Fleet
 from .parking import Parking
 
 log = logging.getLogger("teamserver.dispatch")
@@ -40,7 +42,8 @@ class Results:
 
     def __init__(self, kb: KnowledgeBase, clock, *, feeds: FeedMonitor, outcomes: Outcomes,
                  products: Products, repairs: Repairs, health: StationHealth,
-                 shelves: CapShelves, parking: Parking, discards: Discards, tasks: TaskLink, config: DispatchConfig):
+                 shelves: CapShelves, parking: Parking, discards: Discards, tasks: TaskLink, config: DispatchConfig,
+                 fleet: Fleet):
         self.kb = kb
         self.clock = clock
         self.feeds = feeds
@@ -53,6 +56,7 @@ class Results:
         self.discards = discards
         self.tasks = tasks
         self.config = config
+        self.fleet = fleet
 
     def on_result(self, robot_number: int, task_id: int, status: str, error: str = "NONE",
                   holding: bool | None = None, text: str = "") -> None:
@@ -63,6 +67,15 @@ class Results:
         robot = self.kb.robots.get(robot_number)
         if task is None or robot is None:
             return
+        current = status != "RUNNING" and robot.task_id == task.id and task.robot == robot_number \
+            and task.state == M.ASSIGNED
+        self._booked(task, robot, status, error, holding, text)
+        if current:
+            self.fleet.after_result(robot, task)       # the task queued behind it starts, or goes back
+
+    def _booked(self, task: M.Task, robot: M.Robot, status: str, error: str, holding: bool | None,
+                text: str) -> None:
+        robot_number = robot.number
         if task.robot != robot_number or task.state != M.ASSIGNED:
             if status == "RUNNING" and task.robot != robot_number:
                 self.tasks.cancel(task, "task no longer yours")
@@ -71,7 +84,14 @@ class Results:
             return
         if status == "RUNNING":
             return
-        robot.task_id = None
+        if task.after is not None and robot.task_id != task.id and error == "NOT_RUNNING":
+            self.fleet.back_to_pool(task, text or "refused behind its robot's task")   # it never began
+            task.after = None
+            self.kb.save_task(task)
+            return
+        task.after = None
+        if robot.task_id == task.id:
+            robot.task_id = None
         task.finished_at = self.clock.now()
         if task.kind == M.GO_TO:
             task.state = M.DONE if status == "SUCCEEDED" else M.FAILED

@@ -198,6 +198,8 @@ class Task(Record):
     and ``prepared_at`` when it was last sent.  ``locks``: machines this task
     holds while assigned; ``keep_locks``: machines it leaves locked for a
     later task of the same product (``releases`` names the ones it frees).
+    ``after``: the robot's current task this one was sent to run after
+    (:meth:`teamserver.dispatch.fleet.Fleet.queue`), until that one's result.
     """
 
     id: int
@@ -218,6 +220,7 @@ class Task(Record):
     assigned_at: float | None = None
     finished_at: float | None = None
     error: str | None = None
+    after: int | None = None            # queued on its robot behind this task (id): sent before it ended
     _tuples = ("deps", "locks", "releases")
 
     @property

@@ -241,6 +241,9 @@ class AgentLink:
         at, detail = render_task(t.kind, params, task_id=wire_id(t), robot_id=int(t.robot or 0), color=color,
                                  profile=self.profile, robot_zone=zone, issued_at=self.clock.now(),
                                  **self._workpiece(t))
+        before = self.kb.tasks.get(t.after) if t.after is not None else None
+        if before is not None and extras:
+            detail.after = wire_id(before)          # to run once that one succeeded
         return [detail, at] if extras else [at]
 
     def _workpiece(self, t: M.Task) -> dict:

@@ -222,10 +222,12 @@ class ScriptedServer:
         self.send(mm)
 
     def task(self, task_id: int, kind: str, robot: int = 1, timeout: float | None = None, detail: bool = True,
-             **params) -> None:
+             after: int | None = None, **params) -> None:
         """Send a task: AgentTask, after its TaskDetail unless ``detail`` is False
-        or the server is a league one."""
+        or the server is a league one; ``after``: to run once that task succeeded."""
         at, d = make_task(kind, task_id, robot, self.color, timeout, profile=self.profile, **params)
+        if after is not None:
+            d.after = after
         if detail and not self.league:
             assert self.send(d)
         assert self.send(at)

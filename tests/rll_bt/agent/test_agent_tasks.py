@@ -107,6 +107,37 @@ def test_a_task_sent_while_another_runs_waits_and_a_task_id_runs_once(rig):
     assert [e.task_id for e in rig.agent.book.waiting] == []
 
 
+def test_a_task_sent_to_run_after_the_current_one_starts_once_that_succeeded(rig):
+    """rll-bt's team server sends the next task before the current one ends (TaskDetail
+    ``after``): it waits, starts when the current one succeeded, and is refused
+    (NOT_RUNNING, never begun) when the one before failed, was cancelled or is unknown."""
+    srv = rig.server
+    srv.task(31, "mount_cap", machine="C-CS1")
+    rig.until(lambda: srv.running(31))
+    srv.task(32, "go_to", x=1.0, y=2.0, after=31)
+    rig.run(1.0)
+    assert rig.agent.book.where(32) == "waiting" and srv.final(32) is None
+    srv.cancel(31)                                                   # cancelled: not a success
+    rig.until(lambda: srv.final(32) is not None)
+    res = srv.final(32)
+    assert srv.final(31).status == "CANCELLED"
+    assert res.status == "FAILED" and res.code == "NOT_RUNNING" and not srv.running(32)
+    assert rig.agent.run is None
+    srv.task(33, "get_workpiece", machine="C-BS")
+    rig.until(lambda: srv.running(33))
+    srv.task(34, "get_workpiece", machine="C-BS", after=33)
+    rig.until(lambda: srv.running(34), what="task 34 started")
+    assert srv.final(33).status == "SUCCEEDED"                        # ... only after 33 succeeded
+    rig.until(lambda: srv.final(34) is not None)
+    srv.task(35, "put_workpiece", machine="C-RS1")                   # fails (PUT_FAILED)
+    srv.task(36, "go_to", x=1.0, y=2.0, after=35)
+    rig.until(lambda: srv.final(36) is not None)
+    assert srv.final(35).code == "PUT_FAILED" and srv.final(36).code == "NOT_RUNNING" and not srv.running(36)
+    srv.task(37, "go_to", x=1.0, y=2.0, after=99)                    # after a task this robot never had
+    rig.until(lambda: srv.final(37) is not None)
+    assert srv.final(37).code == "NOT_RUNNING" and not srv.running(37)
+
+
 def test_rll_bts_team_server_gets_a_refusal_from_a_busy_robot(rig):
     """rll-bt's team server (it sends TaskDetail) plans again on a refusal, as it always did."""
     srv = rig.server
