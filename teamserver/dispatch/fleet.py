@@ -106,22 +106,35 @@ class Fleet:
         return [r for r in self.kb.active_robots() if not self.unsure(r)
                 and (r.task_id is None or self.parking_task(r) is not None)]
 
-    def finishing(self, positions: dict, near: float) -> list[M.Robot]:
-        """Robots that may be given their next task before their current one ends (see
-        :mod:`.queueing`), each as a copy standing at its task's station with an empty
-        gripper, as it will be; :meth:`assign` queues a task given to such a copy."""
+    def near_the_end(self, positions: dict, near: float) -> list[tuple[M.Robot, M.Task]]:
+        """Robots that may be given their next task before their current one ends, with
+        that task: robots of rll-bt (they hold such a task until it may start) whose latest
+        status says they run it, within ``near`` metres of its station, nothing queued yet."""
         out = []
         for r in self.kb.active_robots():
             t = self.kb.tasks.get(r.task_id) if r.task_id is not None else None
             pos = positions.get(t.machine) if t is not None else None
             if (t is None or pos is None or t.state != M.ASSIGNED or r.state != "BUSY" or self.unsure(r)
                     or self.tasks.codec.running.get(r.number) != wire_id(t)       # its status: it runs t
-                    or not (t.carry or t.kind == M.RETRIEVE_CAP) or not self.tasks.codec.speaks_rllbt(r)
-                    or travel(r, pos) > near or self.queued(r) is not None):
+                    or not self.tasks.codec.speaks_rllbt(r) or travel(r, pos) > near or self.queued(r) is not None):
                 continue
-            out.append(replace(r, pose=(float(pos[0]), float(pos[1]), 0.0), holding=None, task_id=None))
+            out.append((r, t))
+        return out
+
+    def finishing(self, positions: dict, near: float) -> list[M.Robot]:
+        """Robots :meth:`near_the_end` of a task that leaves the gripper empty, each as a
+        copy standing at its task's station with an empty gripper, as it will be;
+        :meth:`assign` queues a task given to such a copy behind the robot's current one."""
+        out = [replace(r, pose=(float(positions[t.machine][0]), float(positions[t.machine][1]), 0.0),
+                       holding=None, task_id=None)
+               for r, t in self.near_the_end(positions, near) if t.carry or t.kind == M.RETRIEVE_CAP]
         self._finishing = {r.number: r for r in out}
         return out
+
+    def queue(self, task: M.Task, robot: M.Robot) -> None:
+        """Send ``task`` to ``robot`` to run once its current task succeeded."""
+        task.after = robot.task_id
+        self._hand_over(task, robot.number)
 
     def queued(self, robot: M.Robot) -> M.Task | None:
         """The task sent to ``robot`` to run after its current one, if any."""
@@ -153,6 +166,8 @@ class Fleet:
             self._unqueue(nxt, f"task {task.id} before it did not succeed")
             return None
         nxt.after, nxt.assigned_at = None, self.clock.now()
+        if nxt.carry:
+            nxt.holder = robot.number           # it carries what ``task`` picked up
         self.kb.save_task(nxt)
         robot.task_id = nxt.id
         self.kb.save_robot(robot)
@@ -160,6 +175,8 @@ class Fleet:
 
     def _unqueue(self, task: M.Task, why: str) -> None:
         task.after = None
+        if task.carry and task.params.get("carry_from") is not None:
+            task.holder = None                  # its pickup failed: whoever picks up again carries
         self.tasks.cancel(task, why)            # (the robot drops it itself; a cancel makes sure)
         self.back_to_pool(task, why)
 
@@ -169,8 +186,7 @@ class Fleet:
         real = self.kb.robots.get(robot.number)
         if robot is self._finishing.get(robot.number) and real is not None and real.task_id is not None:
             del self._finishing[robot.number]
-            task.after = real.task_id           # (its current task stays the robot's)
-            self._hand_over(task, real.number)
+            self.queue(task, real)              # (its current task stays the robot's)
             return
         park = self.parking_task(robot)
         if park is not None and park is not task:

@@ -69,7 +69,7 @@ class Matcher:
                 if r is not None and self.slides.divert(t, r, self._travel):
                     break
         ready = [t for t in self.kb.open_tasks() if self.readiness.ready(t, game_time)]
-        assigned: list[M.Task] = []
+        assigned: list[M.Task] = self._queue_carries(game_time)
         # carry tasks: their holder, if idle
         for t in sorted(ready, key=lambda t: t.id):
             if t.carry:
@@ -117,6 +117,23 @@ class Matcher:
             self.fleet.assign(t, r)
             assigned.append(t)
         return assigned
+
+    def _queue_carries(self, game_time: float | None) -> list[M.Task]:
+        """The step that carries what a robot near the end of a pickup will hold, ready
+        but for that pickup, queued behind it (it goes to that robot anyway)."""
+        if self.config.queue_near is None:
+            return []
+        out = []
+        for r, pickup in self.fleet.near_the_end(self.world.positions(), self.config.queue_near):
+            if pickup.kind != M.GET_WORKPIECE:
+                continue
+            c = next((t for t in self.kb.open_tasks() if t.carry and t.state == M.PENDING
+                      and t.params.get("carry_from") == pickup.id and t.kind != M.DISCARD), None)
+            if c is not None and self.readiness.ready(c, game_time, done=(pickup.id,)) \
+                    and self.locks.free_for(c) and self.slides.slide_ready(c):
+                self.fleet.queue(c, r)
+                out.append(c)
+        return out
 
     def _all_stuck_for(self, game_time: float | None) -> float:
         """Seconds every robot has been stuck (:meth:`Holding.stuck`) without work (a

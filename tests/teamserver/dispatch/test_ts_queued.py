@@ -103,3 +103,36 @@ def test_a_queued_task_of_a_dropped_robot_goes_back_to_the_pool(ls):
     ls.server.dispatcher.dropouts.drop(kb.robots[1], "switched off")
     ls.step()
     assert kb.tasks[ls.waiting].state == M.PENDING and kb.tasks[ls.waiting].robot is None
+
+
+@pytest.mark.parametrize("outcome", ["SUCCEEDED", "FAILED"])
+def test_the_step_that_carries_a_workpiece_is_queued_behind_its_pickup(outcome):
+    """A C1 whose ring costs nothing: its ring mount is ready but for the base's pickup,
+    and goes to the robot that picks the base up anyway: queued behind the pickup."""
+    ls = Lockstep(robots=2, config=ServerConfig(prefill_caps=False))
+    try:
+        for a, pose in zip(ls.agents, [(5.0, 1.3, 0.0), (1.0, 5.0, 0.0)]):
+            a.pose = pose
+            a.status()
+        production_setup(ls, [{"id": 1, "complexity": 1, "rings": ["RING_GREEN"]}])
+        ls.step(n=5)
+        kb, r1 = ls.server.kb, ls.agents[0]
+        pickup = r1.tasks()[-1]
+        assert (pickup.kind, pickup.get_workpiece.machine) == ("get_workpiece", "C-BS")
+        r1.status(state=BUSY, task=pickup.wire_id)
+        ls.step(n=3)
+        mount = r1.tasks()[-1]
+        assert (mount.kind, mount.mount_ring.machine) == ("mount_ring", "C-RS1")
+        assert mount.detail.after == pickup.wire_id and kb.tasks[mount.task_id].after == pickup.task_id
+        if outcome == "SUCCEEDED":
+            r1.result(pickup.task_id, holding=True)
+            ls.step(n=2)
+            assert kb.robots[1].task_id == mount.task_id and kb.tasks[mount.task_id].holder == 1
+        else:
+            r1.result(pickup.task_id, status="FAILED", error="GRAB_FAILED")
+            ls.step(n=2)
+            m = kb.tasks[mount.task_id]
+            assert m.state == M.PENDING and m.holder is None and m.after is None
+            assert mount.task_id in [c.task_id for c in r1.cancels()]
+    finally:
+        ls.close()
