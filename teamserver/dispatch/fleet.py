@@ -174,6 +174,10 @@ class Fleet:
         return nxt
 
     def _unqueue(self, task: M.Task, why: str) -> None:
+        robot = self.kb.robots.get(task.robot) if task.robot is not None else None
+        if robot is not None and robot.task_id == task.id:
+            robot.task_id = None                # (never: a queued task is not its robot's current one)
+            self.kb.save_robot(robot)
         task.after = None
         if task.carry and task.params.get("carry_from") is not None:
             task.holder = None                  # its pickup failed: whoever picks up again carries
@@ -193,6 +197,7 @@ class Fleet:
             park.state, park.finished_at = M.CANCELLED, self.clock.now()
             self.kb.save_task(park)
             self.tasks.cancel(park, f"task {task.id} for this robot")
+        task.after = None                       # (a task once queued and back in the pool runs now)
         self._hand_over(task, robot.number)
         robot.task_id = task.id
         self.kb.save_robot(robot)
@@ -216,7 +221,7 @@ class Fleet:
         """An assigned task is PENDING again, for any robot (an exploration task is
         cancelled instead: exploration picks a fresh zone)."""
         task.state, task.robot, task.assigned_at, task.prepared_at = M.PENDING, None, None, None
-        task.error = why
+        task.after, task.error = None, why
         self.kb.save_task(task)
         if task.kind == M.EXPLORE_ZONE:
             task.state = M.CANCELLED        # exploration picks a fresh zone instead

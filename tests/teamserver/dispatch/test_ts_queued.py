@@ -136,3 +136,43 @@ def test_the_step_that_carries_a_workpiece_is_queued_behind_its_pickup(outcome):
             assert mount.task_id in [c.task_id for c in r1.cancels()]
     finally:
         ls.close()
+
+
+def consistent(kb):
+    """Every robot's task is an assigned task of its own; every other assigned task of a
+    robot is queued behind that one."""
+    for r in kb.robots.values():
+        if r.task_id is not None:
+            t = kb.tasks[r.task_id]
+            assert t.state == M.ASSIGNED and t.robot == r.number and t.after is None, (r, t)
+    for t in kb.tasks.values():
+        if t.state == M.ASSIGNED and kb.robots[t.robot].task_id != t.id:
+            assert t.after is not None and t.after == kb.robots[t.robot].task_id, t
+
+
+def test_a_queued_task_taken_back_and_given_out_again_runs_as_any_other(ls):
+    """Its station went DOWN while it was queued (taken back), and it is given out again:
+    a task of its own, not queued behind one that finished (the hardware game of seed 2
+    at 0986293 left a robot bound to such a task, idle, for 600 s)."""
+    from tests.support.teamserver import RS_2016
+    kb, r1 = ls.server.kb, ls.agents[0]
+    current = r1.tasks()[-1]
+    r1.status(state=BUSY, task=current.wire_id)
+    ls.step(n=3)
+    assert kb.tasks[ls.waiting].after == current.task_id
+    ls.station_states["C-CS1"] = "DOWN"
+    ls.refbox.machines(ls.station_states, RS_2016)
+    ls.step(n=3)
+    assert kb.tasks[ls.waiting].state == M.PENDING and kb.tasks[ls.waiting].after is None
+    consistent(kb)
+    r3 = ls.agents[2]                         # robot 3 is back, idle, beside C-CS1
+    r3.hello(restarted=True)
+    r3.status()
+    ls.station_states["C-CS1"] = "IDLE"
+    ls.refbox.machines(ls.station_states, RS_2016)
+    for _ in range(20):
+        ls.step()
+        consistent(kb)
+    t = kb.tasks[ls.waiting]
+    assert t.state == M.ASSIGNED and t.robot == 3 and kb.robots[3].task_id == ls.waiting
+    assert not r3.tasks()[-1].detail.HasField("after") and r3.tasks()[-1].task_id == ls.waiting
