@@ -129,9 +129,9 @@ class WorldRig(CoupledRig):
     def _camera_wanted(self) -> bool:
         return self.rig.camera_server is not None and self.rig.camera_server.clients > 0
 
-    def _put_image(self, image: np.ndarray) -> None:
+    def _put_image(self, image: np.ndarray, taken: float) -> None:
         with self._lock:
-            self._image = image
+            self._image = (image, taken)
             self._image_seq += 1
 
     def _sync_gripper(self, world_time: float) -> None:

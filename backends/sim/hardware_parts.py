@@ -256,16 +256,16 @@ class CoupledRig:
         r.drive(vx, vy, w, world_time)
         if at is not None and self.wall() - at > STALE_CAST:
             return      # catching up: a cast or a render of a world this far behind is stale before it is sent
+        # the world as it stands is of this time on the devices' clock (now, or the wall time a world
+        # behind it stands at): a scan says so in its stamp (laser/source.py), a frame in its X-Timestamp
+        cast = self.wall() if at is None else min(at, self.wall())
         if world_time >= self._next_scan:
             self._next_scan = max(self._next_scan + self.scan_period, world_time)
-            # cast of the world as it stands (the devices' clock: now, or the wall time a world behind it stands
-            # at): the scan says so in its stamp and goes out at once (laser/source.py)
-            cast = self.wall() if at is None else min(at, self.wall())
             self._put_ranges(sensors.laser_ranges(self.world.cid, r, self.angles, noisy=True) * 1000.0, cast)
             self.scans += 1
         if world_time >= self._next_frame and self._camera_wanted():
             self._next_frame = max(self._next_frame + self.camera_period, world_time)
-            self._put_image(self.world.camera_image(r).image)
+            self._put_image(self.world.camera_image(r).image, cast)
             self.frames += 1
 
     def holding_volts(self) -> float:
@@ -287,7 +287,8 @@ class CoupledRig:
     def _camera_wanted(self) -> bool:
         raise NotImplementedError
 
-    def _put_image(self, image: np.ndarray) -> None:
+    def _put_image(self, image: np.ndarray, taken: float) -> None:
+        """The camera's newest frame, rendered of the world at ``taken`` (:meth:`wall`)."""
         raise NotImplementedError
 
 

@@ -55,6 +55,7 @@ RPM, G_MOVES, G_OPEN, G_TARGET, G_COMMANDS, CLIENTS, IMAGE_H, IMAGE_W = 8, 11, 1
 STEPPED = 20           # the base emulator's step the wheels' speeds are of (time.monotonic(); nan: none yet)
 RANGES_CAST = 21       # when the world cast the laser's ranges (time.monotonic(): the scan's stamp)
 TRACK_COUNT = 22      # rows written to the wheel track (hardware_parts.WheelTrack)
+IMAGE_TAKEN = 23      # the world time the camera's frame is of (time.monotonic(): its X-Timestamp)
 HEADER = 24
 BEAMS = HEADER         # the laser's ranges (mm) from here
 TRACK = HEADER + MAX_BEAMS     # the wheel track's rows (time, three positions) from here
@@ -187,13 +188,14 @@ class ProcessRig(CoupledRig):
     def _camera_wanted(self) -> bool:
         return self._floats[CLIENTS] > 0
 
-    def _put_image(self, image: np.ndarray) -> None:
+    def _put_image(self, image: np.ndarray, taken: float) -> None:
         flat = np.ascontiguousarray(image, dtype=np.uint8).reshape(-1)
         if flat.size > self._image.size:
             raise ValueError(f"a {image.shape} frame does not fit the {self._image.size} bytes shared")
         with self._shared.lock:
             self._image[:flat.size] = flat
             self._floats[IMAGE_H], self._floats[IMAGE_W] = image.shape[0], image.shape[1]
+            self._floats[IMAGE_TAKEN] = taken
             self._image_seq += 1
             self._floats[IMAGE_SEQ] = self._image_seq
 
@@ -232,7 +234,7 @@ class _Devices:
                 return None
             self._frame_sent = seq
             h, w = int(self.floats[IMAGE_H]), int(self.floats[IMAGE_W])
-            return self.image[:h * w * 3].reshape(h, w, 3).copy()
+            return self.image[:h * w * 3].reshape(h, w, 3).copy(), float(self.floats[IMAGE_TAKEN])
 
     def copy(self, now: float) -> None:
         """Wheels (as of the base emulator's step at ``now``), gripper sketch and camera

@@ -5,9 +5,11 @@
 
 ``source`` is what ``cv2.VideoCapture`` opens: a V4L2 device (an index or
 ``/dev/videoN``, opened with ``CAP_V4L2``), a video file, or a stream URL
-(MJPEG over HTTP, RTSP: FFmpeg, with open and read time-outs so that a
-silent stream cannot hang the thread).  The thread reads as fast as frames
-come (a file at its own frame rate) and keeps only the newest, stamped with
+(MJPEG over HTTP: read by :class:`.mjpeg_reader.MjpegCapture`, which keeps
+each frame's capture time, ``X-Timestamp``; RTSP and other streams: FFmpeg, with
+open and read time-outs so that a silent stream cannot hang the thread).  The
+thread reads as fast as frames come (a file at its own frame rate) and keeps
+only the newest, stamped with its capture time (the server's word), else with
 the host time it arrived minus ``latency``; a tick never waits for the
 camera.  A failed read, or no frame for ``timeout`` seconds, counts as a
 lost camera: it is released and reopened every ``reopen_interval``.  A file
@@ -20,6 +22,7 @@ import math
 import os
 import re
 import threading
+import time
 from collections import deque
 from dataclasses import dataclass, replace
 
@@ -29,8 +32,11 @@ from rll_bt.backend import CameraExtrinsics, CameraImage, CameraIntrinsics
 from rll_bt.clock import Clock, WallClock
 
 from .calibration import scaled
+from .mjpeg_reader import MjpegCapture
 
 log = logging.getLogger(__name__)
+#: a capture time more than this (s) before a frame arrived is another machine's clock: not used
+MAX_AGE = 2.0
 
 
 @dataclass
@@ -49,6 +55,11 @@ def _open(source, open_timeout: float, read_timeout: float):
     import cv2
     if isinstance(source, int) or (isinstance(source, str) and re.fullmatch(r"/dev/video\d+", source)):
         return cv2.VideoCapture(source, cv2.CAP_V4L2)
+    if isinstance(source, str) and source.startswith("http://"):
+        cap = MjpegCapture(source, open_timeout, read_timeout)      # keeps each frame's capture time
+        if cap.isOpened():
+            return cap
+        log.debug("%s: %s; trying FFmpeg", source, cap.error)
     params = [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, int(open_timeout * 1000),
               cv2.CAP_PROP_READ_TIMEOUT_MSEC, int(read_timeout * 1000)]
     return cv2.VideoCapture(source, cv2.CAP_FFMPEG, params)
@@ -126,6 +137,16 @@ class CameraGrabber:
             self._intr_cache[key] = scaled(base, w, h)
         return self._intr_cache[key]
 
+    def _stamp(self, arrived: float, sent: float | None) -> float:
+        """A frame's capture time on :attr:`clock`: from the time the server says it captured
+        it (``sent``, s since the epoch; its clock is this machine's: the camera server runs on
+        the robot) when that is a plausible age, else its arrival minus ``latency``."""
+        if sent is not None:
+            age = time.time() - sent
+            if -0.05 <= age <= MAX_AGE:
+                return arrived - max(age, 0.0)
+        return arrived - self.latency
+
     def _run(self) -> None:
         import cv2
         while not self._stop.is_set():
@@ -171,7 +192,8 @@ class CameraGrabber:
             if image.ndim == 2:
                 image = np.repeat(image[:, :, None], 3, axis=2)
             h, w = image.shape[:2]
-            frame = CameraImage(now - self.latency, image, self._intrinsics(w, h), self.extrinsics, self.name)
+            frame = CameraImage(self._stamp(now, getattr(cap, "timestamp", None)), image,
+                                self._intrinsics(w, h), self.extrinsics, self.name)
             with self._lock:
                 self._frame = frame
                 self._stats.frames += 1

@@ -4,12 +4,13 @@ serve): the emulated robot camera.
     server = MjpegServer(frame_source, fps=10).start()
     server.url          # http://127.0.0.1:PORT/stream.mjpg, opened by cv2.VideoCapture
 
-``frame_source()`` returns a BGR image (or None: nothing new to send; it is
-asked again a few milliseconds later, so a frame goes out as soon as it is
-there, as a camera sends what it captures).
+``frame_source()`` returns a BGR image, or (image, when it was taken on the
+server's ``clock``), or None: nothing new to send; it is asked again a few
+milliseconds later, so a frame goes out as soon as it is there, as a camera
+sends what it captures.
 Every client gets ``multipart/x-mixed-replace`` parts, each a JPEG with its
-``Content-Type``, ``Content-Length`` and ``X-Timestamp`` (the capture time on
-the server's clock).  ``/snapshot.jpg`` serves one frame.  Faults:
+``Content-Type``, ``Content-Length`` and ``X-Timestamp`` (the capture time in
+seconds since the epoch, as ``mjpg-streamer`` sends it).  ``/snapshot.jpg`` serves one frame.  Faults:
 :meth:`unplug` drops every client and refuses new ones for a while,
 :meth:`set_silent` keeps the connections open without sending frames.
 """
@@ -133,6 +134,9 @@ class MjpegServer:
             except Exception:
                 log.exception("camera frame source failed")
                 continue
+            taken = now
+            if isinstance(image, tuple):            # (image, when it was taken on this clock)
+                image, taken = image
             if image is None:
                 # nothing new yet: look again soon rather than a whole period later (the
                 # emulated camera's world renders on its own clock; polled once a period,
@@ -144,8 +148,13 @@ class MjpegServer:
             if not ok:
                 continue
             with self._cond:
-                self._frame = (now, jpeg.tobytes())
+                self._frame = (self._epoch(taken, now), jpeg.tobytes())
                 self._cond.notify_all()
+
+    def _epoch(self, taken: float, now: float) -> float:
+        """``taken`` (this clock) in seconds since the epoch, as ``X-Timestamp`` says it."""
+        epoch = getattr(self.clock, "epoch", None)
+        return taken + (epoch() - now) if epoch is not None else taken
 
     def _next_frame(self, last: float | None, generation: int) -> tuple[float, bytes] | None:
         with self._cond:

@@ -168,3 +168,37 @@ def test_a_frame_goes_out_when_it_is_there_not_a_period_later(wait_for):
     finally:
         cam.close()
         server.stop()
+
+
+def test_a_frame_is_stamped_when_it_was_taken_not_when_it_arrived(wait_for):
+    """The server says when each frame was taken (X-Timestamp): a frame of the world as
+    it stood 0.3 s before it went out is stamped then (the robot's pose at that time is
+    where the tags were seen from), not when it arrived."""
+    taken = {}
+
+    def source():
+        now = time.monotonic()
+        n = len(taken) + 1
+        taken[n] = now - 0.3
+        img = np.zeros((240, 320, 3), np.uint8)
+        img[:, :, 1] = 20 * (n % 12)
+        return img, taken[n]
+
+    server = MjpegServer(source, fps=10.0).start()
+    cam = CameraGrabber(server.url, hfov=math.radians(60)).start(wait=120)
+    try:
+        assert wait_for(lambda: cam.stats().frames >= 5, 30)
+        f, arrived_by = cam.latest(), time.monotonic()
+        n = max(k for k in list(taken) if k % 12 == round(float(f.image[:, :, 1].mean()) / 20))
+        assert abs(f.stamp - taken[n]) < 0.02 and f.stamp < arrived_by - 0.25
+    finally:
+        cam.close()
+        server.stop()
+
+
+def test_a_capture_time_from_another_clock_is_not_used():
+    cam = CameraGrabber("http://127.0.0.1:9/none.mjpg", latency=0.05)
+    assert cam._stamp(100.0, time.time() - 0.1) == pytest.approx(99.9, abs=0.01)
+    assert cam._stamp(100.0, time.time() - 3600.0) == pytest.approx(99.95)     # another machine's clock
+    assert cam._stamp(100.0, time.time() + 5.0) == pytest.approx(99.95)
+    assert cam._stamp(100.0, None) == pytest.approx(99.95)
