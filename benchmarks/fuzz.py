@@ -193,6 +193,24 @@ def laser_targets() -> list[Target]:
             Target("SICK CoLa telegrams", seeds, tim, note="TelegramReader.feed; decode raises ColaError")]
 
 
+def camera_targets() -> list[Target]:
+    """The MJPEG part parser the camera grabber reads HTTP streams with (and the capture
+    times in the parts' headers)."""
+    from backends.devices.camera.mjpeg_reader import PartReader, part_timestamp
+
+    def part(body: bytes, stamp: bytes = b"1795811291.264496") -> bytes:
+        return (b"--rllbtframe\r\nContent-Type: image/jpeg\r\nContent-Length: " + str(len(body)).encode()
+                + b"\r\nX-Timestamp: " + stamp + b"\r\n\r\n" + body + b"\r\n")
+    seeds = [part(b"\xff\xd8jpeg\xff\xd9") * 2, part(b"") + part(b"x" * 40, b"nan"),
+             b"--rllbtframe\r\nContent-Length: 3\r\n\r\nabc"]
+
+    def parts(data: bytes):
+        reader = PartReader(b"rllbtframe")
+        for headers, _body in reader.feed(data[:len(data) // 2]) + reader.feed(data[len(data) // 2:]):
+            part_timestamp(headers)
+    return [Target("MJPEG stream parts", seeds, parts, note="PartReader.feed never raises")]
+
+
 def tree_targets(tmp: Path) -> list[Target]:
     from rll_bt.tree import TreeLoadError, default_registry, parse_tree
 
@@ -226,7 +244,7 @@ def config_targets(tmp: Path) -> list[Target]:
 
 def all_targets(tmp: Path) -> list[Target]:
     out = []
-    for make in (refbox_targets, team_targets, robotino_targets, laser_targets):
+    for make in (refbox_targets, team_targets, robotino_targets, laser_targets, camera_targets):
         out += make()
     return out + config_targets(tmp) + tree_targets(tmp)
 
