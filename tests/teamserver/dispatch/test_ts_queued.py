@@ -37,6 +37,16 @@ def prepares(ls, machine):
     return [p for p in ls.refbox.received if p.DESCRIPTOR.name == "PrepareMachine" and p.machine == machine]
 
 
+def queued_behind(ls):
+    """Robot 1 says it runs its retrieval at C-CS2: the waiting task is queued behind it."""
+    kb, r1 = ls.server.kb, ls.agents[0]
+    current = r1.tasks()[-1]
+    r1.status(state=BUSY, task=current.wire_id)
+    ls.step(n=3)
+    assert kb.tasks[ls.waiting].after == current.task_id
+    return kb, r1, current
+
+
 def queued(agent):
     """(task id, TaskDetail.after) of the tasks ``agent`` got."""
     return [(v.task_id, v.detail.after if v.detail.HasField("after") else None) for v in agent.tasks()]
@@ -62,11 +72,7 @@ def test_a_robot_at_the_end_of_its_task_gets_the_next_one_queued_behind_it(ls):
 
 
 def test_the_queued_task_goes_back_to_the_pool_when_the_one_before_fails(ls):
-    kb, r1 = ls.server.kb, ls.agents[0]
-    current = r1.tasks()[-1]
-    r1.status(state=BUSY, task=current.wire_id)
-    ls.step(n=3)
-    assert kb.tasks[ls.waiting].after == current.task_id
+    kb, r1, current = queued_behind(ls)
     r1.result(current.task_id, status="FAILED", error="NAVIGATION_FAILED")
     ls.step(n=2)
     assert kb.tasks[ls.waiting].state == M.PENDING and kb.tasks[ls.waiting].after is None
@@ -80,10 +86,7 @@ def test_the_queued_task_goes_back_to_the_pool_when_the_one_before_fails(ls):
 def test_a_queued_task_the_robot_refuses_goes_back_to_the_pool(ls):
     """The robot never had the task before it (restarted meanwhile): it refuses
     the queued one as not begun, and the server gives it out anew."""
-    kb, r1 = ls.server.kb, ls.agents[0]
-    current = r1.tasks()[-1]
-    r1.status(state=BUSY, task=current.wire_id)
-    ls.step(n=3)
+    kb, r1, current = queued_behind(ls)
     first = r1.tasks()[-1].wire_id
     r1.result(ls.waiting, status="FAILED", error="NOT_RUNNING", text="the task before it did not succeed")
     ls.step()
@@ -95,11 +98,7 @@ def test_a_queued_task_the_robot_refuses_goes_back_to_the_pool(ls):
 
 
 def test_a_queued_task_of_a_dropped_robot_goes_back_to_the_pool(ls):
-    kb, r1 = ls.server.kb, ls.agents[0]
-    current = r1.tasks()[-1]
-    r1.status(state=BUSY, task=current.wire_id)
-    ls.step(n=3)
-    assert kb.tasks[ls.waiting].after == current.task_id
+    kb, r1, current = queued_behind(ls)
     ls.server.dispatcher.dropouts.drop(kb.robots[1], "switched off")
     ls.step()
     assert kb.tasks[ls.waiting].state == M.PENDING and kb.tasks[ls.waiting].robot is None
@@ -155,11 +154,7 @@ def test_a_queued_task_taken_back_and_given_out_again_runs_as_any_other(ls):
     a task of its own, not queued behind one that finished (the hardware game of seed 2
     at 0986293 left a robot bound to such a task, idle, for 600 s)."""
     from tests.support.teamserver import RS_2016
-    kb, r1 = ls.server.kb, ls.agents[0]
-    current = r1.tasks()[-1]
-    r1.status(state=BUSY, task=current.wire_id)
-    ls.step(n=3)
-    assert kb.tasks[ls.waiting].after == current.task_id
+    kb, r1, current = queued_behind(ls)
     ls.station_states["C-CS1"] = "DOWN"
     ls.refbox.machines(ls.station_states, RS_2016)
     ls.step(n=3)
