@@ -178,11 +178,14 @@ def task_runs(lines: Iterable[dict], end: float | None = None, *, channel: str =
     before it; a repeat of the open task changes nothing, a different one
     ends the open run as CANCELLED; a cancel or pause request starts
     nothing); the robot's AgentTask echoed with ``successful`` / ``canceled``
-    ends it (SUCCEEDED, FAILED or CANCELLED).  Runs still open are closed at
+    ends it (SUCCEEDED, FAILED or CANCELLED); a task sent to run after the open one
+    (its TaskDetail's ``after``) starts when that one succeeded.  Runs still open are closed at
     ``end`` ("running at the end"), or left with ``end`` None.  ``channel`` and
     ``server``: the team's link and its server as the lines name them."""
     runs: dict[int, list[dict]] = {}
     kinds: dict[tuple[int, int], str] = {}
+    afters: dict[tuple[int, int], int] = {}
+    queued: dict[int, dict] = {}         # robot -> the run sent to start once its open one succeeds
     for e in lines:
         if e.get("channel") != channel or e.get("type") not in ("AgentTask", "TaskDetail"):
             continue
@@ -191,19 +194,29 @@ def task_runs(lines: Iterable[dict], end: float | None = None, *, channel: str =
         if e["type"] == "TaskDetail":
             if m.get("kind"):
                 kinds[(robot, tid)] = m["kind"]
+            if m.get("after") is not None:
+                afters[(robot, tid)] = int(m["after"])
             continue
         mine = runs.setdefault(robot, [])
         cur = mine[-1] if mine and mine[-1]["end"] is None else None
         if e["from"] == server:
+            after = afters.pop((robot, tid), None)
             if m.get("cancel_task") or "pause_task" in m or cur is not None and cur["id"] == tid:
+                continue
+            run = {"kind": kinds.pop((robot, tid), None) or _league_kind(m), "id": tid, "start": t,
+                   "end": None, "outcome": None}
+            if cur is not None and after == cur["id"]:
+                queued[robot] = run                 # runs once the open one succeeded (TaskDetail after)
                 continue
             if cur is not None:
                 cur["end"], cur["outcome"] = t, "CANCELLED"
-            mine.append({"kind": kinds.pop((robot, tid), None) or _league_kind(m), "id": tid, "start": t,
-                         "end": None, "outcome": None})
+            mine.append(run)
         elif ("successful" in m or "canceled" in m) and cur is not None and cur["id"] == tid:
             outcome = "CANCELLED" if m.get("canceled") else "SUCCEEDED" if m.get("successful") else "FAILED"
             cur["end"], cur["outcome"] = t, outcome
+            nxt = queued.pop(robot, None)
+            if nxt is not None and outcome == "SUCCEEDED":
+                mine.append({**nxt, "start": t})
     if end is not None:
         for mine in runs.values():
             for run in mine:

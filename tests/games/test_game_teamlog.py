@@ -127,3 +127,26 @@ def test_merging_keeps_one_log_in_time_order(tmp_path):
     assert [(x["t"], x["channel"]) for x in lines] == [
         (0.0, "public"), (0.5, "teamserver"), (1.5, "public"), (1.5, "teamserver"), (2.5, "public"),
         (3.4, "teamserver")]
+
+
+def test_a_task_queued_behind_the_running_one_starts_when_that_one_succeeded():
+    """rll-bt's team server sends a robot its next task before the current one ends
+    (TaskDetail ``after``): that does not end the current run; the queued one runs from
+    the current one's success, and never if it failed."""
+    def task(t, tid, kind, after=None):
+        detail = {"kind": kind} if after is None else {"kind": kind, "after": after}
+        return [_line(t, "teamserver", "TaskDetail", robot_id=1, task_id=tid, **detail),
+                _line(t, "teamserver", "AgentTask", robot_id=1, task_id=tid, team_color="CYAN",
+                      move={"waypoint": "Z4"})]
+
+    def result(t, tid, ok):
+        return _line(t, "R1", "AgentTask", robot_id=1, task_id=tid, team_color="CYAN", successful=ok,
+                     canceled=False, move={"waypoint": "Z4"})
+    lines = [*task(1.0, 64, "mount_cap"), *task(3.0, 128, "get_workpiece", after=64),
+             *task(4.0, 128, "get_workpiece", after=64),                # repeated while queued
+             result(6.0, 64, True), result(9.0, 128, True),
+             *task(10.0, 192, "deliver"), *task(11.0, 256, "go_to", after=192), result(12.0, 192, False)]
+    assert task_runs(lines, end=20.0)[1] == [
+        {"kind": "mount_cap", "id": 64, "start": 1.0, "end": 6.0, "outcome": "SUCCEEDED"},
+        {"kind": "get_workpiece", "id": 128, "start": 6.0, "end": 9.0, "outcome": "SUCCEEDED"},
+        {"kind": "deliver", "id": 192, "start": 10.0, "end": 12.0, "outcome": "FAILED"}]
