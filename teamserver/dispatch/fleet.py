@@ -116,7 +116,8 @@ class Fleet:
             pos = positions.get(t.machine) if t is not None else None
             if (t is None or pos is None or t.state != M.ASSIGNED or r.state != "BUSY" or self.unsure(r)
                     or self.tasks.codec.running.get(r.number) != wire_id(t)       # its status: it runs t
-                    or not self.tasks.codec.speaks_rllbt(r) or travel(r, pos) > near or self.queued(r) is not None):
+                    or not self.tasks.codec.speaks_rllbt(r) or travel(r, pos) > near
+                    or queued_task(self.kb, r.number) is not None):
                 continue
             out.append((r, t))
         return out
@@ -136,10 +137,6 @@ class Fleet:
         task.after = robot.task_id
         self._hand_over(task, robot.number)
 
-    def queued(self, robot: M.Robot) -> M.Task | None:
-        """The task sent to ``robot`` to run after its current one, if any."""
-        return queued_task(self.kb, robot.number)
-
     def settle_queued(self) -> list[M.Task]:
         """Queued tasks whose predecessor is no longer its robot's assigned task (cancelled,
         taken back, the robot dropped, or its result in: :meth:`after_result`) go back to
@@ -158,9 +155,8 @@ class Fleet:
     def after_result(self, robot: M.Robot, task: M.Task) -> M.Task | None:
         """``task``'s result from ``robot`` was booked: the task queued behind it starts
         (the robot starts it once ``task`` succeeded) or goes back to the pool."""
-        nxt = next((t for t in self.kb.open_tasks() if t.state == M.ASSIGNED and t.after == task.id
-                    and t.robot == robot.number), None)
-        if nxt is None:
+        nxt = queued_task(self.kb, robot.number)
+        if nxt is None or nxt.after != task.id:
             return None
         if task.state != M.DONE or robot.task_id is not None or robot.status != M.ACTIVE:
             self._unqueue(nxt, f"task {task.id} before it did not succeed")
@@ -174,11 +170,6 @@ class Fleet:
         return nxt
 
     def _unqueue(self, task: M.Task, why: str) -> None:
-        robot = self.kb.robots.get(task.robot) if task.robot is not None else None
-        if robot is not None and robot.task_id == task.id:
-            robot.task_id = None                # (never: a queued task is not its robot's current one)
-            self.kb.save_robot(robot)
-        task.after = None
         if task.carry and task.params.get("carry_from") is not None:
             task.holder = None                  # its pickup failed: whoever picks up again carries
         self.tasks.cancel(task, why)            # (the robot drops it itself; a cancel makes sure)

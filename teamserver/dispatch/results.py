@@ -86,8 +86,6 @@ class Results:
             return
         if task.after is not None and robot.task_id != task.id and error == "NOT_RUNNING":
             self.fleet.back_to_pool(task, text or "refused behind its robot's task")   # it never began
-            task.after = None
-            self.kb.save_task(task)
             return
         task.after = None
         if robot.task_id == task.id:
