@@ -104,6 +104,9 @@ class SkillContext:
         self._costmap: Costmap | None = None
         self.odometry_history = OdometryHistory()
         self.laser_memory = LaserMemory()
+        #: place (``Place.describe()``) -> metres the robot's docked sideways move to it stopped
+        #: short of where it meant to stand: the gripper reaches over them (skills.manipulation)
+        self.short_of_spot: dict[str, float] = {}
 
     @classmethod
     def create(cls, backend: Backend, clock: Clock, profile: Profile, start: Pose2D,

@@ -25,6 +25,9 @@ class ManipulationSettings:
     # (the motion guard stops a sideways move 3 cm short of what the laser sees, and the pose
     # is a centimetre or two off: with 2 cm, 2016 seed 11's moves to C-CS1's slot 0 stopped short)
     side_reach: float = 0.09
+    # the gripper's sideways axis (+-0.10 m): a docked sideways move to a spot that a wall or
+    # station stops a little short (the guard's band) is made up by the gripper up to this
+    side_axis: float = 0.10
     side_margin: float = 0.05
     align_tolerance: float = 0.008    # m, lateral and along the tag normal
     align_heading_tolerance: float = 0.015   # rad

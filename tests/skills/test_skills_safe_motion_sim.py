@@ -153,6 +153,27 @@ def test_a_shelf_slot_by_the_wall_is_grabbed_from_beside_it_with_the_gripper_rea
     assert spot_aside(ctx, slot0) is None
 
 
+def test_a_move_to_a_shelf_slot_stopped_short_by_the_wall_is_made_up_by_the_gripper():
+    # 2025 seed 4: C-CS1's slot 1 by the wall, the docked sideways move to it stopped 1 cm short
+    # (the motion guard's band), the retrieval failed and the slot was booked out of reach.  Here
+    # the map has seed 30's C-CS1 3 cm off the wall: the robot is sent squarely in front of
+    # slot 0, the wall stops it 5-7 cm short, and the gripper's sideways axis reaches the rest
+    world, ctx = scene(30, None)
+    slot0 = place_for("C-CS1", "SHELF", 0)
+    st = world.stations["C-CS1"].pose
+    ctx.machines.set("C-CS1", Pose2D(st.x, st.y + 0.03, st.theta))
+    assert spot_aside(ctx, slot0) == 0.0
+    if not world.workpieces_at("C-CS1", "shelf0"):
+        world.spawn_workpiece("C-CS1", "shelf0", "BASE_RED")
+    grab = GrabFrom(ctx, slot0)
+    status, closest = drive(world, grab)
+    assert status is Status.SUCCESS, grab.message
+    short = ctx.short_of_spot[slot0.describe()]
+    assert 0.02 < short <= ctx.settings.manipulation.side_axis
+    assert not world.workpieces_at("C-CS1", "shelf0")
+    assert world.collision_count == 0 and closest > 0.0
+
+
 def _backed_against(seed, name, gap):
     """Robot 1 in front of ``name``'s output face, facing away from it, its back ``gap`` m
     from the face: the bumper feels the station."""
