@@ -13,7 +13,9 @@ So
   more breaks the station);
 - a mount whose bases are all put but missing from the slide for
   ``settle`` seconds gets the missing ones fetched from the BS
-  (:meth:`Slides.top_up_slides`);
+  (:meth:`Slides.top_up_slides`), as does a mount that waits for nothing
+  else while its own bases to come are not under way (a cap-less base whose
+  cap retrieval has not begun);
 - a mount whose slide already holds what it costs (bases other products
   discarded there) no longer waits for its own bases that the full slide
   cannot take (:meth:`Slides.waive_full_slide_puts`): they go on the slide
@@ -271,11 +273,33 @@ class Slides:
                 st = self.kb.stations.get(t.machine)
                 coming = sum(1 for q in tasks.values() if q.id not in t.deps
                              and q.kind == M.PUT_WORKPIECE and q.state in M.OPEN_STATES
-                             and q.machine == t.machine and q.params.get("side") == M.SLIDE)
+                             and q.machine == t.machine and q.params.get("side") == M.SLIDE
+                             and self._under_way(q))
                 missing = int(t.params.get("cost", 0)) - (st.loaded_with if st else 0) - coming
                 if missing > 0:             # (bases the mount no longer waits for still come)
                     out += self._top_up(p, t, missing)
         return out
+
+    def _under_way(self, put: M.Task) -> bool:
+        """Is the base of ``put`` (a put on a slide) under way: the put sent, or its
+        base held or being fetched, or the steps that free it (a cap-less base's cap
+        retrieval) started?  A put whose base nobody has started on does not count as
+        coming: the mount's robot would hold its product until then (rcll2016 seed 2,
+        rendered: two robots held products 372 s and 414 s at C-RS2 for one base each,
+        their own cap-less bases, whose cap retrievals at C-CS2 had not begun)."""
+        if put.state == M.ASSIGNED:
+            return True
+        todo, seen = [put.params.get("carry_from"), *put.deps], set()
+        while todo:
+            tid = todo.pop()
+            src = self.kb.tasks.get(tid) if tid is not None and tid not in seen else None
+            if src is None:
+                continue
+            seen.add(tid)
+            if src.state in (M.ASSIGNED, M.DONE):
+                return True
+            todo.extend(src.deps)
+        return False
 
     def _top_up(self, product: M.Product, mount: M.Task, n: int) -> list[M.Task]:
         bs = f"{self.prefix}-BS"
