@@ -122,9 +122,10 @@ def register(cli) -> None:
                    help="emulated: every agent runs the robotino backend (the code a real robot runs) on "
                         "device emulators fed by the world: base firmware and gripper on ptys, the laser "
                         "(--laser) and an MJPEG camera; implies --processes, detectors on camera frames")
-    g.add_argument("--laser", default="urg", choices=("urg", "tim"),
-                   help="the emulated laser with --hardware emulated: urg (Hokuyo, SCIP 2.0 on a pty, "
-                        "the default) or tim (SICK TiM571, CoLa on TCP)")
+    g.add_argument("--laser", default="urg", choices=("urg", "urg-tcp", "tim"),
+                   help="the emulated laser with --hardware emulated: urg (Hokuyo URG-04LX, SCIP 2.0 on a pty, "
+                        "the default), urg-tcp (Hokuyo UTM-30LX-EW, SCIP 2.0 on TCP) or tim (SICK TiM571, "
+                        "CoLa on TCP)")
     g.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     g = gp.add_argument_group("a refbox elsewhere (the real one; docs/league.md)")
     g.add_argument("--refbox", default="simulated", choices=("simulated", "external"),

@@ -32,7 +32,7 @@ HARDWARE = ("none", "emulated")
 REFBOXES = ("simulated", "external")
 CONTROLS = ("auto", "manual")
 STATIONS = ("mqtt", "opcua")
-LASERS = ("urg", "tim")
+LASERS = ("urg", "urg-tcp", "tim")
 TEAM_NAME = "GRIPS"
 TEAM_KEY = "rll-bt-sim-key"
 

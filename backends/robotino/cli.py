@@ -59,9 +59,9 @@ def register(cli) -> None:
                    help="directory for the device symlinks (default: a new temporary one)")
     p.add_argument("--firmware", default="1.2.3", metavar="VERSION",
                    help="firmware version to report (2.x drops the gyro; default 1.2.3)")
-    p.add_argument("--laser", choices=("urg", "tim"), default=None,
-                   help="also emulate a laser: urg (Hokuyo URG-04LX, SCIP 2.0 on a pty) or tim "
-                        "(SICK TiM571, CoLa on a TCP port)")
+    p.add_argument("--laser", choices=("urg", "urg-tcp", "tim"), default=None,
+                   help="also emulate a laser: urg (Hokuyo URG-04LX, SCIP 2.0 on a pty), urg-tcp "
+                        "(Hokuyo UTM-30LX-EW, SCIP 2.0 on a TCP port) or tim (SICK TiM571, CoLa on a TCP port)")
     p.add_argument("--camera", action="store_true", help="also emulate the camera (MJPEG over HTTP on loopback)")
     p.add_argument("--config-out", default=None, metavar="FILE",
                    help="write the robot configuration of the emulated devices to FILE "

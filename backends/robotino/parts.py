@@ -26,7 +26,8 @@ def make_laser(cfg: RobotConfig, clock: Clock):
         common["timeout"] = float(spec["timeout"])
     if spec["type"] == "urg":
         from backends.devices.laser.urg import UrgLaser
-        return UrgLaser(spec["device"], mode=spec.get("mode", "stream"), encoding=spec.get("encoding", 3), **common)
+        device = spec.get("device") or f"socket://{spec['host']}:{spec.get('port', 10940)}"
+        return UrgLaser(device, mode=spec.get("mode", "stream"), encoding=spec.get("encoding", 3), **common)
     from backends.devices.laser.tim import TimLaser
     return TimLaser(spec["host"], spec.get("port", 2112), mode=spec.get("mode", "stream"),
                     dialect=spec.get("dialect", "a"), **common)

@@ -31,7 +31,7 @@ import numpy as np
 
 from rll_bt.clock import Clock, WallClock
 
-LASERS = ("urg", "tim")
+LASERS = ("urg", "urg-tcp", "tim")      # urg-tcp: an Ethernet URG (UTM-30LX-EW) on a TCP port
 
 
 class EmulatedRobot:
@@ -65,16 +65,20 @@ class EmulatedRobot:
         self._laser_source = laser_source
         self._frame_source = frame_source
         boot = time.monotonic()
-        if laser == "urg":
+        if laser in ("urg", "urg-tcp"):
             from backends.devices.laser.urg_device import MODELS, UrgDevice
-            from backends.devices.ptyrunner import PtyRunner
-            model = MODELS[laser_model or "URG-04LX"]
+            model = MODELS[laser_model or ("URG-04LX" if laser == "urg" else "UTM-30LX")]
             self.laser_device = UrgDevice(model, self._urg_source, start=boot, on_cast=laser_wake is not None)
-            self.laser_runner = PtyRunner(self.laser_device, os.path.join(self.link_dir, "urg"), clock=self.clock,
-                                          wake=laser_wake)
+            if laser == "urg":
+                from backends.devices.ptyrunner import PtyRunner
+                self.laser_runner = PtyRunner(self.laser_device, os.path.join(self.link_dir, "urg"),
+                                              clock=self.clock, wake=laser_wake)
+            else:
+                from backends.devices.laser.tcp_emulators import UrgTcpEmulator
+                self.laser_runner = UrgTcpEmulator(self.laser_device, clock=self.clock, wake=laser_wake)
         elif laser == "tim":
+            from backends.devices.laser.tcp_emulators import TimEmulator
             from backends.devices.laser.tim_device import MODELS, TimDevice
-            from backends.devices.laser.tim_emulator import TimEmulator
             self.laser_device = TimDevice(MODELS[laser_model or "TiM571"], self._tim_source, start=boot,
                                           on_cast=laser_wake is not None)
             self.laser_runner = TimEmulator(self.laser_device, clock=self.clock, wake=laser_wake)
@@ -86,7 +90,7 @@ class EmulatedRobot:
     def laser_angles(self) -> np.ndarray:
         """The laser's beam angles (rad, laser frame) its source is asked for."""
         dev = self.laser_device
-        if self.laser_kind == "urg":
+        if self.laser_kind in ("urg", "urg-tcp"):
             return dev.model.step_angle(np.arange(dev.model.max_step + 1))
         return dev.model.angles()
 
@@ -159,9 +163,9 @@ class EmulatedRobot:
         cfg: dict = {"name": self.name, "base": {"type": "robotino3", "device": self.base.device}}
         if self.laser_kind == "urg":
             cfg["laser"] = {"type": "urg", "device": self.laser_runner.link, "mount": dict(self.laser_mount)}
-        elif self.laser_kind == "tim":
+        elif self.laser_kind in ("tim", "urg-tcp"):
             host, port = self.laser_runner.address
-            cfg["laser"] = {"type": "tim", "host": host, "port": port, "mount": dict(self.laser_mount)}
+            cfg["laser"] = {"type": self.laser_kind[:3], "host": host, "port": port, "mount": dict(self.laser_mount)}
         if self.camera_server is not None:
             cfg["camera"] = {"source": self.camera_server.url, "hfov": self.camera_hfov,
                              "mount": dict(self.camera_mount)}

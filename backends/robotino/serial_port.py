@@ -62,8 +62,12 @@ def write_all(port: serial.Serial, data: bytes, timeout: float = WRITE_TIMEOUT) 
 
 
 def open_serial(device: str, *, write_timeout: float = WRITE_TIMEOUT, exclusive: bool = True) -> serial.Serial:
-    """Open ``device`` at 115200 8N1, non-blocking reads (select on ``fileno()``)."""
+    """Open ``device`` at 115200 8N1, non-blocking reads (select on ``fileno()``).
+    A URL opens through pyserial's URL handlers: ``socket://HOST:PORT`` is a
+    device on a TCP port (an Ethernet URG)."""
     try:
+        if "://" in device:
+            return serial.serial_for_url(device, timeout=0, write_timeout=write_timeout)
         return serial.Serial(device, BAUDRATE, bytesize=serial.EIGHTBITS, parity=serial.PARITY_NONE,
                              stopbits=serial.STOPBITS_ONE, timeout=0, write_timeout=write_timeout,
                              exclusive=exclusive)

@@ -112,6 +112,14 @@ class UrgDevice:
                 self.commands += 1
                 self._command(line, now)
 
+    def new_link(self) -> UrgDevice:
+        """A host connected (the TCP port of an Ethernet URG): nothing half
+        read or unsent is left over and no stream runs; the laser stays as it was."""
+        self._rx.clear()
+        self._out.clear()
+        self.stream = None
+        return self
+
     def take_output(self) -> bytes:
         out, self._out = bytes(self._out), bytearray()
         return out

@@ -7,9 +7,9 @@ import pytest
 
 from backends.devices.laser import LaserMount
 from backends.devices.laser.stamps import DeviceClock
+from backends.devices.laser.tcp_emulators import TimEmulator
 from backends.devices.laser.tim import TimLaser
 from backends.devices.laser.tim_device import TIM571, TimDevice
-from backends.devices.laser.tim_emulator import TimEmulator
 from tests.support.scan_stamps import CountingSource, assert_stamps_are_measuring_times, collect_stamps
 
 MM = 100.0 + 20.0 * np.arange(811)

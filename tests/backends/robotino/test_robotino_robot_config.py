@@ -44,7 +44,7 @@ def _params(kind):
     return read_task(at, detail, profile=profile, robot_id=1, color="CYAN")[1]
 
 
-@pytest.fixture(params=["urg", "tim"])
+@pytest.fixture(params=["urg", "urg-tcp", "tim"])
 def rig(request):
     r = EmulatedRobot(laser=request.param, holding_sensor="distance:8>1.5").start()
     yield r
@@ -210,7 +210,8 @@ def test_robotino_check_reports_every_device(rig, tmp_path, capsys):
     devices = report["devices"]
     assert all(devices[n]["found"] for n in ("base", "laser", "camera", "gripper")), devices
     # rates as measured (how many a loaded machine reaches is the benchmarks' business), never above the devices'
-    assert devices["base"]["rate_hz"] >= 0 and 0 <= devices["laser"]["rate_hz"] < 20
+    assert devices["base"]["rate_hz"] >= 0
+    assert 0 <= devices["laser"]["rate_hz"] <= 1.1 / rig.laser_device.model.scan_period + 1
     assert devices["camera"]["rate_hz"] >= 0
 
 
@@ -235,3 +236,16 @@ def test_robotino_check_with_a_bad_file_exits_2(tmp_path, capsys):
 def test_the_config_parser_takes_a_dict():
     cfg = parse_robot_config({"base": {"type": "robotino4"}})
     assert cfg.base["url"] == "http://127.0.0.1" and cfg.laser is None
+
+
+def test_an_ethernet_urg_is_configured_by_its_address():
+    from backends.robotino.parts import make_laser
+    clock = WallClock()
+    cfg = parse_robot_config({"base": {"type": "robotino3"}, "laser": {"type": "urg", "host": "192.168.0.10"}})
+    assert make_laser(cfg, clock).device == "socket://192.168.0.10:10940"          # Hokuyo's port
+    cfg = parse_robot_config({"base": {"type": "robotino3"},
+                              "laser": {"type": "urg", "host": "10.0.0.5", "port": 10941, "mode": "poll"}})
+    laser = make_laser(cfg, clock)
+    assert (laser.device, laser.mode) == ("socket://10.0.0.5:10941", "poll")
+    assert make_laser(parse_robot_config({"base": {"type": "robotino3"}, "laser": {"type": "tim", "host": "h"}}),
+                      clock).describe().endswith("h:2112")

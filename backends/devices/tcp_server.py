@@ -1,14 +1,21 @@
-"""A TiM5xx on a TCP port: :class:`~.tim_device.TimDevice` served to any
-number of CoLa clients by one thread (``select``).
+"""A device model behind a TCP port, as an Ethernet sensor looks to its host:
+one thread (``select``) serves every client a session of the model.
 
-    emu = TimEmulator(TimDevice(TIM571, source), port=0).start()
-    emu.address        # ("127.0.0.1", port) for the driver
+A session has ``receive(data, now)``, ``take_output() -> bytes`` and
+``advance(now)`` (the :class:`~backends.devices.ptyrunner.PtyRunner`
+interface); ``session_factory()`` makes one per accepted connection.  A
+device that serves one client at a time (``max_clients=1``) closes a further
+connection at once.
+
+    server = DeviceServer(device.session, port=0).start()
+    server.address        # ("127.0.0.1", port) for the driver
 
 Faults: :meth:`unplug` drops every connection and stops listening for a
 while (connects are refused, as with the cable out), :meth:`set_silent`
 keeps the connections but sends nothing.  ``wake`` (a
-:class:`~.source.CastSignal`) wakes the thread when the source has cast new
-ranges, so that a device ``on_cast`` sends them at once.
+:class:`~backends.devices.laser.source.CastSignal`) wakes the thread when
+the source has cast new ranges, so that a device ``on_cast`` sends them at
+once.
 """
 from __future__ import annotations
 
@@ -19,15 +26,16 @@ import threading
 
 from rll_bt.clock import Clock, WallClock
 
-from .tim_device import TimDevice
-
 log = logging.getLogger(__name__)
 
 
-class TimEmulator:
-    def __init__(self, device: TimDevice, *, host: str = "127.0.0.1", port: int = 0,
-                 clock: Clock | None = None, period: float = 0.005, wake=None):
-        self.device = device
+class DeviceServer:
+    name = "device"
+
+    def __init__(self, session_factory, *, host: str = "127.0.0.1", port: int = 0,
+                 clock: Clock | None = None, period: float = 0.005, wake=None, max_clients: int | None = None):
+        self.session_factory = session_factory
+        self.max_clients = max_clients
         self.host = host
         self.port = port
         self.clock = clock or WallClock()
@@ -36,6 +44,7 @@ class TimEmulator:
         self.lock = threading.RLock()
         self.silent = False
         self.connects = 0
+        self.refused = 0
         self._listener: socket.socket | None = None
         self._clients: dict[socket.socket, object] = {}
         self._unplugged_until: float | None = None
@@ -55,10 +64,10 @@ class TimEmulator:
         self.port = s.getsockname()[1]
         self._listener = s
 
-    def start(self) -> TimEmulator:
+    def start(self) -> DeviceServer:
         self._listen()
         self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name=f"tim:{self.port}", daemon=True)
+        self._thread = threading.Thread(target=self._run, name=f"{self.name}:{self.port}", daemon=True)
         self._thread.start()
         return self
 
@@ -109,7 +118,7 @@ class TimEmulator:
             try:
                 self._step()
             except Exception:
-                log.exception("TiM emulator step failed")
+                log.exception("%s emulator step failed", self.name)
                 self._stop.wait(0.05)
 
     def _step(self) -> None:
@@ -118,12 +127,12 @@ class TimEmulator:
             until = self._unplugged_until
             if until is not None:
                 if self._listener is not None and now < until:
-                    log.info("TiM %d: unplugged", self.port)
+                    log.info("%s %d: unplugged", self.name, self.port)
                     self._drop_all()
                 elif self._listener is None and now >= until:
                     self._unplugged_until = None
                     self._listen()
-                    log.info("TiM %d: plugged in again", self.port)
+                    log.info("%s %d: plugged in again", self.name, self.port)
         if self._listener is None:
             self._stop.wait(self.period)
             return
@@ -140,8 +149,12 @@ class TimEmulator:
                         c, _ = s.accept()
                     except OSError:
                         continue
+                    if self.max_clients is not None and len(self._clients) >= self.max_clients:
+                        self.refused += 1
+                        c.close()
+                        continue
                     c.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                    self._clients[c] = self.device.session()
+                    self._clients[c] = self.session_factory()
                     self.connects += 1
                     continue
                 if s not in self._clients:
