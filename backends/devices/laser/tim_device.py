@@ -258,8 +258,13 @@ class TimSession:
             return self._send(self._number(name, int((now - self.device.boot) / 360.0), "I"))
         if name == "ODpwrc":
             return self._send(self._number(name, 1, "I"))
+        stop = m.start_angle + m.step * (m.count - 1)
+        if name == "LMPoutputRange":            # sectors, resolution, start, stop (1/10000 degree)
+            if self.binary:
+                return self._send(b"sRA LMPoutputRange " + struct.pack(">HIii", 1, m.step, m.start_angle, stop))
+            return self._send(f"sRA LMPoutputRange 1 {m.step:X} {m.start_angle & 0xFFFFFFFF:X} "
+                              f"{stop & 0xFFFFFFFF:X}".encode())
         if name == "LMPscancfg":
-            stop = m.start_angle + m.step * (m.count - 1)
             if self.binary:
                 return self._send(b"sRA LMPscancfg " + struct.pack(">IHIii", m.frequency, 1, m.step,
                                                                    m.start_angle, stop))

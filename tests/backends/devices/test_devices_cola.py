@@ -121,6 +121,22 @@ def test_answers_parse_as_the_ros_sick_tim_driver_reads_them():
     assert state == "sRA SCdevicestate 1"
 
 
+def test_the_scan_configuration_reads_as_the_listing_gives_it():
+    """LMPscancfg: frequency (1/100 Hz), sectors, resolution, start, stop; LMPoutputRange: sectors,
+    resolution, start, stop (angles in 1/10000 degree, the TiM571's -45 .. 225 degrees)."""
+    for binary in (False, True):
+        s = TimDevice(TIM571).session()
+        frame = cola.frame_b if binary else cola.frame_a
+        s.receive(frame(b"sRN LMPscancfg") + frame(b"sRN LMPoutputRange"), 0.1)
+        cfg, out = (t.payload for t in cola.TelegramReader().feed(s.take_output()))
+        if binary:
+            assert struct.unpack(">IHIii", cfg[len(b"sRA LMPscancfg "):]) == (1500, 1, 3333, -450000, 2249730)
+            assert struct.unpack(">HIii", out[len(b"sRA LMPoutputRange "):]) == (1, 3333, -450000, 2249730)
+        else:
+            assert cfg == b"sRA LMPscancfg 5DC 1 D05 FFF92230 225402"
+            assert out == b"sRA LMPoutputRange 1 D05 FFF92230 225402"
+
+
 def test_a_scan_fed_by_a_world_goes_out_at_its_cast_stamped_with_the_cast_time():
     cast = {"mm": np.zeros(811), "t": -np.inf}
     dev = TimDevice(TIM571, lambda t: (cast["mm"], cast["t"]), start=0.0, on_cast=True)
