@@ -21,68 +21,47 @@ from __future__ import annotations
 import logging
 import os
 import select
-import threading
 
-from rll_bt.clock import Clock, WallClock
+from rll_bt.clock import Clock
+
+from .pluggable import Pluggable
 
 log = logging.getLogger(__name__)
 
 
-class PtyRunner:
+class PtyRunner(Pluggable):
     def __init__(self, model, link: str, *, clock: Clock | None = None, period: float = 0.002,
                  on_connect=None, idle: float = 0.05, wake=None):
         from backends.robotino.emulator import PtyDevice
+        super().__init__(clock)
         self.model = model
-        self.clock = clock or WallClock()
         self.pty = PtyDevice(link)
         self.period = period            # the shortest sleep (a model due now is served this late at most)
         self.idle = idle                # the longest sleep
         self.on_connect = on_connect
         self.wake = wake
-        self.lock = threading.RLock()
-        self.silent = False
-        self.connects = 0
         self.bytes_in = self.bytes_out = 0
-        self._unplugged_until: float | None = None
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
 
     @property
     def link(self) -> str:
         return self.pty.link
 
+    @property
+    def thread_name(self) -> str:
+        return f"pty:{os.path.basename(self.link)}"
+
     def start(self) -> PtyRunner:
         os.makedirs(os.path.dirname(self.link) or ".", exist_ok=True)
         self.pty.open()
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name=f"pty:{os.path.basename(self.link)}", daemon=True)
-        self._thread.start()
+        self._start_thread()
         return self
 
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
-            self._thread = None
+    def _close_link(self) -> None:
         self.pty.close()
-
-    def unplug(self, duration: float) -> None:
-        """Pull the cable for ``duration`` seconds (``inf``: until :meth:`replug`)."""
-        with self.lock:
-            self._unplugged_until = self.clock.now() + duration
-
-    def replug(self) -> None:
-        with self.lock:
-            if self._unplugged_until is not None:
-                self._unplugged_until = self.clock.now()
 
     @property
     def plugged(self) -> bool:
         return self.pty.is_open
-
-    def set_silent(self, silent: bool) -> None:
-        with self.lock:
-            self.silent = silent
 
     def _wait(self, now: float) -> float:
         """How long to wait for the host: until the model is due, at least ``period``, at most ``idle``."""
@@ -91,14 +70,6 @@ class PtyRunner:
         if when is None:
             return self.idle
         return min(self.idle, max(self.period, when - now))
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            try:
-                self._step()
-            except Exception:              # keep serving the host
-                log.exception("%s: step failed", self.link)
-                self._stop.wait(0.05)
 
     def _step(self) -> None:
         now = self.clock.now()

@@ -22,38 +22,37 @@ from __future__ import annotations
 import logging
 import select
 import socket
-import threading
 
-from rll_bt.clock import Clock, WallClock
+from rll_bt.clock import Clock
+
+from .pluggable import Pluggable
 
 log = logging.getLogger(__name__)
 
 
-class DeviceServer:
+class DeviceServer(Pluggable):
     name = "device"
 
     def __init__(self, session_factory, *, host: str = "127.0.0.1", port: int = 0,
                  clock: Clock | None = None, period: float = 0.005, wake=None, max_clients: int | None = None):
+        super().__init__(clock)
         self.session_factory = session_factory
         self.max_clients = max_clients
         self.host = host
         self.port = port
-        self.clock = clock or WallClock()
         self.period = period
         self.wake = wake
-        self.lock = threading.RLock()
-        self.silent = False
-        self.connects = 0
         self.refused = 0
         self._listener: socket.socket | None = None
         self._clients: dict[socket.socket, object] = {}
-        self._unplugged_until: float | None = None
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
 
     @property
     def address(self) -> tuple[str, int]:
         return self.host, self.port
+
+    @property
+    def thread_name(self) -> str:
+        return f"{self.name}:{self.port}"
 
     def _listen(self) -> None:
         s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
@@ -66,34 +65,15 @@ class DeviceServer:
 
     def start(self) -> DeviceServer:
         self._listen()
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name=f"{self.name}:{self.port}", daemon=True)
-        self._thread.start()
+        self._start_thread()
         return self
 
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
-            self._thread = None
+    def _close_link(self) -> None:
         self._drop_all()
-
-    def unplug(self, duration: float) -> None:
-        with self.lock:
-            self._unplugged_until = self.clock.now() + duration
-
-    def replug(self) -> None:
-        with self.lock:
-            if self._unplugged_until is not None:
-                self._unplugged_until = self.clock.now()
 
     @property
     def plugged(self) -> bool:
         return self._listener is not None
-
-    def set_silent(self, silent: bool) -> None:
-        with self.lock:
-            self.silent = silent
 
     @property
     def clients(self) -> int:
@@ -112,14 +92,6 @@ class DeviceServer:
             c.close()
         except OSError:
             pass
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            try:
-                self._step()
-            except Exception:
-                log.exception("%s emulator step failed", self.name)
-                self._stop.wait(0.05)
 
     def _step(self) -> None:
         now = self.clock.now()
