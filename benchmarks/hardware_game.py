@@ -38,6 +38,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from backends.robotino.rig import LASERS
+
 
 def play(opts, out: Path, connect_timeout: float) -> dict:
     import time as _time
@@ -105,7 +107,7 @@ def main(argv=None) -> int:
     ap.add_argument("--first-seed", type=int, default=1)
     ap.add_argument("--exploration", type=float, default=None, metavar="S", help="exploration length (rules')")
     ap.add_argument("--production", type=float, default=None, metavar="S", help="production length (rules')")
-    ap.add_argument("--laser", choices=("urg", "urg-tcp", "tim"), default="urg")
+    ap.add_argument("--laser", choices=LASERS, default="urg")
     ap.add_argument("--against", choices=("lockstep", "processes"), default="lockstep",
                     help="how the sim-backend game runs (default lockstep)")
     ap.add_argument("--perception", choices=("rendered", "oracle"), default="rendered",

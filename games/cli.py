@@ -39,6 +39,7 @@ import errno
 import sys
 from pathlib import Path
 
+from backends.robotino.rig import LASERS
 from rll_bt.cli.argtypes import seconds as _seconds
 from rll_bt.cli.argtypes import share as _fraction
 from rll_bt.errors import Unavailable, UserError
@@ -122,7 +123,7 @@ def register(cli) -> None:
                    help="emulated: every agent runs the robotino backend (the code a real robot runs) on "
                         "device emulators fed by the world: base firmware and gripper on ptys, the laser "
                         "(--laser) and an MJPEG camera; implies --processes, detectors on camera frames")
-    g.add_argument("--laser", default="urg", choices=("urg", "urg-tcp", "tim"),
+    g.add_argument("--laser", default="urg", choices=LASERS,
                    help="the emulated laser with --hardware emulated: urg (Hokuyo URG-04LX, SCIP 2.0 on a pty, "
                         "the default), urg-tcp (Hokuyo UTM-30LX-EW, SCIP 2.0 on TCP) or tim (SICK TiM571, "
                         "CoLa on TCP)")

@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from backends.robotino.rig import LASERS
 from rll_bt import plugins, rules
 from rll_bt.comm.faults import NetFaults
 from rll_bt.contracts import SIMULATORS, TEAMSERVERS, TeamServerOptions, check_teamserver
@@ -32,7 +33,6 @@ HARDWARE = ("none", "emulated")
 REFBOXES = ("simulated", "external")
 CONTROLS = ("auto", "manual")
 STATIONS = ("mqtt", "opcua")
-LASERS = ("urg", "urg-tcp", "tim")
 TEAM_NAME = "GRIPS"
 TEAM_KEY = "rll-bt-sim-key"
 

@@ -12,6 +12,8 @@ from rll_bt.backend import BackendError, BackendUnavailable
 from rll_bt.clock import WallClock
 from rll_bt.errors import Unavailable, UserError
 
+from .rig import LASERS
+
 CLOCK = WallClock()
 
 EXIT_OK, EXIT_FAILURE = 0, 1
@@ -59,7 +61,7 @@ def register(cli) -> None:
                    help="directory for the device symlinks (default: a new temporary one)")
     p.add_argument("--firmware", default="1.2.3", metavar="VERSION",
                    help="firmware version to report (2.x drops the gyro; default 1.2.3)")
-    p.add_argument("--laser", choices=("urg", "urg-tcp", "tim"), default=None,
+    p.add_argument("--laser", choices=LASERS, default=None,
                    help="also emulate a laser: urg (Hokuyo URG-04LX, SCIP 2.0 on a pty), urg-tcp "
                         "(Hokuyo UTM-30LX-EW, SCIP 2.0 on a TCP port) or tim (SICK TiM571, CoLa on a TCP port)")
     p.add_argument("--camera", action="store_true", help="also emulate the camera (MJPEG over HTTP on loopback)")

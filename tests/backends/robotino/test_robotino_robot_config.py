@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 from backends.robotino.config import RobotConfigError, load_robot_config, parse_robot_config
-from backends.robotino.rig import EmulatedRobot
+from backends.robotino.rig import LASERS, EmulatedRobot
 from backends.robotino_rest.standin import RestStandIn
 from rll_bt import rules
 from rll_bt.agent import TREE_KINDS, default_trees_dir, load_task_tree
@@ -44,7 +44,7 @@ def _params(kind):
     return read_task(at, detail, profile=profile, robot_id=1, color="CYAN")[1]
 
 
-@pytest.fixture(params=["urg", "urg-tcp", "tim"])
+@pytest.fixture(params=LASERS)
 def rig(request):
     r = EmulatedRobot(laser=request.param, holding_sensor="distance:8>1.5").start()
     yield r
