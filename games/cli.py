@@ -39,7 +39,6 @@ import errno
 import sys
 from pathlib import Path
 
-from backends.robotino.rig import LASERS
 from rll_bt.cli.argtypes import seconds as _seconds
 from rll_bt.cli.argtypes import share as _fraction
 from rll_bt.errors import Unavailable, UserError
@@ -67,7 +66,7 @@ def register(cli) -> None:
     from rll_bt import rules
     from rll_bt.plugins import Choices
 
-    from .options import PUBLISHED, UNTIL
+    from .options import LASERS, PUBLISHED, UNTIL
 
     def published(option: str):       # loaded only when a value is checked or --help shown
         group, _field = PUBLISHED[option]

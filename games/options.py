@@ -17,7 +17,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from backends.robotino.rig import LASERS
 from rll_bt import plugins, rules
 from rll_bt.comm.faults import NetFaults
 from rll_bt.contracts import SIMULATORS, TEAMSERVERS, TeamServerOptions, check_teamserver
@@ -33,6 +32,8 @@ HARDWARE = ("none", "emulated")
 REFBOXES = ("simulated", "external")
 CONTROLS = ("auto", "manual")
 STATIONS = ("mqtt", "opcua")
+#: the emulated rig's lasers (backends.robotino.rig.LASERS: games reach backends through entry points only)
+LASERS = ("urg", "urg-tcp", "tim")
 TEAM_NAME = "GRIPS"
 TEAM_KEY = "rll-bt-sim-key"
 

@@ -29,10 +29,8 @@ for tests (minutes of quality, seconds of time).
 from __future__ import annotations
 
 import json
-import multiprocessing
 import os
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -41,9 +39,10 @@ import numpy as np
 from rll_bt.clock import WallClock
 from rll_bt.errors import UserError
 
-from .dataset import ChunkResult, ChunkSpec, PackedFrame, free_frames, make_chunk
+from .dataset import ChunkSpec, PackedFrame
 from .evaluation import LightScore
-from .hog import TowerDetector, crop_window, iou, make_hog, select, train_svm, window_features, window_for_tower
+from .hog import TowerDetector, iou, train_svm
+from .jobs import TOWER_FRACTION, FrameHits, chunk_job, eval_job, free_chunks, free_job, mine_job, split, worker_pool
 from .mlp import DEFAULT_SIZE, N_STATES, NO_TOWER, Ensemble, Mlp, crop_features
 from .photos import photos
 from .reader import (
@@ -67,9 +66,6 @@ REJECT_LEVELS = (0.5, 0.3, 0.2, 0.15, 0.1, 0.05, 0.02)
 FREE_FALSE_COST = 10
 #: false detections per tower-free calibration frame calibration allows: half the aim of 1 in 1000
 FREE_FALSE_RATE = 0.0005
-#: the tallest tower the detector searches, a fraction of the frame's height (composed frames show
-#: towers up to 0.9 of it; the detector's own default, 0.6, is what older models were calibrated with)
-TOWER_FRACTION = 0.9
 
 
 @dataclass
@@ -118,65 +114,6 @@ def plan(opts: TrainOptions) -> tuple[list[ChunkSpec], list[ChunkSpec]]:
     return train, heldout
 
 
-def _chunk_job(spec: ChunkSpec) -> ChunkResult:
-    return make_chunk(spec)
-
-
-#: composed tower-free frames are made in this many chunks, whatever the number of workers
-#: (the chunk seeds, not the workers, decide the frames: any --workers trains the same models)
-FREE_CHUNKS = 8
-
-
-def _free_chunks(seed: int, count: int, procedural: float) -> list[tuple[int, int, float]]:
-    """:func:`_free_job` arguments for ``count`` frames in :data:`FREE_CHUNKS` seeded chunks."""
-    return [(seed + k, count // FREE_CHUNKS + (k < count % FREE_CHUNKS), procedural) for k in range(FREE_CHUNKS)]
-
-
-def _free_job(args) -> list[PackedFrame]:
-    seed, count, procedural = args
-    return free_frames(seed, count, procedural=procedural)
-
-
-@dataclass
-class FrameHits:
-    """What the detector finds in one frame at a low threshold, for mining and calibration."""
-    boxes: np.ndarray             # N x 4 tower boxes after non-maximum suppression
-    scores: np.ndarray            # N SVM scores
-    false: np.ndarray             # N bools: matches no tower
-    crops: np.ndarray             # N x variants x 32 x 8 x 3 network crops (REFINE_HEIGHTS, DEFAULT_SIZE)
-    hard: np.ndarray              # HOG features of the strongest false hits
-    state: np.ndarray             # N: state of the clean tower a hit matches, -1 for none
-    fit: np.ndarray               # N x variants: IoU of each variant's box with that tower
-
-
-def _mine_job(args) -> list[FrameHits]:
-    vector, frames, low, per_frame = args
-    det = TowerDetector(vector, threshold=low, max_tower_fraction=TOWER_FRACTION)
-    hog = make_hog()
-    out = []
-    for f in frames:
-        img = f.image
-        boxes, scores = det.raw_hits(img, max_hits=300)
-        kept = select(boxes, scores, low, 1, det.nms_overlap)[:40]
-        false = np.array([all(iou(k.xywh, t.box) < 0.2 for t in f.truths) for k in kept], bool)
-        hard = [crop_window(img, window_for_tower(k.xywh)) for k, bad in zip(kept, false) if bad][:per_frame]
-        crops = np.stack([[crop_window(img, refine_box(k.xywh, v), DEFAULT_SIZE) for v in REFINE_HEIGHTS]
-                          for k in kept]) if kept else \
-            np.zeros((0, len(REFINE_HEIGHTS), DEFAULT_SIZE[1], DEFAULT_SIZE[0], 3), np.uint8)
-        state = np.full(len(kept), -1, np.int64)
-        fit = np.zeros((len(kept), len(REFINE_HEIGHTS)), np.float32)
-        for i, k in enumerate(kept):
-            clean = [t for t in f.truths if t.clean and t.box[3] >= 20]
-            best = max(clean, key=lambda t: iou(k.xywh, t.box), default=None)
-            if best is not None and iou(k.xywh, best.box) >= 0.3:
-                state[i] = best.state
-                fit[i] = [iou(refine_box(k.xywh, v), best.box) for v in REFINE_HEIGHTS]
-        out.append(FrameHits(np.array([k.xywh for k in kept], np.float32).reshape(-1, 4),
-                             np.array([k.score for k in kept], np.float32), false, crops,
-                             window_features(hog, hard), state, fit))
-    return out
-
-
 def train_ensemble(x: np.ndarray, y: np.ndarray, hidden: int, n_out: int, seed: int, members: int,
                    iterations: int, callback=None) -> Ensemble:
     """``members`` networks on the same crops from different starts."""
@@ -202,16 +139,6 @@ def hard_clutter(x: np.ndarray, y: np.ndarray, x_clutter: np.ndarray, n: int, op
     taken = np.zeros(len(x_clutter), bool)
     taken[pick] = True
     return np.concatenate([pick, order[~taken[order]][:n - len(pick)]])
-
-
-def _pool(workers: int):
-    ctx = multiprocessing.get_context("fork") if "fork" in multiprocessing.get_all_start_methods() else None
-    return ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
-
-
-def _split(items: list, n: int) -> list[list]:
-    n = max(1, min(n, len(items)))
-    return [items[i::n] for i in range(n)]
 
 
 def calibrate(frames: list[PackedFrame], hits: list[FrameHits], no_tower: list[np.ndarray], low: float,
@@ -324,8 +251,8 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         f"{sum(s.towers + s.free for s in held_specs)} held-out frames with {opts.workers} workers")
     pos, neg, crops, states, frames, heldout = [], [], [], [], [], []
     jobs = [(s, True) for s in train_specs] + [(s, False) for s in held_specs]
-    with _pool(opts.workers) as pool:
-        for k, ((_spec, is_train), res) in enumerate(zip(jobs, pool.map(_chunk_job, [j[0] for j in jobs]))):
+    with worker_pool(opts.workers) as pool:
+        for k, ((_spec, is_train), res) in enumerate(zip(jobs, pool.map(chunk_job, [j[0] for j in jobs]))):
             if is_train:
                 pos.append(res.pos)
                 neg.append(res.neg)
@@ -356,7 +283,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         # calibration's composed tower-free frames are photographs and collages: procedural
         # backdrops (drawn to look like towers at times) teach the models, the calibration
         # sets the false-detection rate a camera's real scenes give
-        for part in pool.map(_free_job, _free_chunks(opts.seed * 7919 + 555_000, n_free, 0.0)):
+        for part in pool.map(free_job, free_chunks(opts.seed * 7919 + 555_000, n_free, 0.0)):
             calib.extend(part)
         calib = calib or mine
         per_frame = max(2, 3000 // max(1, len(mine)))     # hard negatives per frame and round
@@ -368,9 +295,9 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         def detect_all(fs):
             """Frames ``fs`` and their hits, in their order however they fall on the workers
             (the order of the hard negatives steers the SVM)."""
-            parts = _split(fs, opts.workers * 2)
+            parts = split(fs, opts.workers * 2)
             hits = [None] * len(fs)
-            for k, got in enumerate(pool.map(_mine_job, [(vector, p, low, per_frame) for p in parts])):
+            for k, got in enumerate(pool.map(mine_job, [(vector, p, low, per_frame) for p in parts])):
                 hits[k::len(parts)] = got          # part k holds frames k, k + n, ... (_split)
             return fs, hits
 
@@ -388,7 +315,7 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
         say(f"{sum(len(h.scores) for h in cal_hits)} hits on {len(calib)} calibration frames")
         # more clutter for the check: the detector's hits on further composed tower-free
         # frames (cheap: no rendering), apart from the calibration frames
-        extra = [f for part in pool.map(_free_job, _free_chunks(opts.seed * 7919 + 777_000, n_extra, 0.4))
+        extra = [f for part in pool.map(free_job, free_chunks(opts.seed * 7919 + 777_000, n_extra, 0.4))
                  for f in part]
         _, extra_hits = detect_all(extra)
         clutter = [c for h in extra_hits for k in np.flatnonzero(h.false) for c in h.crops[k]]
@@ -493,16 +420,9 @@ def train_light(opts: TrainOptions, progress: Callable[[str], None] = lambda s: 
     return report
 
 
-def _eval_job(args) -> LightScore:
-    model_dir, frames = args
-    from .evaluation import evaluate
-    reader = LightReader.load(model_dir)
-    return evaluate(lambda img: [(d.box, d.state) for d in reader.read(img)], frames)
-
-
 def evaluate_parallel(model_dir, frames: list[PackedFrame], workers: int) -> LightScore:
     """Score the models in ``model_dir`` on ``frames`` using ``workers`` processes."""
     if not frames:
         return LightScore()
-    with _pool(workers) as pool:
-        return LightScore.combine(pool.map(_eval_job, [(str(model_dir), fs) for fs in _split(frames, workers)]))
+    with worker_pool(workers) as pool:
+        return LightScore.combine(pool.map(eval_job, [(str(model_dir), fs) for fs in split(frames, workers)]))

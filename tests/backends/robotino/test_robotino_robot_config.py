@@ -249,3 +249,9 @@ def test_an_ethernet_urg_is_configured_by_its_address():
     assert (laser.device, laser.mode) == ("socket://10.0.0.5:10941", "poll")
     assert make_laser(parse_robot_config({"base": {"type": "robotino3"}, "laser": {"type": "tim", "host": "h"}}),
                       clock).describe().endswith("h:2112")
+
+
+def test_rll_bt_sim_offers_the_rigs_lasers():
+    """``rll-bt sim --laser`` names the rig's lasers (games reach backends by entry points only)."""
+    from games.options import LASERS as OFFERED
+    assert OFFERED == LASERS
