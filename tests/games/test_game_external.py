@@ -31,8 +31,9 @@ pytestmark = [pytest.mark.slow,  # a whole game: `make test-fast` leaves it out
 
 CLI_MAIN = "import sys; from rll_bt.cli import main; sys.exit(main())"
 TEAM, KEY = "GRIPS", "external-test-key"
-#: the refbox's game: SETUP until our game switches, 150 s of production, reports in its first 45 s
-PHASES = {"setup": 600.0, "exploration": 45.0, "production": 150.0}
+#: the refbox's game: SETUP until our game switches, 100 s of production, reports in its first 45 s
+#: (the first base comes out of the BS at 45 s of game time, the second at 86 s)
+PHASES = {"setup": 600.0, "exploration": 45.0, "production": 100.0}
 STEPS = ("GET_BASE", "CAP_ACTION", "MOUNT_RING", "DELIVER", "RETRIEVE", "STORE")
 
 

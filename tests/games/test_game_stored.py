@@ -13,7 +13,7 @@ from games import GameOptions, LockstepGame, finish
 pytestmark = [pytest.mark.slow,  # whole games: `make test-fast` leaves them out
               pytest.mark.timeout(1500)]  # two 2025 games: more than 300 s at a load of 45 on 2 cores
 
-SHORT = {"profile": "rcll2025", "setup": 1.0, "exploration": 40.0, "production": 90.0, "strategy": "oracle"}
+SHORT = {"profile": "rcll2025", "setup": 1.0, "exploration": 40.0, "production": 60.0, "strategy": "oracle"}
 
 
 def _play(out, **kw):
