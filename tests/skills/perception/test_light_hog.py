@@ -18,6 +18,8 @@ from skills.perception.light.hog import (
 )
 from skills.perception.light.synth import drawn_tower, paste
 
+pytestmark = pytest.mark.xdist_group("light-hog")      # one worker trains the module's detector once
+
 
 def scene(rng, width, state, at=None, h=240, w=320):
     """A drawn tower about ``width`` pixels wide (four times as high) on a procedural background."""
