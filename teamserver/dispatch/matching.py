@@ -17,9 +17,7 @@ another slide.  Locks are taken at assignment.  A robot about to finish a task
 that leaves its gripper empty, near that task's station, is matched as it will
 be (there, empty: :meth:`Fleet.finishing`) and the task it gets is queued behind
 its current one: on a radio with 2 s of delay the result's way up and the next
-task's way down cost 4 s between any two tasks (benchmarks/README.md).  Such a
-robot may also be given, for itself alone, a step that frees a stuck robot and
-waits only for the task it is finishing (a cap-less base behind its retrieval).
+task's way down cost 4 s between any two tasks (benchmarks/README.md).
 """
 from __future__ import annotations
 
@@ -37,9 +35,6 @@ from .config import DispatchConfig
 from .fleet import Fleet, travel
 from .holding import Holding
 from .readiness import Readiness
-
-#: the cost of a pairing that may not be (a step given to a robot other than the one it waits for)
-FAR = 1e6
 
 
 class Matcher:
@@ -85,18 +80,14 @@ class Matcher:
                     self.fleet.assign(t, r)
                     assigned.append(t)
                     del idle[r.number]
-        ahead: dict[int, int] = {}                   # finishing robot -> the task it finishes
         if self.config.queue_near is not None:       # robots about to finish, as they will be
-            for r in self.fleet.finishing(self.world.positions(), self.config.queue_near):
-                idle[r.number], ahead[r.number] = r, self.kb.robots[r.number].task_id
+            idle.update((r.number, r) for r in self.fleet.finishing(self.world.positions(), self.config.queue_near))
         free = [r for r in idle.values() if not r.holding]
         pool = [t for t in ready if not t.carry]
-        # robots must stay able to fetch what the held workpieces wait for
-        stuck, n = self.holding.stuck(game_time), len(self.kb.active_robots())
-        only = self._after_finishing(ahead, pool, game_time) if stuck else {}
-        pool += [self.kb.tasks[tid] for tid in only]
         if not free or not pool:
             return assigned
+        # robots must stay able to fetch what the held workpieces wait for
+        stuck, n = self.holding.stuck(game_time), len(self.kb.active_robots())
         swaps = self.holding.swaps(game_time) if stuck else set()    # (take one, free one)
         blocking = {t.id: self.holding.hold_limit(t, n) for t in pool
                     if t.id not in swaps and self.holding.blocks(t, game_time)}
@@ -113,15 +104,11 @@ class Matcher:
                               + self.config.urgency * self._slack(t, game_time)
                               - self.config.unblock * (t.id in frees)
                               - self.config.cap_first * (t.product in capped)
-                              - self.config.cap_due * self._cap_due(t)
-                              + FAR * (only.get(t.id, r.number) != r.number))
+                              - self.config.cap_due * self._cap_due(t))
         rows, cols = linear_sum_assignment(cost)
         for i, j in sorted(zip(rows, cols), key=lambda ij: cost[ij[0], ij[1]]):
             t, r = pool[j], free[i]
-            if cost[i, j] >= FAR / 2:
-                continue                    # a step that waits for another robot's task
-            done = (ahead[r.number],) if t.id in only else ()
-            if not self.locks.free_for(t, done=done) or not self.slides.slide_ready(t):
+            if not self.locks.free_for(t) or not self.slides.slide_ready(t):
                 continue                    # another assignment just took the station or the slide's room
             if t.id in blocking:
                 if stuck >= blocking[t.id]:
@@ -130,27 +117,6 @@ class Matcher:
             self.fleet.assign(t, r)
             assigned.append(t)
         return assigned
-
-    def _after_finishing(self, ahead: dict[int, int], pool: list[M.Task], game_time: float | None
-                         ) -> dict[int, int]:
-        """Steps that free a stuck robot and wait only for the task a finishing robot
-        is about to end (a cap-less base's pickup behind its cap retrieval), each for
-        that robot alone: task id -> robot number.  Matched as it will be, that robot
-        would otherwise take other work the moment before the step is ready, and the
-        stuck robot waits for it (hardware game seed 4: a robot held a product 100 s
-        while the robot at its cap station went on to another product's cap)."""
-        if not ahead:
-            return {}
-        frees = self.holding.unblocking(game_time)
-        known = {t.id for t in pool}
-        out: dict[int, int] = {}
-        for number, current in ahead.items():
-            for tid in frees:
-                t = self.kb.tasks.get(tid)
-                if (t is not None and tid not in known and tid not in out and not t.carry
-                        and current in t.deps and self.readiness.ready(t, game_time, done=(current,))):
-                    out[tid] = number
-        return out
 
     def _queue_carries(self, game_time: float | None) -> list[M.Task]:
         """The step that carries what a robot near the end of a pickup will hold, ready

@@ -15,8 +15,7 @@ BUSY = 2
 def ls():
     """Three robots and two products (P1 capped black at C-CS2, P2 grey at C-CS1); robot 1
     retrieves P1's cap at C-CS2, robot 3, which had P2's, drops out: that retrieval waits.
-    Robot 2, on its way to P1's base, drops out too: held, that base would wait for P1's
-    cap-less base, which a robot finishing the retrieval then takes first (the last test)."""
+    Robot 2, on its way to P1's base, drops out too (the queued task is then the only other work)."""
     ls = Lockstep(robots=3, config=ServerConfig(max_products=2, prefill_caps=False))
     for a, pose in zip(ls.agents, [(3.0, 2.8, 0.0), (5.0, 1.3, 0.0), (5.0, 3.2, 0.0)]):
         a.pose = pose
@@ -175,32 +174,3 @@ def test_a_queued_task_taken_back_and_given_out_again_runs_as_any_other(ls):
     assert t.state == M.ASSIGNED and t.robot == 3 and kb.robots[3].task_id == ls.waiting
     assert not r3.tasks()[-1].detail.HasField("after") and r3.tasks()[-1].task_id == ls.waiting
 
-
-def test_a_robot_finishing_a_cap_retrieval_gets_the_capless_base_a_stuck_robot_waits_for():
-    """Robot 1 holds P1's base; its cap mount waits for the cap-less base of the cap
-    retrieval robot 2 is finishing at C-CS2.  Another product's cap retrieval is ready
-    at C-CS1, yet robot 2 gets the cap-less base queued behind its retrieval: that
-    frees robot 1 (hardware game seed 4: robot 2 went for the other cap, 40 s, and
-    the base lay in the output while robot 1 waited)."""
-    ls = Lockstep(robots=2, config=ServerConfig(prefill_caps=False))
-    for a, pose in zip(ls.agents, [(5.0, 1.2, 0.0), (-5.0, 5.5, 0.0)]):
-        a.pose = pose
-        a.status()
-    production_setup(ls, [{"id": 1}])
-    kb = ls.server.kb
-    ls.step(n=3)
-    [get] = [t for t in kb.tasks.values() if t.machine == "C-BS" and t.state == M.ASSIGNED]
-    [retrieve] = [t for t in kb.tasks.values() if t.kind == M.RETRIEVE_CAP]
-    assert get.robot == 1 and retrieve.robot == 2
-    ls.agents[0].result(get.id, holding=True)                       # robot 1 holds the base: stuck
-    x, y = ls.server.production.world.positions()["C-CS2"][:2]
-    ls.agents[1].pose = (x + 0.5, y, 0.0)
-    ls.agents[1].status(state=BUSY, task=ls.agents[1].tasks()[-1].wire_id)   # docked, running it
-    grey = ls.refbox.ms.enum("CapColor").Value("CAP_GREY")
-    ls.refbox.orders(ls.order_msgs + [dict(ls.order_msgs[0], id=2, delivery_gate=2, cap_color=grey)])
-    ls.step(n=3)
-    [capless] = [t for t in kb.tasks.values() if t.kind == M.GET_WORKPIECE and retrieve.id in t.deps]
-    assert ls.server.dispatcher.holding.stuck(0.0) == 1                # robot 1, still
-    assert capless.state == M.ASSIGNED and capless.robot == 2 and capless.after == retrieve.id
-    assert not any(t.machine == "C-CS1" and t.state == M.ASSIGNED for t in kb.tasks.values())
-    ls.close()
