@@ -129,7 +129,7 @@ class Readiness:
             dep = self.kb.tasks.get(d)
             if dep is None or (dep.state != M.DONE and d not in done):
                 return False
-        if not self.locks.free_for(task, but, done):
+        if not self.locks.free_for(task, but):
             return False
         if self._needs_unfound(task):
             return False

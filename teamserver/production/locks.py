@@ -27,17 +27,17 @@ class StationLocks:
     def _set(self, locks: dict[str, str]) -> None:
         self.kb.set("locks", locks)
 
-    def free_for(self, task: M.Task, but: str | None = None, done=()) -> bool:
+    def free_for(self, task: M.Task, but: str | None = None) -> bool:
         """Its product may take the task's locks, and no other running task uses them
         (a station serves one robot at a time, even within one product).  ``but``: a
-        product whose locks count as given up; ``done``: tasks (ids) that count as ended."""
+        product whose locks count as given up."""
         if not task.locks:
             return True
         locks = self.owners
         if any(locks.get(lk, task.product) not in (task.product, but) for lk in task.locks):
             return False
         mine = set(task.locks)
-        return not any(t.id != task.id and t.id not in done and t.state == M.ASSIGNED and mine & set(t.locks)
+        return not any(t.id != task.id and t.state == M.ASSIGNED and mine & set(t.locks)
                        for t in self.kb.open_tasks())
 
     def acquire(self, task: M.Task) -> None:
