@@ -108,6 +108,8 @@ def test_the_same_frame_again_is_not_detected_again(world, reader):
     from rll_bt.backend import open_backend
     backend = open_backend("sim", world=world, robot=("CYAN", 1))
     source = CameraPerception(backend, world.profile, reader=reader)
+    # steady lights: a blinking one (left by another test of this module's world) changes the view
+    world.set_lights(STATION, red="ON", yellow="OFF", green="OFF")
     look_at_face(world, STATION, "input", 1.2, 0)
     first = source.detections()
     assert first.tags
