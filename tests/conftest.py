@@ -17,14 +17,3 @@ def pytest_configure(config):
     if tuple(int(p) for p in version("pytest-xdist").split(".")[:2]) <= (3, 8):
         raise pytest.UsageError(f"pytest {pytest.__version__} with pytest-xdist {version('pytest-xdist')} "
                                 "ignores xdist_group: pip install 'pytest<9' (pyproject.toml's test extra)")
-
-
-def pytest_collection_modifyitems(config, items):
-    """Modules holding whole games (marked ``slow``) first, each module's tests
-    kept together and in their order: the workers take the long tests while
-    the queue is full and end on short ones, instead of one worker starting a
-    two-minute game when the others have nothing left."""
-    slow_modules = {item.module.__name__ for item in items
-                    if item.get_closest_marker("slow") is not None and getattr(item, "module", None)}
-    items.sort(key=lambda item: getattr(item, "module", None) is None
-               or item.module.__name__ not in slow_modules)
