@@ -53,6 +53,17 @@ class OmniKinematics:
         omega = (vy + m2 / k) / self.rb
         return vx, vy, omega
 
+    def clamped(self, vx: float, vy: float, omega: float) -> tuple[float, float, float]:
+        """The body velocity the base makes of a command whose motor speeds
+        are each clamped to +-``rpm_max`` (as :meth:`setpoints` clamps them,
+        before rounding): a command beyond a wheel's reach loses speed and
+        changes direction the way the real base does."""
+        lim = self.rpm_max
+        rpm = self.forward(vx, vy, omega)
+        if all(-lim <= m <= lim for m in rpm):
+            return vx, vy, omega
+        return self.inverse(*(max(-lim, min(lim, m)) for m in rpm))
+
     def setpoints(self, vx: float, vy: float, omega: float) -> tuple[int, int, int]:
         """Integer motor set-points as sent to the base: each clamped to
         +-``rpm_max``, then rounded half away from zero (as Fawkes does)."""

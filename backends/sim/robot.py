@@ -4,7 +4,10 @@ decides collisions.
 
 Motion: the commanded body velocity (robot frame: x forward, y left, rad/s
 counter-clockwise) is clipped to the speed limits of ``rules.ROBOT``
-(0.7 m/s, ``max_omega``), approached with its acceleration limits
+(0.7 m/s, ``max_omega``) and to what the wheels can do (each motor at most
+``wheel_rpm_max``, clamped per wheel as the Robotino's host clamps its
+set-points: ~0.68 m/s straight ahead, less while turning), approached with
+its acceleration limits
 (``max_accel`` when speeding up, ``max_decel`` when slowing down,
 ``max_alpha``) and integrated each time step.  A drive command older than
 ``RobotConfig.deadman`` seconds of sim time is dropped (the robot brakes).
@@ -26,11 +29,13 @@ the start (``odom_frame="field"``).
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from backends.robotino.kinematics import OmniKinematics
 from rll_bt.backend import Battery, Pose2D, wrap_angle
 from rll_bt.rules import MPS, ROBOT, WORKPIECE, RobotGeometry
 
@@ -40,12 +45,21 @@ from .gripper import Gripper
 GRIPPER_HOME_Z = round(MPS.belt_height + WORKPIECE.base_height / 2.0, 4)
 
 
+@functools.lru_cache(maxsize=8)
+def _drive(rpm_max: float) -> OmniKinematics:
+    """The Robotino 3 omni drive with motor limit ``rpm_max``."""
+    return OmniKinematics(rpm_max=rpm_max)
+
+
 @dataclass(frozen=True)
 class RobotConfig:
     """Per-robot simulation settings (all SI units).  Any field can be
     overridden through ``open_backend("sim", ..., <field>=value)``."""
     # base
     deadman: float = 0.5                  # s of sim time a drive command stays valid
+    #: motor speed limit of the omni drive (Robotino 3: 3000 rpm, rb 0.175 m, rw 0.06 m, gear 32; the host
+    #: clamps each wheel's set-point): forward at most ~0.68 m/s, less while turning; 0 or None: no limit
+    wheel_rpm_max: float | None = 3000.0
     # odometry
     odom_frame: str = "zero"              # "zero" or "field"
     odom_noise_trans: float = 0.01        # m per sqrt(m)
@@ -177,7 +191,10 @@ class SimRobot:
         speed = math.hypot(vx, vy)
         if speed > g.max_speed:
             vx, vy = vx * g.max_speed / speed, vy * g.max_speed / speed
-        return vx, vy, max(-g.max_omega, min(g.max_omega, w))
+        w = max(-g.max_omega, min(g.max_omega, w))
+        if self.config.wheel_rpm_max:
+            vx, vy, w = _drive(self.config.wheel_rpm_max).clamped(vx, vy, w)
+        return vx, vy, w
 
     def propose(self, dt: float, now: float) -> tuple[Pose2D, tuple[float, float, float]]:
         """Next pose and velocity if nothing blocks the motion."""

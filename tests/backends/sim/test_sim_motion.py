@@ -2,6 +2,7 @@ import math
 
 import pytest
 
+from backends.robotino.kinematics import OmniKinematics
 from backends.sim import SimBackend
 from rll_bt.backend import Pose2D, open_backend
 from rll_bt.rules import ROBOT
@@ -37,7 +38,7 @@ def test_same_seed_same_commands_same_trajectories(make_world):
 
 def test_speed_and_acceleration_limits(empty_world):
     world = empty_world
-    bot = SimBackend(world, ("CYAN", 1), pose=Pose2D(-4.0, 1.0, 0.0))
+    bot = SimBackend(world, ("CYAN", 1), pose=Pose2D(-4.0, 1.0, 0.0), wheel_rpm_max=None)
     bot.drive(3.0, 0.0, 0.0)
     world.step(0.1)
     v = bot.odometry().vx
@@ -52,6 +53,32 @@ def test_speed_and_acceleration_limits(empty_world):
         world.step(0.1)
     o = bot.odometry()
     assert math.hypot(o.vx, o.vy) == pytest.approx(ROBOT.max_speed, abs=1e-6)
+
+
+def _settled(bot, world, command, seconds=3.0):
+    for _ in range(int(seconds / 0.1)):
+        bot.drive(*command)
+        world.step(0.1)
+    o = bot.odometry()
+    return o.vx, o.vy, o.omega
+
+
+def test_the_wheels_limit_the_speed_as_on_the_robotino(empty_world):
+    """Each motor turns at most 3000 rpm (the Robotino 3's host clamps every
+    set-point): 0.7 m/s straight ahead is 0.68, a turn while driving takes
+    its share of the same wheels, and the robot makes what the clamped
+    wheels give, as the real base does."""
+    kin = OmniKinematics()
+    bot = SimBackend(empty_world, ("CYAN", 1), pose=Pose2D(-4.0, 1.0, 0.0),
+                     odom_noise_trans=0.0, odom_noise_rot=0.0)
+    ahead = _settled(bot, empty_world, (0.7, 0.0, 0.0))
+    assert ahead[0] == pytest.approx(3000.0 / (kin.k * math.sqrt(3) / 2), rel=1e-3) and ahead[0] < 0.69
+    turning = _settled(bot, empty_world, (0.7, 0.0, 1.6))
+    assert math.hypot(turning[0], turning[1]) < 0.6 and turning[2] < 1.6
+    assert max(abs(m) for m in kin.forward(*turning)) == pytest.approx(3000.0, rel=1e-3)
+    assert turning == pytest.approx(kin.clamped(0.7, 0.0, 1.6), abs=1e-3)     # what the robotino backend sends
+    slow = _settled(bot, empty_world, (0.3, 0.1, 0.5))                          # within reach: as commanded
+    assert slow == pytest.approx((0.3, 0.1, 0.5), abs=1e-6)
 
 
 def test_deadman_drops_a_stale_command(world):
