@@ -54,22 +54,25 @@ class OmniKinematics:
         return vx, vy, omega
 
     def clamped(self, vx: float, vy: float, omega: float) -> tuple[float, float, float]:
-        """The body velocity the base makes of a command whose motor speeds
-        are each clamped to +-``rpm_max`` (as :meth:`setpoints` clamps them,
-        before rounding): a command beyond a wheel's reach loses speed and
-        changes direction the way the real base does."""
-        lim = self.rpm_max
-        rpm = self.forward(vx, vy, omega)
-        if all(-lim <= m <= lim for m in rpm):
+        """The command within the motors' reach: when a motor would turn
+        faster than ``rpm_max``, the whole command is scaled down until it
+        turns at ``rpm_max``.  The robot then drives the path it was told to
+        (the same direction and curve), only slower; Fawkes clamps each wheel
+        alone, which bends the path (a robot 0.2 m from a station face drove
+        into it)."""
+        top = max(abs(m) for m in self.forward(vx, vy, omega))
+        if top <= self.rpm_max:
             return vx, vy, omega
-        return self.inverse(*(max(-lim, min(lim, m)) for m in rpm))
+        scale = self.rpm_max / top
+        return vx * scale, vy * scale, omega * scale
 
     def setpoints(self, vx: float, vy: float, omega: float) -> tuple[int, int, int]:
-        """Integer motor set-points as sent to the base: each clamped to
-        +-``rpm_max``, then rounded half away from zero (as Fawkes does)."""
+        """Integer motor set-points as sent to the base: the command
+        :meth:`clamped` to the motors' reach, then rounded half away from zero
+        (as Fawkes rounds)."""
         lim = self.rpm_max
         return tuple(round_half_away(max(-lim, min(lim, m)))  # type: ignore[return-value]
-                     for m in self.forward(vx, vy, omega))
+                     for m in self.forward(*self.clamped(vx, vy, omega)))
 
 
 class OdometryIntegrator:

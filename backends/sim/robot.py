@@ -5,11 +5,10 @@ decides collisions.
 Motion: the commanded body velocity (robot frame: x forward, y left, rad/s
 counter-clockwise) is clipped to the speed limits of ``rules.ROBOT``
 (0.7 m/s, ``max_omega``) and to what the wheels can do (each motor at most
-``wheel_rpm_max``, clamped per wheel as the Robotino's host clamps its
-set-points: ~0.68 m/s straight ahead, less while turning), approached with
-its acceleration limits
-(``max_accel`` when speeding up, ``max_decel`` when slowing down,
-``max_alpha``) and integrated each time step.  A drive command older than
+``wheel_rpm_max``; a command beyond it is scaled down whole, as the
+robotino backend's host scales it: ~0.68 m/s straight ahead, less while
+turning), approached with its acceleration limits (``max_accel`` when
+speeding up, ``max_decel`` when slowing down, ``max_alpha``) and integrated each time step.  A drive command older than
 ``RobotConfig.deadman`` seconds of sim time is dropped (the robot brakes).
 A robot whose wheels an emulated base firmware turns (``follows_wheels``,
 :mod:`.hardware_parts`) moves at the wheels' speeds as they are: the host
@@ -57,8 +56,8 @@ class RobotConfig:
     overridden through ``open_backend("sim", ..., <field>=value)``."""
     # base
     deadman: float = 0.5                  # s of sim time a drive command stays valid
-    #: motor speed limit of the omni drive (Robotino 3: 3000 rpm, rb 0.175 m, rw 0.06 m, gear 32; the host
-    #: clamps each wheel's set-point): forward at most ~0.68 m/s, less while turning; 0 or None: no limit
+    #: motor speed limit of the omni drive (Robotino 3: 3000 rpm, rb 0.175 m, rw 0.06 m, gear 32; a command
+    #: beyond it is scaled down whole, as the robotino host does): ~0.68 m/s ahead, less turning; None: no limit
     wheel_rpm_max: float | None = 3000.0
     # odometry
     odom_frame: str = "zero"              # "zero" or "field"

@@ -34,6 +34,19 @@ def test_setpoints_round_half_away_and_clamp():
     assert KIN.setpoints(0.0, -0.1, 0.0) == (-255, 509, -255)         # -254.6, 509.3
 
 
+@given(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5), st.floats(-4, 4))
+def test_a_command_beyond_the_motors_is_scaled_whole(vx, vy, w):
+    """Beyond 3000 rpm on a motor the whole command shrinks: the same
+    direction and curve, every motor within reach, the fastest at the limit."""
+    cx, cy, cw = KIN.clamped(vx, vy, w)
+    rpm = KIN.forward(cx, cy, cw)
+    assert max(abs(m) for m in rpm) <= KIN.rpm_max + 1e-6
+    top = max(abs(m) for m in KIN.forward(vx, vy, w))
+    scale = min(1.0, KIN.rpm_max / top) if top > 0 else 1.0
+    assert (cx, cy, cw) == pytest.approx((vx * scale, vy * scale, w * scale), abs=1e-9)
+    assert all(abs(a - b) <= 0.5 for a, b in zip(KIN.setpoints(vx, vy, w), rpm))
+
+
 def test_odometry_straight_and_turning():
     odo = OdometryIntegrator(KIN)
     rpm = KIN.forward(0.3, 0.0, 0.0)

@@ -64,10 +64,9 @@ def _settled(bot, world, command, seconds=3.0):
 
 
 def test_the_wheels_limit_the_speed_as_on_the_robotino(empty_world):
-    """Each motor turns at most 3000 rpm (the Robotino 3's host clamps every
-    set-point): 0.7 m/s straight ahead is 0.68, a turn while driving takes
-    its share of the same wheels, and the robot makes what the clamped
-    wheels give, as the real base does."""
+    """Each motor turns at most 3000 rpm: 0.7 m/s straight ahead is 0.68, a
+    turn while driving takes its share of the same wheels, and the robot
+    drives the commanded curve slower, as the robotino backend's host sends it."""
     kin = OmniKinematics()
     bot = SimBackend(empty_world, ("CYAN", 1), pose=Pose2D(-4.0, 1.0, 0.0),
                      odom_noise_trans=0.0, odom_noise_rot=0.0)
@@ -75,6 +74,7 @@ def test_the_wheels_limit_the_speed_as_on_the_robotino(empty_world):
     assert ahead[0] == pytest.approx(3000.0 / (kin.k * math.sqrt(3) / 2), rel=1e-3) and ahead[0] < 0.69
     turning = _settled(bot, empty_world, (0.7, 0.0, 1.6))
     assert math.hypot(turning[0], turning[1]) < 0.6 and turning[2] < 1.6
+    assert turning[2] / turning[0] == pytest.approx(1.6 / 0.7, rel=1e-3) and abs(turning[1]) < 1e-6
     assert max(abs(m) for m in kin.forward(*turning)) == pytest.approx(3000.0, rel=1e-3)
     assert turning == pytest.approx(kin.clamped(0.7, 0.0, 1.6), abs=1e-3)     # what the robotino backend sends
     slow = _settled(bot, empty_world, (0.3, 0.1, 0.5))                          # within reach: as commanded
