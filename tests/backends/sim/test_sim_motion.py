@@ -69,7 +69,7 @@ def test_the_wheels_limit_the_speed_as_on_the_robotino(empty_world):
     drives the commanded curve slower, as the robotino backend's host sends it."""
     kin = OmniKinematics()
     bot = SimBackend(empty_world, ("CYAN", 1), pose=Pose2D(-4.0, 1.0, 0.0),
-                     odom_noise_trans=0.0, odom_noise_rot=0.0)
+                     odom_noise_trans=0.0, odom_noise_rot=0.0, wheel_rpm_max=3000.0)
     ahead = _settled(bot, empty_world, (0.7, 0.0, 0.0))
     assert ahead[0] == pytest.approx(3000.0 / (kin.k * math.sqrt(3) / 2), rel=1e-3) and ahead[0] < 0.69
     turning = _settled(bot, empty_world, (0.7, 0.0, 1.6))
