@@ -167,7 +167,7 @@ def test_the_laser_pulled_mid_action_stops_the_robot_and_fails_it_then_the_robot
         assert wait_for(lambda: not any(rig.base.wheel_speeds()[:3]), 2)          # the base stopped
         with pytest.raises(SensorLost):
             backend.drive(0.1, 0.0, 0.0)
-        assert backend.sensor_stops >= 1
+        assert wait_for(lambda: backend.sensor_stops >= 1, 2)     # counted by the watch thread (every 20 ms)
         assert wait_for(lambda: backend.parts.lost() is None, 10)                # reopened by its driver
         again = MoveRelative(ctx, 0.1, 0.0, speed=0.2).start()
         assert _run(again).name == "SUCCESS", again.message
