@@ -7,9 +7,10 @@ counter-clockwise) is clipped to the speed limits of ``rules.ROBOT``
 (0.7 m/s, ``max_omega``) and, with ``wheel_rpm_max`` set (3000 on a
 Robotino 3; off by default for now), to what the wheels can do (a command
 beyond it is scaled down whole, as the robotino backend's host scales it:
-~0.68 m/s straight ahead, less while turning), approached with its acceleration limits (``max_accel`` when
-speeding up, ``max_decel`` when slowing down, ``max_alpha``) and integrated each time step.  A drive command older than
-``RobotConfig.deadman`` seconds of sim time is dropped (the robot brakes).
+~0.68 m/s straight ahead, less while turning), approached with its
+acceleration limits (``max_accel`` when speeding up, ``max_decel`` when
+slowing down, ``max_alpha``) and integrated each time step.  A drive
+command older than ``RobotConfig.deadman`` seconds of sim time is dropped (the robot brakes).
 A robot whose wheels an emulated base firmware turns (``follows_wheels``,
 :mod:`.hardware_parts`) moves at the wheels' speeds as they are: the host
 ramped its commands and the firmware its motors, and the host's odometry
