@@ -5,6 +5,7 @@ and agents; the other team's robots met only in the lasers; a competitive
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import pytest
 
@@ -95,24 +96,26 @@ def _both_delivered_one_order(game) -> bool:
     return bool(got["CYAN"] & got["MAGENTA"])
 
 
-@pytest.mark.timeout(1800)    # under the real rules both teams deliver one order only after ~470 s of game time
+@pytest.mark.timeout(1200)
 def test_a_competitive_order_pays_the_first_team_and_costs_the_second():
-    """2025 rules, every order made competitive: the first team to deliver an
-    order gains 10, the other team's delivery of it loses up to 10.  (Seed 3
-    under the real rules: order 1 delivered by both teams at 456-488 s, 926-954 s
-    wall at a load of 11 on 2 cores.)"""
+    """2025 rules: the first team to deliver a competitive order gains 10, the
+    other team's delivery of it loses up to 10.  The game's orders are cut to
+    one competitive C0 order, open from the start of production, so that both
+    teams make the same product at once (with the drawn orders both teams first
+    deliver the same order only after ~470 s of game time)."""
     options = GameOptions(seed=3, cyan="htn", magenta="htn", profile="rcll2025", setup=1.0, exploration=40.0,
                           production=600.0, strategy="oracle")
     with LockstepGame(options) as game:
-        for order in game.refbox.game.orders:
-            order.competitive = True
+        orders = game.refbox.game.orders
+        orders[:] = [replace(orders[0], id=1, complexity=0, rings=(), quantity=1, begin=0, end=600,
+                             activate_at=0, standing=False, overtime=False, competitive=True)]
         result = game.run(stop=_both_delivered_one_order)
     assert _both_delivered_one_order(game), [(d.team, d.order, d.how) for d in result.deliveries]
     both = sorted({d.order for d in result.deliveries if d.team == "CYAN"}
                   & {d.order for d in result.deliveries if d.team == "MAGENTA"})
-    order = both[0]
-    firsts = [a for a in result.awards if a.reason == f"first delivery for competitive order {order}"]
-    seconds = [a for a in result.awards if a.reason == f"second delivery for competitive order {order}"]
+    assert both == [1]
+    firsts = [a for a in result.awards if a.reason == "first delivery for competitive order 1"]
+    seconds = [a for a in result.awards if a.reason == "second delivery for competitive order 1"]
     assert len(firsts) == 1 and len(seconds) == 1
     assert firsts[0].points == 10 and seconds[0].points < 0
     assert firsts[0].team != seconds[0].team                                # one team won it, the other paid
