@@ -59,7 +59,7 @@ class RobotConfig:
     deadman: float = 0.5                  # s of sim time a drive command stays valid
     #: motor speed limit of the omni drive (Robotino 3: 3000 rpm, rb 0.175 m, rw 0.06 m, gear 32; a command
     #: beyond it is scaled down whole, as the robotino host does): ~0.68 m/s ahead, less turning.  None (the
-    #: default for now): no limit; 3000.0 is the real robot (two game tests fail with it: benchmarks/README.md)
+    #: default for now): no limit; 3000.0 is the real robot (the tables were measured without it: benchmarks/README.md)
     wheel_rpm_max: float | None = None
     # odometry
     odom_frame: str = "zero"              # "zero" or "field"
