@@ -28,6 +28,8 @@ class DispatchConfig:
     unblock: float = 20.0           # metres of drive that freeing a stuck robot is worth
     cap_first: float = 10.0         # metres of drive a step of a product whose cap waits in a CS is worth
     cap_due: float = 5.0            # ... a product's due cap retrieval (its rings under way) is worth
+    hold_cost: float = 5.0          # ... a pickup that leaves its robot holding (its next step not ready) costs
+    fetch_early: bool = False       # fetch a new base even if its next step waits for work nobody can start
     divert_after: float = 10.0      # every robot stuck this long: a base for a full slide goes elsewhere
     idle_prefill: float = 15.0      # a robot without work this long: a cap is retrieved ahead
     park: bool = True

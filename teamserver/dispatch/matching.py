@@ -12,7 +12,9 @@ rings under way: the product waits for that cap next) by ``cap_due``.  A robot
 on its way to a pickup that will leave it stuck counts as stuck.  Pickups that
 would leave one more robot stuck wait while ``robots - 1`` are
 (:mod:`.holding`), but a pickup that frees a stuck robot by clearing its
-station's output; when all are stuck, a base held for a full slide goes to
+station's output; a new base whose next step waits for work nobody can start
+yet is not fetched (:meth:`Holding.premature`), and a pickup that leaves its robot
+holding costs ``hold_cost`` metres more; when all are stuck, a base held for a full slide goes to
 another slide.  Locks are taken at assignment.  A robot about to finish a task
 that leaves its gripper empty, near that task's station, is matched as it will
 be (there, empty: :meth:`Fleet.finishing`) and the task it gets is queued behind
@@ -91,7 +93,9 @@ class Matcher:
         swaps = self.holding.swaps(game_time) if stuck else set()    # (take one, free one)
         blocking = {t.id: self.holding.hold_limit(t, n) for t in pool
                     if t.id not in swaps and self.holding.blocks(t, game_time)}
-        pool = [t for t in pool if stuck < blocking.get(t.id, n)]
+        pool = [t for t in pool if stuck < blocking.get(t.id, n)
+                and (self.config.fetch_early or t.id not in blocking
+                     or not self.holding.premature(t, game_time))]
         if not pool:
             return assigned
         positions = self.world.positions()
@@ -104,7 +108,8 @@ class Matcher:
                               + self.config.urgency * self._slack(t, game_time)
                               - self.config.unblock * (t.id in frees)
                               - self.config.cap_first * (t.product in capped)
-                              - self.config.cap_due * self._cap_due(t))
+                              - self.config.cap_due * self._cap_due(t)
+                              + self.config.hold_cost * (t.id in blocking))
         rows, cols = linear_sum_assignment(cost)
         for i, j in sorted(zip(rows, cols), key=lambda ij: cost[ij[0], ij[1]]):
             t, r = pool[j], free[i]

@@ -154,12 +154,12 @@ class Slides:
         bases while its cap-less base waited for its cap retrieval).  Returns the mounts
         changed."""
         changed = []
-        for t, st, cost in self._pending_mounts():
+        for t, _st, cost in self._pending_mounts():
             deps = [self.kb.tasks.get(d) for d in t.deps]
             waiting = [d for d in deps if d is None or d.state != M.DONE]
-            if not waiting or not all(self._own_base(d, t) for d in waiting):
+            if not waiting or not all(self.own_base(d, t) for d in waiting):
                 continue
-            if st.loaded_with - self._put_for_others(t) < cost:
+            if not self.stocked_for(t):
                 continue
             waived = {d.id for d in waiting}
             t.deps = tuple(d for d in t.deps if d not in waived)
@@ -177,7 +177,7 @@ class Slides:
                      "its own, task(s) %s", t.id, t.machine, cost, sorted(waived))
         return changed
 
-    def _own_base(self, task: M.Task | None, mount: M.Task) -> bool:
+    def own_base(self, task: M.Task | None, mount: M.Task) -> bool:
         """Is ``task`` (a step ``mount`` waits for) a base for ``mount``'s slide: a put
         there, or the pickup of a base a put there carries on?"""
         if task is None or task.id == mount.params.get("carry_from"):
@@ -188,6 +188,12 @@ class Slides:
             q.params.get("carry_from") == task.id and q.kind == M.PUT_WORKPIECE
             and q.params.get("side") == M.SLIDE and q.machine == mount.machine
             for q in self.kb.open_tasks())
+
+    def stocked_for(self, mount: M.Task) -> bool:
+        """Does ``mount``'s slide hold what its ring costs beyond the bases other pending
+        mounts there have put (so that it need not wait for its own bases)?"""
+        st, cost = self.kb.stations.get(mount.machine or ""), int(mount.params.get("cost", 0))
+        return st is not None and cost > 0 and st.loaded_with - self._put_for_others(mount) >= cost
 
     def _put_for_others(self, mount: M.Task) -> int:
         """Bases on ``mount``'s slide that other pending mounts there have put."""

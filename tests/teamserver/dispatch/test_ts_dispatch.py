@@ -2,6 +2,7 @@
 assignment by travel cost, station locks, PrepareMachine timing, failures and repair."""
 import pytest
 
+from teamserver.dispatch.config import DispatchConfig
 from teamserver.knowledge import model as M
 from teamserver.links.agents import from_wire, wire_id
 from teamserver.server import ServerConfig
@@ -370,7 +371,8 @@ def test_work_that_frees_a_stuck_robot_goes_first(holding):
     one that frees robot 1.  (On its way, robot 1 did not count: rcll2025 seed 2
     with 20 % loss, a robot fetched a product whose cap nobody had started on,
     and held it 100 s.)"""
-    ls = Lockstep(robots=2, config=ALONE)
+    # (robot 1 fetches the base early: it would not while nobody can start the cap, test_ts_holding.py)
+    ls = Lockstep(robots=2, config=ServerConfig(prefill_caps=False, dispatch=DispatchConfig(fetch_early=True)))
     place(ls, [(5.0, 1.2, 0.0), (-5.0, 5.5, 0.0)])
     production_setup(ls, [{"id": 1}], states={"C-CS2": "DOWN"})
     kb, d = ls.server.kb, ls.server.dispatcher
